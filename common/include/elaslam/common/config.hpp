@@ -1,0 +1,123 @@
+// Configuration loading (yaml-cpp): one options struct per component, every error
+// collected with its key path and reported at once, ranges checked, unknown keys
+// rejected, and the effective configuration recorded as it is read so that it can
+// be printed or echoed into results.
+//
+// Usage, in a component's parse function:
+//   void parse(config::Reader& r, EkfOptions* o) {
+//     r.read("range_sigma_m", &o->range_sigma_m, 1e-6, 100.0);
+//     r.read_enum("mode", &o->mode_name, {"ekf", "gated"});
+//   }
+// and at the top:
+//   config::Document doc = config::Document::from_file(path);   // throws ConfigError
+//   EkfOptions o; doc.section("robot", [&](config::Reader& r){ parse(r, &o); });
+//   doc.finish();                                                  // throws ConfigError
+#pragma once
+
+#include <functional>
+#include <initializer_list>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+namespace elaslam::config {
+
+/// All problems found in a configuration, one per line, each naming its key path.
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(const std::string& source, std::vector<std::string> problems);
+  const std::vector<std::string>& problems() const { return problems_; }
+
+ private:
+  std::vector<std::string> problems_;
+};
+
+/// Shared state of one parse: the problems found and the effective config.
+struct ParseState {
+  std::vector<std::string> problems;
+  YAML::Node effective = YAML::Node(YAML::NodeType::Map);
+};
+
+/// A view of one YAML map at a key path. Every key read is remembered; finish()
+/// (called by Document for each section) reports the keys nobody read as unknown.
+class Reader {
+ public:
+  Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> state);
+
+  /// Required scalars, with an inclusive range.
+  void read(const std::string& key, double* out, double lo, double hi);
+  void read(const std::string& key, int* out, int lo, int hi);
+  void read(const std::string& key, bool* out);
+  void read(const std::string& key, std::string* out);
+  /// Optional scalars: *out keeps its value (the documented default) when absent;
+  /// the default is recorded in the effective config either way.
+  void read_optional(const std::string& key, double* out, double lo, double hi);
+  void read_optional(const std::string& key, int* out, int lo, int hi);
+  void read_optional(const std::string& key, bool* out);
+  void read_optional(const std::string& key, std::string* out);
+  /// A string that must be one of `allowed`.
+  void read_enum(const std::string& key, std::string* out, std::initializer_list<const char*> allowed,
+                 bool optional = false);
+  /// A fixed-length list of numbers, each within [lo, hi].
+  void read_vector(const std::string& key, std::vector<double>* out, std::size_t size, double lo, double hi);
+
+  /// Required nested map; the callback reads it. Unknown keys inside are reported.
+  void section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional = false);
+  /// Required list of maps; the callback reads each (index given).
+  void list(const std::string& key, const std::function<void(Reader&, std::size_t)>& fn,
+            std::size_t min_items, std::size_t max_items);
+
+  bool has(const std::string& key) const;
+  /// Record a problem at this path (for cross-field checks).
+  void fail(const std::string& key, const std::string& what);
+  const std::string& path() const { return path_; }
+
+  /// Report keys of this map that were never read.
+  void finish();
+
+ private:
+  std::string key_path(const std::string& key) const;
+  YAML::Node child(const std::string& key, bool optional);
+  template <typename T>
+  bool scalar(const std::string& key, T* out, bool optional, const char* type_name);
+  void record(const std::string& key, const YAML::Node& value);
+
+  YAML::Node node_;
+  std::string path_;
+  std::shared_ptr<ParseState> state_;
+  std::vector<std::string> seen_;
+  YAML::Node effective_;  // this map's place in state_->effective
+};
+
+/// A whole configuration file. Sections are read by components; keys at the top
+/// level that no component reads are reported by finish().
+class Document {
+ public:
+  /// Throws ConfigError naming the file (and line, for malformed YAML).
+  static Document from_file(const std::string& path);
+  static Document from_string(const std::string& text, const std::string& source = "<string>");
+
+  /// Read one top-level section with `fn`.
+  void section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional = false);
+  /// Mark top-level keys as known without reading them (read by another component).
+  void allow(std::initializer_list<const char*> keys);
+  /// Throws ConfigError with every problem found so far (unknown top-level keys too).
+  void finish();
+
+  /// The effective configuration read so far, as YAML text.
+  std::string effective_yaml() const;
+  const YAML::Node& effective() const { return state_->effective; }
+  const std::string& source() const { return source_; }
+
+ private:
+  Document(YAML::Node root, std::string source);
+  YAML::Node root_;
+  std::string source_;
+  std::shared_ptr<ParseState> state_;
+  std::vector<std::string> known_;
+};
+
+}  // namespace elaslam::config

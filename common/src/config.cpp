@@ -1,0 +1,275 @@
+#include "elaslam/common/config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace elaslam::config {
+namespace {
+
+std::string join_lines(const std::string& source, const std::vector<std::string>& problems) {
+  std::ostringstream os;
+  os << source << ": " << problems.size() << " configuration problem" << (problems.size() == 1 ? "" : "s")
+     << ":";
+  for (const auto& p : problems) os << "\n  " << p;
+  return os.str();
+}
+
+std::string scalar_text(const YAML::Node& n) {
+  if (n.IsScalar()) return "'" + n.Scalar() + "'";
+  if (n.IsSequence()) return "a list";
+  if (n.IsMap()) return "a map";
+  return "nothing";
+}
+
+template <typename T>
+std::string num(T v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+ConfigError::ConfigError(const std::string& source, std::vector<std::string> problems)
+    : std::runtime_error(join_lines(source, problems)), problems_(std::move(problems)) {}
+
+Reader::Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> state)
+    : node_(std::move(node)), path_(std::move(path)), state_(std::move(state)) {
+  // Locate (creating) this map in the effective config.
+  effective_.reset(state_->effective);
+  if (!path_.empty()) {
+    std::stringstream ss(path_);
+    std::string part;
+    while (std::getline(ss, part, '.')) {
+      YAML::Node next = effective_[part];
+      if (!next.IsMap()) {
+        effective_[part] = YAML::Node(YAML::NodeType::Map);
+        next = effective_[part];
+      }
+      effective_.reset(next);
+    }
+  }
+}
+
+std::string Reader::key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+bool Reader::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+
+void Reader::fail(const std::string& key, const std::string& what) {
+  state_->problems.push_back(key_path(key) + ": " + what);
+}
+
+YAML::Node Reader::child(const std::string& key, bool optional) {
+  if (std::find(seen_.begin(), seen_.end(), key) == seen_.end()) seen_.push_back(key);
+  if (!node_.IsMap()) return YAML::Node();
+  YAML::Node n = node_[key];
+  if (!n.IsDefined() || n.IsNull()) {
+    if (!optional) fail(key, "missing (required key)");
+    return YAML::Node();
+  }
+  return n;
+}
+
+void Reader::record(const std::string& key, const YAML::Node& value) { effective_[key] = value; }
+
+template <typename T>
+bool Reader::scalar(const std::string& key, T* out, bool optional, const char* type_name) {
+  YAML::Node n = child(key, optional);
+  if (!n.IsDefined()) {
+    if (optional) record(key, YAML::Node(*out));
+    return false;
+  }
+  if (!n.IsScalar()) {
+    fail(key, std::string("wrong type: expected ") + type_name + ", got " + scalar_text(n));
+    return false;
+  }
+  try {
+    *out = n.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(key, std::string("wrong type: expected ") + type_name + ", got " + scalar_text(n));
+    return false;
+  }
+  record(key, YAML::Node(*out));
+  return true;
+}
+
+void Reader::read(const std::string& key, double* out, double lo, double hi) {
+  if (scalar(key, out, false, "a number") && !(std::isfinite(*out) && *out >= lo && *out <= hi))
+    fail(key, "out of range: got " + num(*out) + ", expected a value in [" + num(lo) + ", " + num(hi) + "]");
+}
+void Reader::read_optional(const std::string& key, double* out, double lo, double hi) {
+  if (scalar(key, out, true, "a number") && !(std::isfinite(*out) && *out >= lo && *out <= hi))
+    fail(key, "out of range: got " + num(*out) + ", expected a value in [" + num(lo) + ", " + num(hi) + "]");
+}
+void Reader::read(const std::string& key, int* out, int lo, int hi) {
+  if (scalar(key, out, false, "an integer") && !(*out >= lo && *out <= hi))
+    fail(key, "out of range: got " + num(*out) + ", expected an integer in [" + num(lo) + ", " + num(hi) + "]");
+}
+void Reader::read_optional(const std::string& key, int* out, int lo, int hi) {
+  if (scalar(key, out, true, "an integer") && !(*out >= lo && *out <= hi))
+    fail(key, "out of range: got " + num(*out) + ", expected an integer in [" + num(lo) + ", " + num(hi) + "]");
+}
+void Reader::read(const std::string& key, bool* out) { scalar(key, out, false, "true or false"); }
+void Reader::read_optional(const std::string& key, bool* out) { scalar(key, out, true, "true or false"); }
+void Reader::read(const std::string& key, std::string* out) { scalar(key, out, false, "a string"); }
+void Reader::read_optional(const std::string& key, std::string* out) { scalar(key, out, true, "a string"); }
+
+void Reader::read_enum(const std::string& key, std::string* out, std::initializer_list<const char*> allowed,
+                       bool optional) {
+  if (!scalar(key, out, optional, "a string")) return;
+  for (const char* a : allowed)
+    if (*out == a) return;
+  std::string list;
+  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+  fail(key, "invalid value '" + *out + "', expected one of: " + list);
+}
+
+void Reader::read_vector(const std::string& key, std::vector<double>* out, std::size_t size, double lo,
+                         double hi) {
+  YAML::Node n = child(key, false);
+  if (!n.IsDefined()) return;
+  if (!n.IsSequence() || n.size() != size) {
+    fail(key, "wrong type: expected a list of " + num(size) + " numbers, got " +
+                  (n.IsSequence() ? "a list of " + num(n.size()) : scalar_text(n)));
+    return;
+  }
+  std::vector<double> v(size);
+  for (std::size_t i = 0; i < size; ++i) {
+    try {
+      v[i] = n[i].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key + "[" + num(i) + "]", "wrong type: expected a number, got " + scalar_text(n[i]));
+      return;
+    }
+    if (!(std::isfinite(v[i]) && v[i] >= lo && v[i] <= hi))
+      fail(key + "[" + num(i) + "]",
+           "out of range: got " + num(v[i]) + ", expected a value in [" + num(lo) + ", " + num(hi) + "]");
+  }
+  *out = v;
+  YAML::Node rec(YAML::NodeType::Sequence);
+  for (double d : v) rec.push_back(d);
+  rec.SetStyle(YAML::EmitterStyle::Flow);
+  record(key, rec);
+}
+
+void Reader::section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional) {
+  YAML::Node n = child(key, optional);
+  if (!n.IsDefined()) return;
+  if (!n.IsMap()) {
+    fail(key, "wrong type: expected a map of keys, got " + scalar_text(n));
+    return;
+  }
+  Reader sub(n, key_path(key), state_);
+  fn(sub);
+  sub.finish();
+}
+
+void Reader::list(const std::string& key, const std::function<void(Reader&, std::size_t)>& fn,
+                  std::size_t min_items, std::size_t max_items) {
+  YAML::Node n = child(key, false);
+  if (!n.IsDefined()) return;
+  if (!n.IsSequence()) {
+    fail(key, "wrong type: expected a list, got " + scalar_text(n));
+    return;
+  }
+  if (n.size() < min_items || n.size() > max_items) {
+    fail(key, "wrong length: got " + num(n.size()) + " items, expected " + num(min_items) + " to " +
+                  num(max_items));
+    return;
+  }
+  YAML::Node rec(YAML::NodeType::Sequence);
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const std::string item_path = key_path(key) + "[" + num(i) + "]";
+    if (!n[i].IsMap()) {
+      state_->problems.push_back(item_path + ": wrong type: expected a map of keys, got " + scalar_text(n[i]));
+      continue;
+    }
+    // Items get their own effective subtree (a list is not addressable by dotted path).
+    auto item_state = std::make_shared<ParseState>();
+    Reader sub(n[i], "", item_state);
+    sub.path_ = item_path;
+    fn(sub, i);
+    sub.finish();
+    for (auto& p : item_state->problems) state_->problems.push_back(std::move(p));
+    rec.push_back(item_state->effective);
+  }
+  record(key, rec);
+}
+
+void Reader::finish() {
+  if (!node_.IsMap()) return;
+  for (const auto& kv : node_) {
+    const std::string k = kv.first.as<std::string>();
+    if (std::find(seen_.begin(), seen_.end(), k) == seen_.end()) {
+      std::string known;
+      for (const auto& s : seen_) known += (known.empty() ? "" : ", ") + s;
+      fail(k, "unknown key (known keys here: " + known + ")");
+    }
+  }
+}
+
+Document::Document(YAML::Node root, std::string source)
+    : root_(std::move(root)), source_(std::move(source)), state_(std::make_shared<ParseState>()) {}
+
+Document Document::from_string(const std::string& text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ConfigError(source, {"malformed YAML at line " + std::to_string(e.mark.line + 1) + ", column " +
+                                   std::to_string(e.mark.column + 1) + ": " + e.msg});
+  }
+  if (!root.IsMap())
+    throw ConfigError(source, {"expected a map of sections at the top level, got " + scalar_text(root)});
+  return Document(root, source);
+}
+
+Document Document::from_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path, {"cannot open the file (does it exist and is it readable?)"});
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return from_string(ss.str(), path);
+}
+
+void Document::section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional) {
+  known_.push_back(key);
+  YAML::Node n = root_[key];
+  if (!n.IsDefined() || n.IsNull()) {
+    if (!optional) state_->problems.push_back(key + ": missing (required section)");
+    return;
+  }
+  if (!n.IsMap()) {
+    state_->problems.push_back(key + ": wrong type: expected a map of keys, got " + scalar_text(n));
+    return;
+  }
+  Reader r(n, key, state_);
+  fn(r);
+  r.finish();
+}
+
+void Document::allow(std::initializer_list<const char*> keys) {
+  for (const char* k : keys) known_.emplace_back(k);
+}
+
+void Document::finish() {
+  for (const auto& kv : root_) {
+    const std::string k = kv.first.as<std::string>();
+    if (std::find(known_.begin(), known_.end(), k) == known_.end()) {
+      std::string known;
+      for (const auto& s : known_) known += (known.empty() ? "" : ", ") + s;
+      state_->problems.push_back(k + ": unknown section (known sections: " + known + ")");
+    }
+  }
+  if (!state_->problems.empty()) throw ConfigError(source_, state_->problems);
+}
+
+std::string Document::effective_yaml() const {
+  YAML::Emitter out;
+  out << state_->effective;
+  return out.c_str();
+}
+
+}  // namespace elaslam::config

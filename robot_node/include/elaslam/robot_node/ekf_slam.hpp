@@ -1,0 +1,139 @@
+// Fixed-memory planar EKF-SLAM (DESIGN.md section 4; paper eqs 1-15).
+//
+// State X = [R; M]: R = (x, y, theta) of the robot in W, M = landmark positions in
+// W, one 2-vector per occupied slot. Mean, covariance and the id-to-slot tables are
+// allocated once, at construction, from the configured capacity; predict, update,
+// add_landmark and remove_landmark allocate nothing (tests/test_ekf_no_alloc.cpp).
+// Only this class changes the mean and covariance. Every operation returns a
+// status; none throws or exits on bad data.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "elaslam/common/geometry.hpp"
+#include "elaslam/robot_node/models.hpp"
+
+namespace elaslam {
+
+/// Named state layout: no bare indices into X or P outside these.
+struct StateLayout {
+  static constexpr int kPoseDim = 3;      // x, y, theta
+  static constexpr int kLandmarkDim = 2;  // x, y
+  static constexpr int kX = 0, kY = 1, kTheta = 2;
+  /// Offset in X and P of the landmark stored in `slot`.
+  static constexpr int landmark_offset(int slot) { return kPoseDim + kLandmarkDim * slot; }
+  static constexpr int dim(int num_landmarks) { return kPoseDim + kLandmarkDim * num_landmarks; }
+};
+
+struct EkfOptions {
+  int capacity = 128;          // maximum landmarks held at once (slots)
+  int max_landmark_id = 1024;  // ids accepted: 0 <= id < max_landmark_id
+  double range_sigma = 0.1;    // [m]   std dev of range measurements
+  double bearing_sigma = 0.01; // [rad] std dev of bearing measurements
+  double gate_probability = 0.99;  // chi-square gate probability (mode "gated")
+  /// Joseph-form covariance update (true) or the symmetric rank-2 form P - K Z K^T.
+  bool joseph = true;
+};
+
+enum class EkfStatus : std::uint8_t {
+  kOk = 0,
+  kGated,              // innovation outside the chi-square gate: not applied
+  kUnknownLandmark,    // id not in the filter
+  kAlreadyMapped,      // add_landmark of an id already in the filter
+  kFull,               // no free slot
+  kBadInput,           // non-finite input, id out of range, range <= 0
+  kSingular,           // innovation covariance not positive definite
+  kCovarianceFault,    // result would be non-finite or have a negative diagonal: refused
+};
+const char* to_string(EkfStatus s);
+
+/// The numbers behind one update (or gate check): kept for every observation.
+struct UpdateReport {
+  EkfStatus status = EkfStatus::kOk;
+  double d2 = 0.0;         // innovation Mahalanobis distance squared, z^T Z^-1 z
+  double threshold = 0.0;  // chi-square quantile used (0 when no gate was applied)
+  Eigen::Vector2d innovation = Eigen::Vector2d::Zero();  // z = y - h(X), bearing wrapped
+};
+
+class EkfSlam {
+ public:
+  using Layout = StateLayout;
+
+  explicit EkfSlam(const EkfOptions& options);
+
+  /// Forget every landmark and set the robot prior.
+  void reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov);
+
+  /// Prediction (eqs 4-5) with an odometry increment in B and its covariance U.
+  /// O(n): touches the robot block and the robot-landmark cross terms only.
+  EkfStatus predict(const Pose2& increment, const Eigen::Matrix3d& U);
+
+  /// Innovation and its Mahalanobis distance for landmark `id` without changing
+  /// the filter (eqs 8-9). status kUnknownLandmark / kBadInput / kSingular on failure.
+  UpdateReport check(int id, const RangeBearing& z) const;
+
+  /// Correction with one observation (eqs 8-13), using the sparsity of H.
+  /// With `gate` true, an innovation beyond the chi-square quantile of
+  /// options.gate_probability is refused with kGated (filter unchanged).
+  UpdateReport update(int id, const RangeBearing& z, bool gate = false);
+
+  /// Add landmark `id` by inverse observation (eq 15) with Jacobian augmentation.
+  EkfStatus add_landmark(int id, const RangeBearing& z);
+
+  /// Remove landmark `id` by marginalisation: the last slot moves into the hole. O(n).
+  EkfStatus remove_landmark(int id);
+
+  // ---- accessors --------------------------------------------------------------
+  bool has_landmark(int id) const;
+  int num_landmarks() const { return num_landmarks_; }
+  int capacity() const { return options_.capacity; }
+  int state_dim() const { return Layout::dim(num_landmarks_); }
+  const EkfOptions& options() const { return options_; }
+  /// Slot of a landmark id, or -1.
+  int slot_of(int id) const;
+  /// Landmark id stored at a slot (0 <= slot < num_landmarks()).
+  int id_at(int slot) const { return slot_to_id_[static_cast<std::size_t>(slot)]; }
+
+  Pose2 pose() const;
+  Eigen::Matrix3d pose_cov() const;
+  /// Landmark mean / covariance / cross-covariances. The id must be mapped.
+  Eigen::Vector2d landmark(int id) const;
+  Eigen::Matrix2d landmark_cov(int id) const;
+  Eigen::Matrix2d landmark_cross_cov(int id_i, int id_j) const;  // P_ij = E[(l_i)(l_j)^T]
+  Eigen::Matrix<double, 3, 2> pose_landmark_cov(int id) const;   // P_Rl
+
+  /// The active part of the mean and covariance (views, no copies).
+  Eigen::Ref<const Eigen::VectorXd> mean() const { return x_.head(state_dim()); }
+  Eigen::Ref<const Eigen::MatrixXd> covariance() const {
+    return P_.topLeftCorner(state_dim(), state_dim());
+  }
+  /// mean(diag(P)) over the active state (paper eq 19).
+  double mean_diag() const;
+  /// Measurement noise covariance W = diag(range_sigma^2, bearing_sigma^2).
+  const Eigen::Matrix2d& measurement_cov() const { return W_; }
+  /// The chi-square threshold used by the gate (2 dof, options.gate_probability).
+  double gate_threshold() const { return gate_threshold_; }
+
+ private:
+  bool valid_id(int id) const { return id >= 0 && id < options_.max_landmark_id; }
+  void symmetrise();
+  bool covariance_healthy() const;
+
+  EkfOptions options_;
+  Eigen::Matrix2d W_;
+  double gate_threshold_ = 0.0;
+  int num_landmarks_ = 0;
+  Eigen::VectorXd x_;          // capacity-sized mean
+  Eigen::MatrixXd P_;          // capacity-sized covariance
+  std::vector<int> id_to_slot_;  // max_landmark_id entries, -1 when absent
+  std::vector<int> slot_to_id_;  // capacity entries
+  // Scratch allocated once, used by predict/update/add/remove.
+  Eigen::MatrixXd PHt_;        // n x 2
+  Eigen::MatrixXd K_;          // n x 2
+  Eigen::MatrixXd tmp_rows_;   // 3 x n
+};
+
+}  // namespace elaslam

@@ -1,0 +1,50 @@
+// Motion and observation models of the planar EKF-SLAM, as pure functions that
+// return a value and, only when asked, fixed-size Jacobians (GTSAM style).
+// Frames: W world, B robot body. Paper eqs 3-15.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "elaslam/common/geometry.hpp"
+
+namespace elaslam {
+
+/// A range-bearing measurement of a point landmark from the robot centre.
+struct RangeBearing {
+  double range = 0.0;    // [m]
+  double bearing = 0.0;  // [rad], robot frame, in [-pi, pi)
+};
+
+/// Odometry noise model (DESIGN.md section 3, sensor_frame_t): variances grow with
+/// the distance travelled and the angle turned.
+struct OdometryNoise {
+  double var_trans_per_m = 0.0;   // [m^2/m]   along and across the motion
+  double var_rot_per_rad = 0.0;   // [rad^2/rad]
+  double var_rot_per_m = 0.0;     // [rad^2/m]
+};
+
+/// Motion f(R, u) (eq 3): the pose R_WB composed with the odometry increment u
+/// (expressed in B at the start of the step). F_x = df/dR, F_u = df/du (eq 6).
+Pose2 motion(const Pose2& pose, const Pose2& increment, Eigen::Matrix3d* F_x = nullptr,
+             Eigen::Matrix3d* F_u = nullptr);
+
+/// Covariance U of an odometry increment (in the increment's own coordinates).
+/// A small floor keeps U positive definite for a standing robot.
+Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise& noise);
+
+/// Observation h(R, l) (eq 7): range and bearing of landmark p_LinW seen from R_WB.
+/// H_x = dh/dR (2x3), H_l = dh/dl (2x2). Undefined (Jacobians set to zero, range 0)
+/// when the landmark is at the robot centre.
+RangeBearing observe(const Pose2& pose, const Eigen::Vector2d& p_LinW,
+                     Eigen::Matrix<double, 2, 3>* H_x = nullptr, Eigen::Matrix2d* H_l = nullptr);
+
+/// Inverse observation g(R, y) (eq 15): the world position of the landmark seen at
+/// y from R_WB. G_x = dg/dR (2x3), G_z = dg/dy (2x2).
+Eigen::Vector2d inverse_observe(const Pose2& pose, const RangeBearing& z,
+                                Eigen::Matrix<double, 2, 3>* G_x = nullptr,
+                                Eigen::Matrix2d* G_z = nullptr);
+
+/// Local (robot-frame) position of an observation and dp/dz.
+Eigen::Vector2d observation_to_local(const RangeBearing& z, Eigen::Matrix2d* J_z = nullptr);
+
+}  // namespace elaslam
