@@ -55,20 +55,26 @@ Reader::Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> st
 
 std::string Reader::key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
-bool Reader::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+bool Reader::has(const std::string& key) const {
+  const YAML::Node& n = node_;
+  return n.IsMap() && n[key].IsDefined() && !n[key].IsNull();
+}
 
 void Reader::fail(const std::string& key, const std::string& what) {
   state_->problems.push_back(key_path(key) + ": " + what);
 }
 
-YAML::Node Reader::child(const std::string& key, bool optional) {
+YAML::Node Reader::child(const std::string& key, bool optional, bool* present) {
+  *present = false;
   if (std::find(seen_.begin(), seen_.end(), key) == seen_.end()) seen_.push_back(key);
   if (!node_.IsMap()) return YAML::Node();
-  YAML::Node n = node_[key];
+  const YAML::Node& const_node = node_;  // const access: never inserts the key
+  YAML::Node n = const_node[key];
   if (!n.IsDefined() || n.IsNull()) {
     if (!optional) fail(key, "missing (required key)");
     return YAML::Node();
   }
+  *present = true;
   return n;
 }
 
@@ -76,8 +82,9 @@ void Reader::record(const std::string& key, const YAML::Node& value) { effective
 
 template <typename T>
 bool Reader::scalar(const std::string& key, T* out, bool optional, const char* type_name) {
-  YAML::Node n = child(key, optional);
-  if (!n.IsDefined()) {
+  bool present = false;
+  YAML::Node n = child(key, optional, &present);
+  if (!present) {
     if (optional) record(key, YAML::Node(*out));
     return false;
   }
@@ -128,8 +135,9 @@ void Reader::read_enum(const std::string& key, std::string* out, std::initialize
 
 void Reader::read_vector(const std::string& key, std::vector<double>* out, std::size_t size, double lo,
                          double hi) {
-  YAML::Node n = child(key, false);
-  if (!n.IsDefined()) return;
+  bool present = false;
+  YAML::Node n = child(key, false, &present);
+  if (!present) return;
   if (!n.IsSequence() || n.size() != size) {
     fail(key, "wrong type: expected a list of " + num(size) + " numbers, got " +
                   (n.IsSequence() ? "a list of " + num(n.size()) : scalar_text(n)));
@@ -155,8 +163,9 @@ void Reader::read_vector(const std::string& key, std::vector<double>* out, std::
 }
 
 void Reader::section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional) {
-  YAML::Node n = child(key, optional);
-  if (!n.IsDefined()) return;
+  bool present = false;
+  YAML::Node n = child(key, optional, &present);
+  if (!present) return;
   if (!n.IsMap()) {
     fail(key, "wrong type: expected a map of keys, got " + scalar_text(n));
     return;
@@ -168,8 +177,9 @@ void Reader::section(const std::string& key, const std::function<void(Reader&)>&
 
 void Reader::list(const std::string& key, const std::function<void(Reader&, std::size_t)>& fn,
                   std::size_t min_items, std::size_t max_items) {
-  YAML::Node n = child(key, false);
-  if (!n.IsDefined()) return;
+  bool present = false;
+  YAML::Node n = child(key, false, &present);
+  if (!present) return;
   if (!n.IsSequence()) {
     fail(key, "wrong type: expected a list, got " + scalar_text(n));
     return;
@@ -236,7 +246,8 @@ Document Document::from_file(const std::string& path) {
 
 void Document::section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional) {
   known_.push_back(key);
-  YAML::Node n = root_[key];
+  const YAML::Node& root = root_;
+  YAML::Node n = root[key];
   if (!n.IsDefined() || n.IsNull()) {
     if (!optional) state_->problems.push_back(key + ": missing (required section)");
     return;

@@ -80,7 +80,7 @@ class Reader {
 
  private:
   std::string key_path(const std::string& key) const;
-  YAML::Node child(const std::string& key, bool optional);
+  YAML::Node child(const std::string& key, bool optional, bool* present);
   template <typename T>
   bool scalar(const std::string& key, T* out, bool optional, const char* type_name);
   void record(const std::string& key, const YAML::Node& value);
