@@ -1,0 +1,117 @@
+// The team's global map (paper section 3.3.2; DESIGN.md section 6). Per landmark id:
+// the latest estimate from each robot, a fused estimate, the contributing robots,
+// a status (STATIC, MOVING) and the frame it last changed. Fixed capacity.
+//
+// Events are idempotent and ordered per robot by seq: duplicates and stale ones
+// are ignored; a gap is noted and repaired by the robot's next snapshot, which
+// replaces that robot's contribution wholesale. No I/O.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "elaslam/common/config.hpp"
+
+namespace elaslam {
+
+constexpr int kMaxTeamRobots = 8;
+
+enum class Fusion { kInformation, kCovarianceIntersection };
+
+struct GlobalMapOptions {
+  int max_landmark_id = 256;    // ids accepted: 0 <= id < max_landmark_id
+  Fusion fusion = Fusion::kInformation;
+  double publish_rate_hz = 10.0;       // process only: GLOBAL_MAP rate
+  double state_save_interval_s = 1.0;  // process only: at most one save per interval
+};
+void parse(config::Reader& r, GlobalMapOptions* o);
+
+enum class GlobalStatus : std::uint8_t { kAbsent = 0, kStatic = 1, kMoving = 2 };
+
+struct RobotEstimate {
+  bool valid = false;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+  int frame = -1;
+};
+
+struct GlobalEntry {
+  GlobalStatus status = GlobalStatus::kAbsent;
+  int status_frame = -1;   // frame of the last status change
+  int moving_by = 0;       // robot whose MOVING event made it moving
+  std::array<RobotEstimate, kMaxTeamRobots> by_robot{};
+  Eigen::Vector2d fused = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d fused_cov = Eigen::Matrix2d::Zero();
+  int contributors() const;  // bit r-1 set when robot r has an estimate
+};
+
+/// Incoming map change (mirrors landmark_event_t; validated by the caller).
+struct GlobalEvent {
+  int robot_id = 0;        // 1..8
+  std::int64_t seq = 0;
+  int frame = 0;
+  int kind = 0;            // landmark_event_t::ADD / UPDATE / MOVING / RETURN
+  int landmark_id = -1;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+};
+
+/// A notice to send to every robot.
+struct Notice {
+  int landmark_id = -1;
+  int detected_by = 0;
+  int frame = 0;
+};
+
+enum class EventResult { kApplied, kAppliedAfterGap, kDuplicate, kStale };
+const char* to_string(EventResult r);
+
+struct RobotStream {
+  std::int64_t last_seq = 0;   // highest seq applied (or covered by a snapshot)
+  bool gap_pending = false;    // a gap was seen and no snapshot has repaired it yet
+  std::int64_t gaps = 0;       // gaps seen
+  std::int64_t duplicates = 0; // duplicate or stale events ignored
+  int last_frame = -1;
+};
+
+class GlobalMap {
+ public:
+  explicit GlobalMap(const GlobalMapOptions& options);
+
+  /// Apply one event; a MOVING that changes the map appends a notice to `notices`.
+  EventResult apply(const GlobalEvent& e, std::vector<Notice>* notices);
+
+  /// Replace robot r's contribution with a snapshot: its static landmarks, and the
+  /// ids it holds as moving (applied only while a gap is pending for r).
+  void apply_snapshot(int robot_id, std::int64_t seq, int frame, const std::vector<std::pair<int, RobotEstimate>>& lms,
+                      const std::vector<int>& moving_ids, std::vector<Notice>* notices);
+
+  const GlobalEntry& entry(int id) const { return entries_[static_cast<std::size_t>(id)]; }
+  int max_landmark_id() const { return static_cast<int>(entries_.size()); }
+  std::int64_t version() const { return version_; }
+  int newest_frame() const { return newest_frame_; }
+  const RobotStream& stream(int robot_id) const { return streams_[static_cast<std::size_t>(robot_id - 1)]; }
+  int count(GlobalStatus s) const;
+  const GlobalMapOptions& options() const { return options_; }
+
+  /// Persistence (JSON text). from_json returns false with `why` on malformed input
+  /// and leaves the map unchanged.
+  std::string to_json() const;
+  bool from_json(const std::string& text, std::string* why);
+
+ private:
+  void fuse(GlobalEntry& g) const;
+  void set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices);
+
+  GlobalMapOptions options_;
+  std::vector<GlobalEntry> entries_;
+  std::array<RobotStream, kMaxTeamRobots> streams_{};
+  std::int64_t version_ = 0;
+  int newest_frame_ = -1;
+};
+
+}  // namespace elaslam

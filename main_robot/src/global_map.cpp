@@ -1,0 +1,218 @@
+#include "elaslam/main_robot/global_map.hpp"
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+#include "elaslam/landmark_event_t.hpp"
+
+namespace elaslam {
+
+void parse(config::Reader& r, GlobalMapOptions* o) {
+  r.read("max_landmark_id", &o->max_landmark_id, 1, 1 << 20);
+  std::string fusion = o->fusion == Fusion::kInformation ? "information" : "covariance_intersection";
+  r.read_enum("fusion", &fusion, {"information", "covariance_intersection"});
+  o->fusion = fusion == "information" ? Fusion::kInformation : Fusion::kCovarianceIntersection;
+  r.read("publish_rate_hz", &o->publish_rate_hz, 0.1, 10000.0);
+  r.read("state_save_interval_s", &o->state_save_interval_s, 0.0, 3600.0);
+}
+
+const char* to_string(EventResult r) {
+  switch (r) {
+    case EventResult::kApplied: return "applied";
+    case EventResult::kAppliedAfterGap: return "applied_after_gap";
+    case EventResult::kDuplicate: return "duplicate";
+    case EventResult::kStale: return "stale";
+  }
+  return "?";
+}
+
+int GlobalEntry::contributors() const {
+  int bits = 0;
+  for (int r = 0; r < kMaxTeamRobots; ++r)
+    if (by_robot[static_cast<std::size_t>(r)].valid) bits |= 1 << r;
+  return bits;
+}
+
+GlobalMap::GlobalMap(const GlobalMapOptions& options)
+    : options_(options), entries_(static_cast<std::size_t>(options.max_landmark_id)) {}
+
+int GlobalMap::count(GlobalStatus s) const {
+  int n = 0;
+  for (const auto& g : entries_) n += g.status == s;
+  return n;
+}
+
+// Information-weighted fusion treats the robots' estimates as independent; they
+// are not quite (robots that share a map share its errors), so covariance
+// intersection is the conservative option. Its weights follow the fast
+// trace-based rule w_r ~ 1/tr(C_r) (Niehsen 2002) rather than an optimisation.
+void GlobalMap::fuse(GlobalEntry& g) const {
+  Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d eta = Eigen::Vector2d::Zero();
+  double wsum = 0.0;
+  for (const auto& e : g.by_robot)
+    if (e.valid) wsum += 1.0 / std::max(e.cov.trace(), 1e-12);
+  for (const auto& e : g.by_robot) {
+    if (!e.valid) continue;
+    const Eigen::LLT<Eigen::Matrix2d> llt(e.cov);
+    if (llt.info() != Eigen::Success) continue;
+    double w = 1.0;
+    if (options_.fusion == Fusion::kCovarianceIntersection) w = (1.0 / std::max(e.cov.trace(), 1e-12)) / wsum;
+    const Eigen::Matrix2d Ci = w * llt.solve(Eigen::Matrix2d::Identity());
+    info += Ci;
+    eta += Ci * e.position;
+  }
+  const Eigen::LLT<Eigen::Matrix2d> llt(info);
+  if (llt.info() != Eigen::Success) return;  // no usable estimate: keep the last fused one
+  g.fused_cov = llt.solve(Eigen::Matrix2d::Identity());
+  g.fused = g.fused_cov * eta;
+}
+
+void GlobalMap::set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices) {
+  GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
+  if (g.status == GlobalStatus::kMoving) return;  // already known: idempotent, no second notice
+  g.status = GlobalStatus::kMoving;
+  g.status_frame = frame;
+  g.moving_by = robot_id;
+  for (auto& e : g.by_robot) e.valid = false;  // deleted from the map
+  if (notices) notices->push_back({id, robot_id, frame});
+  ++version_;
+}
+
+EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices) {
+  RobotStream& s = streams_[static_cast<std::size_t>(e.robot_id - 1)];
+  if (e.seq <= s.last_seq) {
+    ++s.duplicates;
+    return e.seq == s.last_seq ? EventResult::kDuplicate : EventResult::kStale;
+  }
+  const bool gap = e.seq > s.last_seq + 1;
+  if (gap) {
+    ++s.gaps;
+    s.gap_pending = true;
+  }
+  s.last_seq = e.seq;
+  s.last_frame = std::max(s.last_frame, e.frame);
+  newest_frame_ = std::max(newest_frame_, e.frame);
+
+  GlobalEntry& g = entries_[static_cast<std::size_t>(e.landmark_id)];
+  if (e.kind == landmark_event_t::MOVING) {
+    set_moving(e.landmark_id, e.robot_id, e.frame, notices);
+  } else {
+    RobotEstimate& est = g.by_robot[static_cast<std::size_t>(e.robot_id - 1)];
+    est = {true, e.position, e.cov, e.frame};
+    // While MOVING, estimates are kept but the landmark stays out until a RETURN.
+    if (g.status == GlobalStatus::kAbsent || e.kind == landmark_event_t::RETURN) {
+      if (g.status != GlobalStatus::kStatic) g.status_frame = e.frame;
+      g.status = GlobalStatus::kStatic;
+    }
+    if (g.status == GlobalStatus::kStatic) fuse(g);
+    ++version_;
+  }
+  return gap ? EventResult::kAppliedAfterGap : EventResult::kApplied;
+}
+
+void GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame,
+                               const std::vector<std::pair<int, RobotEstimate>>& lms,
+                               const std::vector<int>& moving_ids, std::vector<Notice>* notices) {
+  RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
+  const std::size_t r = static_cast<std::size_t>(robot_id - 1);
+  // Moving ids first: a MOVING event lost in a gap is recovered here.
+  if (s.gap_pending)
+    for (int id : moving_ids)
+      if (entries_[static_cast<std::size_t>(id)].status == GlobalStatus::kStatic &&
+          entries_[static_cast<std::size_t>(id)].status_frame <= frame)
+        set_moving(id, robot_id, frame, notices);
+  for (auto& g : entries_) g.by_robot[r].valid = false;
+  for (const auto& [id, est] : lms) {
+    GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
+    g.by_robot[r] = est;
+    g.by_robot[r].valid = true;
+    if (g.status == GlobalStatus::kAbsent) {
+      g.status = GlobalStatus::kStatic;
+      g.status_frame = frame;
+    }
+  }
+  for (auto& g : entries_)
+    if (g.status == GlobalStatus::kStatic) fuse(g);
+  s.last_seq = std::max(s.last_seq, seq);
+  s.gap_pending = false;
+  s.last_frame = std::max(s.last_frame, frame);
+  newest_frame_ = std::max(newest_frame_, frame);
+  ++version_;
+}
+
+std::string GlobalMap::to_json() const {
+  using nlohmann::json;
+  json j;
+  j["format"] = "elaslam.global_map.v1";
+  j["version"] = version_;
+  j["newest_frame"] = newest_frame_;
+  j["max_landmark_id"] = max_landmark_id();
+  json streams = json::array();
+  for (const auto& s : streams_) streams.push_back({{"last_seq", s.last_seq}, {"last_frame", s.last_frame}});
+  j["robots"] = streams;
+  json lms = json::array();
+  for (int id = 0; id < max_landmark_id(); ++id) {
+    const GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
+    if (g.status == GlobalStatus::kAbsent) continue;
+    json est = json::array();
+    for (int r = 0; r < kMaxTeamRobots; ++r) {
+      const RobotEstimate& e = g.by_robot[static_cast<std::size_t>(r)];
+      if (!e.valid) continue;
+      est.push_back({{"robot", r + 1}, {"frame", e.frame}, {"x", e.position.x()}, {"y", e.position.y()},
+                     {"cov", {e.cov(0, 0), e.cov(0, 1), e.cov(1, 0), e.cov(1, 1)}}});
+    }
+    lms.push_back({{"id", id}, {"status", static_cast<int>(g.status)}, {"status_frame", g.status_frame},
+                   {"moving_by", g.moving_by}, {"estimates", est}});
+  }
+  j["landmarks"] = lms;
+  return j.dump(1);
+}
+
+bool GlobalMap::from_json(const std::string& text, std::string* why) {
+  using nlohmann::json;
+  GlobalMap loaded(options_);
+  try {
+    const json j = json::parse(text);
+    if (j.at("format").get<std::string>() != "elaslam.global_map.v1") throw std::runtime_error("unknown format");
+    loaded.version_ = j.at("version").get<std::int64_t>();
+    loaded.newest_frame_ = j.at("newest_frame").get<int>();
+    const json& rs = j.at("robots");
+    if (!rs.is_array() || rs.size() != static_cast<std::size_t>(kMaxTeamRobots))
+      throw std::runtime_error("robots: expected 8 entries");
+    for (std::size_t r = 0; r < rs.size(); ++r) {
+      loaded.streams_[r].last_seq = rs[r].at("last_seq").get<std::int64_t>();
+      loaded.streams_[r].last_frame = rs[r].at("last_frame").get<int>();
+    }
+    for (const json& l : j.at("landmarks")) {
+      const int id = l.at("id").get<int>();
+      const int status = l.at("status").get<int>();
+      if (id < 0 || id >= max_landmark_id()) throw std::runtime_error("landmark id " + std::to_string(id) + " out of range");
+      if (status < 1 || status > 2) throw std::runtime_error("landmark status " + std::to_string(status));
+      GlobalEntry& g = loaded.entries_[static_cast<std::size_t>(id)];
+      g.status = static_cast<GlobalStatus>(status);
+      g.status_frame = l.at("status_frame").get<int>();
+      g.moving_by = l.at("moving_by").get<int>();
+      for (const json& e : l.at("estimates")) {
+        const int r = e.at("robot").get<int>();
+        if (r < 1 || r > kMaxTeamRobots) throw std::runtime_error("estimate robot " + std::to_string(r));
+        const auto c = e.at("cov").get<std::vector<double>>();
+        if (c.size() != 4) throw std::runtime_error("cov: expected 4 numbers");
+        RobotEstimate& est = g.by_robot[static_cast<std::size_t>(r - 1)];
+        est.valid = true;
+        est.frame = e.at("frame").get<int>();
+        est.position = {e.at("x").get<double>(), e.at("y").get<double>()};
+        est.cov << c[0], c[1], c[2], c[3];
+        if (!est.position.allFinite() || !est.cov.allFinite()) throw std::runtime_error("non-finite estimate");
+      }
+      if (g.status == GlobalStatus::kStatic) loaded.fuse(g);
+    }
+  } catch (const std::exception& ex) {
+    if (why) *why = ex.what();
+    return false;
+  }
+  *this = std::move(loaded);
+  return true;
+}
+
+}  // namespace elaslam

@@ -1,0 +1,53 @@
+// `consensus` mode (ours, DESIGN.md section 5): pairwise consistency of co-observed
+// landmarks' relative vectors and the largest mutually consistent set, found
+// exactly (every maximal clique is enumerated; the sets are small).
+//
+// Co-moving landmarks keep their relative vectors, so a group that moves together
+// is a clique too. The choice between cliques therefore also asks the EKF prior:
+// a clique whose landmarks jointly agree with the predicted robot pose (sum of
+// their innovation d2 within the chi-square quantile for 2k dof) beats one that
+// does not; then the larger wins; then the smaller total d2.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+namespace elaslam {
+
+class ConsensusSolver {
+ public:
+  static constexpr int kMaxNodes = 64;  // one bit per landmark in view
+
+  /// `prior_probability`: probability of the joint prior test (per clique).
+  explicit ConsensusSolver(double prior_probability = 0.99);
+
+  /// Start a new graph of n nodes (n <= kMaxNodes), no edges.
+  void reset(int n);
+  void add_edge(int a, int b);
+  /// The prior innovation d2 of node a (2 dof), used to rank cliques.
+  void set_prior_d2(int a, double d2) { prior_d2_[static_cast<std::size_t>(a)] = d2; }
+
+  /// Solve: the chosen set as a bit mask (bit a = node a is in the set).
+  std::uint64_t solve();
+
+  /// Number of maximal cliques visited by the last solve (for tests and stats).
+  int cliques_visited() const { return visited_; }
+  /// Whether the chosen set passed the joint prior test.
+  bool chosen_agrees_with_prior() const { return best_prior_ok_; }
+
+ private:
+  void bron_kerbosch(std::uint64_t R, std::uint64_t P, std::uint64_t X);
+  void consider(std::uint64_t clique);
+
+  int n_ = 0;
+  std::array<std::uint64_t, kMaxNodes> adj_{};
+  std::array<double, kMaxNodes> prior_d2_{};
+  std::array<double, kMaxNodes + 1> joint_threshold_{};  // chi2 quantile, 2k dof, k = 0..64
+  std::uint64_t best_ = 0;
+  bool best_prior_ok_ = false;
+  int best_size_ = 0;
+  double best_sum_ = 0.0;
+  int visited_ = 0;
+};
+
+}  // namespace elaslam

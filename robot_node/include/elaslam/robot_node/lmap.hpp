@@ -1,0 +1,48 @@
+// The robot's local map, L-map (paper section 3.3, Algorithm 1; DESIGN.md section 5):
+// per landmark id its status, last world position and covariance from the inverse
+// observation g(R, y), last frame seen and consecutive consistent sightings.
+// Fixed capacity: one entry per possible id, allocated at construction.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace elaslam {
+
+enum class LandmarkStatus : std::uint8_t {
+  kUnknown = 0,  // never seen
+  kCandidate,    // seen, not yet trusted; not in the filter
+  kStatic,       // in the filter
+  kMoving,       // found moving; out of the filter until it is seen again
+};
+const char* to_string(LandmarkStatus s);
+
+struct LMapEntry {
+  LandmarkStatus status = LandmarkStatus::kUnknown;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] p_LinW, from g(R, y) (candidates: the anchor)
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+  int last_seen_frame = -1;
+  int consistent_sightings = 0;  // consecutive sightings consistent with `position`
+  int missing_frames = 0;        // consecutive frames expected in view but not seen
+  int status_frame = -1;         // frame of the last status change
+  bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
+};
+
+class LMap {
+ public:
+  explicit LMap(int max_landmark_id);
+  void clear();
+  bool valid_id(int id) const { return id >= 0 && id < static_cast<int>(entries_.size()); }
+  LMapEntry& operator[](int id) { return entries_[static_cast<std::size_t>(id)]; }
+  const LMapEntry& operator[](int id) const { return entries_[static_cast<std::size_t>(id)]; }
+  void set_status(int id, LandmarkStatus s, int frame);
+  int size() const { return static_cast<int>(entries_.size()); }
+  int count(LandmarkStatus s) const;
+
+ private:
+  std::vector<LMapEntry> entries_;
+};
+
+}  // namespace elaslam

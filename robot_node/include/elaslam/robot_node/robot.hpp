@@ -1,0 +1,122 @@
+// One frame of Algorithm 1 (paper section 3.3) end to end, for every mode:
+// predict from the odometer increment, classify every observation (new, candidate,
+// static inside / outside its ELA, expected but missing), correct the filter with
+// the accepted ones, add confirmed candidates, remove moving ones, apply dynamic
+// notices, and produce the outgoing map events. No I/O; fixed memory after
+// construction (tests/robot_node/test_robot_no_alloc.cpp).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "elaslam/robot_node/consensus.hpp"
+#include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/ela_gate.hpp"
+#include "elaslam/robot_node/lmap.hpp"
+#include "elaslam/robot_node/robot_options.hpp"
+
+namespace elaslam {
+
+constexpr int kMaxObservations = 64;  // per frame, as in sensor_frame_t
+
+struct Observation {
+  int landmark_id = -1;
+  RangeBearing z;
+};
+
+/// One sensor frame, already validated (see RobotNode for the checks).
+struct FrameInput {
+  int frame = 0;
+  Pose2 odometer;        // cumulative odometer reading, odometry frame O (= W at start)
+  OdometryNoise noise;   // odometry noise model of this robot
+  int num_obs = 0;
+  std::array<Observation, kMaxObservations> obs{};
+};
+
+/// Values match landmark_event_t's constants.
+enum class EventKind : std::int8_t { kAdd = 1, kUpdate = 2, kMoving = 3, kReturn = 4 };
+const char* to_string(EventKind k);
+
+struct MapEvent {
+  EventKind kind = EventKind::kUpdate;
+  int landmark_id = -1;
+  int frame = 0;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+};
+
+/// What happened in one frame.
+struct FrameSummary {
+  int num_obs = 0;
+  int num_accepted = 0;   // corrected the filter
+  int num_rejected = 0;   // refused by a gate (outside ELA, innovation gate)
+  int num_added = 0;      // landmarks added to the filter (ADD or RETURN)
+  int num_moving = 0;     // landmarks removed as moving (ELA, missing)
+  int num_candidates = 0; // observations of landmarks not (yet) in the filter
+  int filter_faults = 0;  // filter operations refused by its health checks
+  int events_dropped = 0; // events beyond the fixed event buffer (should stay 0)
+};
+
+class Robot {
+ public:
+  Robot(const RobotOptions& options, int robot_id);
+
+  /// Forget everything; the next frame initialises the filter at its odometer reading.
+  void reset();
+
+  /// Process one frame. Events and gate records of this frame replace the previous ones.
+  FrameSummary process(const FrameInput& in);
+
+  /// A dynamic notice from main_robot: drop the landmark as moving (step 5).
+  /// Returns true when the robot held it in its filter. Emits no event.
+  bool apply_notice(int landmark_id, int frame);
+
+  // ---- outputs of the last frame ----------------------------------------------
+  const std::vector<MapEvent>& events() const { return events_; }
+  const std::vector<GateRecord>& gate_records() const { return gates_; }
+
+  // ---- state ------------------------------------------------------------------
+  const EkfSlam& filter() const { return ekf_; }
+  const LMap& lmap() const { return lmap_; }
+  const RobotOptions& options() const { return options_; }
+  int robot_id() const { return robot_id_; }
+  bool initialised() const { return initialised_; }
+  int last_frame() const { return last_frame_; }
+
+ private:
+  void predict(const FrameInput& in, FrameSummary* s);
+  void process_classic(const FrameInput& in, FrameSummary* s);
+  void process_ela(const FrameInput& in, FrameSummary* s);
+  void gate_view(FrameSummary* s);
+  void gate_view_consensus();
+  void handle_candidates(const FrameInput& in, FrameSummary* s);
+  void check_missing(FrameSummary* s);
+  void mark_moving(int id, const Observation* seen, FrameSummary* s);
+  void emit(EventKind kind, int id);
+  void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
+
+  RobotOptions options_;
+  int robot_id_;
+  EkfSlam ekf_;
+  LMap lmap_;
+  ConsensusSolver solver_;
+  double ela_threshold_;      // chi2(ela_gate_probability, 2 dof)
+  double candidate_threshold_;
+  bool initialised_ = false;
+  int last_frame_ = -1;
+  Pose2 last_odometer_;
+
+  // Per-frame scratch, reserved at construction.
+  std::vector<InView> view_;
+  std::vector<int> view_obs_;        // index into FrameInput::obs of view_[k]
+  std::vector<std::uint8_t> inside_; // verdict per view_ entry
+  std::vector<int> out_count_;       // per id: consecutive out-of-ELA sightings
+  std::vector<int> updated_;         // ids corrected this frame
+  std::vector<int> handled_;         // per id: frame at which the id was already handled
+  std::vector<MapEvent> events_;
+  std::vector<GateRecord> gates_;
+  int events_dropped_ = 0;
+};
+
+}  // namespace elaslam

@@ -1,0 +1,43 @@
+// Options of one robot node: the `robot:` section of a config file.
+#pragma once
+
+#include <string>
+
+#include "elaslam/common/config.hpp"
+#include "elaslam/robot_node/ekf_slam.hpp"
+
+namespace elaslam {
+
+enum class Mode { kEkf, kGated, kEla, kConsensus };
+const char* to_string(Mode m);
+/// Parse "ekf" | "gated" | "ela" | "consensus"; false when unknown.
+bool parse_mode(const std::string& s, Mode* m);
+
+struct RobotOptions {
+  Mode mode = Mode::kEla;
+  EkfOptions ekf;
+  double initial_sigma_xy = 0.001;     // [m]   prior std dev of the known initial position
+  double initial_sigma_theta = 0.001;  // [rad] prior std dev of the known initial heading
+
+  // ELA gate and L-map rules (DESIGN.md section 5).
+  double ela_gate_probability = 0.99;   // chi-square probability of the ELA / consensus tests
+  int confirm_frames = 3;               // consistent sightings before a candidate becomes STATIC
+  int return_frames = 6;                // the same for a landmark that has been MOVING
+  int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
+  int missing_frames = 3;               // expected-but-unseen frames before MOVING (0: rule off)
+  double sensor_range = 4.0;            // [m] radius of the field of view (D / 2)
+  double fov_margin = 0.5;              // [m] "well inside the field of view": range < sensor_range - margin
+
+  // Node behaviour.
+  int snapshot_period_frames = 10;      // LMAP_SNAPSHOT every N frames
+  int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
+};
+
+/// Read the `robot:` section (see config/paper.yaml for every key and its unit).
+void parse(config::Reader& r, RobotOptions* o);
+
+/// Load the `robot:` section of a config file; other sections are allowed.
+/// Throws config::ConfigError listing every problem.
+RobotOptions load_robot_options(const std::string& path, std::string* effective_yaml = nullptr);
+
+}  // namespace elaslam

@@ -1,0 +1,79 @@
+#include "elaslam/robot_node/consensus.hpp"
+
+#include <limits>
+
+#include "elaslam/common/stats.hpp"
+
+namespace elaslam {
+
+ConsensusSolver::ConsensusSolver(double prior_probability) {
+  joint_threshold_[0] = 0.0;
+  for (int k = 1; k <= kMaxNodes; ++k)
+    joint_threshold_[static_cast<std::size_t>(k)] = chi2_quantile(prior_probability, 2 * k);
+}
+
+void ConsensusSolver::reset(int n) {
+  n_ = n < 0 ? 0 : (n > kMaxNodes ? kMaxNodes : n);
+  adj_.fill(0);
+  prior_d2_.fill(0.0);
+}
+
+void ConsensusSolver::add_edge(int a, int b) {
+  if (a == b || a < 0 || b < 0 || a >= n_ || b >= n_) return;
+  adj_[static_cast<std::size_t>(a)] |= std::uint64_t{1} << b;
+  adj_[static_cast<std::size_t>(b)] |= std::uint64_t{1} << a;
+}
+
+std::uint64_t ConsensusSolver::solve() {
+  best_ = 0;
+  best_prior_ok_ = false;
+  best_size_ = 0;
+  best_sum_ = std::numeric_limits<double>::infinity();
+  visited_ = 0;
+  if (n_ == 0) return 0;
+  const std::uint64_t all = n_ == 64 ? ~std::uint64_t{0} : ((std::uint64_t{1} << n_) - 1);
+  bron_kerbosch(0, all, 0);
+  return best_;
+}
+
+// Bron-Kerbosch with Tomita pivoting on bit sets: no allocation, recursion depth <= 64.
+void ConsensusSolver::bron_kerbosch(std::uint64_t R, std::uint64_t P, std::uint64_t X) {
+  if (P == 0 && X == 0) {
+    consider(R);
+    return;
+  }
+  // Pivot: the vertex of P | X with most neighbours in P.
+  int pivot = -1, most = -1;
+  for (std::uint64_t px = P | X; px; px &= px - 1) {
+    const int u = __builtin_ctzll(px);
+    const int c = __builtin_popcountll(P & adj_[static_cast<std::size_t>(u)]);
+    if (c > most) most = c, pivot = u;
+  }
+  for (std::uint64_t cand = P & ~adj_[static_cast<std::size_t>(pivot)]; cand; cand &= cand - 1) {
+    const int v = __builtin_ctzll(cand);
+    const std::uint64_t bit = std::uint64_t{1} << v;
+    const std::uint64_t nv = adj_[static_cast<std::size_t>(v)];
+    bron_kerbosch(R | bit, P & nv, X & nv);
+    P &= ~bit;
+    X |= bit;
+  }
+}
+
+void ConsensusSolver::consider(std::uint64_t clique) {
+  ++visited_;
+  const int size = __builtin_popcountll(clique);
+  double sum = 0.0;
+  for (std::uint64_t c = clique; c; c &= c - 1) sum += prior_d2_[static_cast<std::size_t>(__builtin_ctzll(c))];
+  const bool prior_ok = sum <= joint_threshold_[static_cast<std::size_t>(size)];
+  const bool better = (prior_ok != best_prior_ok_) ? prior_ok
+                      : (size != best_size_)       ? size > best_size_
+                                                   : sum < best_sum_;
+  if (better) {
+    best_ = clique;
+    best_prior_ok_ = prior_ok;
+    best_size_ = size;
+    best_sum_ = sum;
+  }
+}
+
+}  // namespace elaslam

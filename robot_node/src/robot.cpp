@@ -1,0 +1,340 @@
+#include "elaslam/robot_node/robot.hpp"
+
+#include <Eigen/LU>
+
+#include "elaslam/common/stats.hpp"
+
+namespace elaslam {
+namespace {
+
+// Room for one frame's events: every observation can yield one event, every mapped
+// landmark can go missing, plus UPDATEs for the corrected ones.
+std::size_t event_capacity(const RobotOptions& o) {
+  return static_cast<std::size_t>(2 * kMaxObservations + o.ekf.capacity + 8);
+}
+
+}  // namespace
+
+const char* to_string(EventKind k) {
+  switch (k) {
+    case EventKind::kAdd: return "ADD";
+    case EventKind::kUpdate: return "UPDATE";
+    case EventKind::kMoving: return "MOVING";
+    case EventKind::kReturn: return "RETURN";
+  }
+  return "?";
+}
+
+Robot::Robot(const RobotOptions& options, int robot_id)
+    : options_(options),
+      robot_id_(robot_id),
+      ekf_(options.ekf),
+      lmap_(options.ekf.max_landmark_id),
+      solver_(options.ela_gate_probability),
+      ela_threshold_(chi2_quantile(options.ela_gate_probability, 2)),
+      candidate_threshold_(chi2_quantile(options.ela_gate_probability, 2)) {
+  view_.reserve(kMaxObservations);
+  view_obs_.reserve(kMaxObservations);
+  inside_.reserve(kMaxObservations);
+  updated_.reserve(kMaxObservations);
+  out_count_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
+  handled_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
+  events_.reserve(event_capacity(options));
+  gates_.reserve(kMaxObservations);
+}
+
+void Robot::reset() {
+  initialised_ = false;
+  last_frame_ = -1;
+  lmap_.clear();
+  std::fill(out_count_.begin(), out_count_.end(), 0);
+  std::fill(handled_.begin(), handled_.end(), -1);
+  events_.clear();
+  gates_.clear();
+}
+
+FrameSummary Robot::process(const FrameInput& in) {
+  FrameSummary s;
+  events_.clear();
+  gates_.clear();
+  updated_.clear();
+  s.num_obs = in.num_obs;
+  predict(in, &s);
+  last_frame_ = in.frame;
+  for (int k = 0; k < in.num_obs; ++k) lmap_[in.obs[static_cast<std::size_t>(k)].landmark_id].last_seen_frame = in.frame;
+
+  if (options_.mode == Mode::kEkf || options_.mode == Mode::kGated) {
+    process_classic(in, &s);
+  } else {
+    process_ela(in, &s);
+    check_missing(&s);
+  }
+  for (int id : updated_)
+    if (ekf_.has_landmark(id)) emit(EventKind::kUpdate, id);
+  s.events_dropped = events_dropped_;
+  events_dropped_ = 0;
+  return s;
+}
+
+// Prediction from the odometer increment (eqs 4-5). The first frame sets the prior
+// at the odometer reading: robots start at known poses (paper section 4), and the
+// odometry frame O of each robot coincides with W at its start.
+void Robot::predict(const FrameInput& in, FrameSummary* s) {
+  if (!initialised_) {
+    Eigen::Matrix3d P0 = Eigen::Matrix3d::Zero();
+    P0(0, 0) = P0(1, 1) = options_.initial_sigma_xy * options_.initial_sigma_xy;
+    P0(2, 2) = options_.initial_sigma_theta * options_.initial_sigma_theta;
+    ekf_.reset(in.odometer, P0);
+    initialised_ = true;
+  } else {
+    const Pose2 increment = between(last_odometer_, in.odometer);
+    if (ekf_.predict(increment, odometry_covariance(increment, in.noise)) != EkfStatus::kOk) ++s->filter_faults;
+  }
+  last_odometer_ = in.odometer;
+}
+
+// Modes ekf and gated: every observation of a mapped landmark corrects the filter
+// (gated: unless its innovation fails the chi-square gate); new ones are added at once.
+void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
+  const bool gate = options_.mode == Mode::kGated;
+  for (int k = 0; k < in.num_obs; ++k) {
+    const Observation& o = in.obs[static_cast<std::size_t>(k)];
+    if (!ekf_.has_landmark(o.landmark_id)) continue;
+    const UpdateReport r = ekf_.update(o.landmark_id, o.z, gate);
+    gates_.push_back({o.landmark_id, gate ? GateKind::kInnovation : GateKind::kNone, r.d2, r.threshold,
+                      r.status != EkfStatus::kGated});
+    if (r.status == EkfStatus::kOk) {
+      ++s->num_accepted;
+      updated_.push_back(o.landmark_id);
+    } else if (r.status == EkfStatus::kGated) {
+      ++s->num_rejected;
+    } else {
+      ++s->filter_faults;
+    }
+  }
+  for (int k = 0; k < in.num_obs; ++k) {
+    const Observation& o = in.obs[static_cast<std::size_t>(k)];
+    if (ekf_.has_landmark(o.landmark_id)) continue;
+    ++s->num_candidates;
+    if (ekf_.add_landmark(o.landmark_id, o.z) != EkfStatus::kOk) {
+      ++s->filter_faults;
+      continue;
+    }
+    lmap_.set_status(o.landmark_id, LandmarkStatus::kStatic, in.frame);
+    emit(EventKind::kAdd, o.landmark_id);
+    ++s->num_added;
+  }
+}
+
+// Modes ela and consensus: Algorithm 1 with the L-map.
+void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
+  // 1. Mapped landmarks in view.
+  view_.clear();
+  view_obs_.clear();
+  for (int k = 0; k < in.num_obs; ++k) {
+    const Observation& o = in.obs[static_cast<std::size_t>(k)];
+    if (!ekf_.has_landmark(o.landmark_id)) continue;
+    InView v;
+    v.id = o.landmark_id;
+    v.z = o.z;
+    set_local(&v, ekf_.measurement_cov());
+    view_.push_back(v);
+    view_obs_.push_back(k);
+  }
+  // 2. Their verdicts, all from the same prior.
+  gate_view(s);
+  // 3. Correct with the accepted ones.
+  for (std::size_t k = 0; k < view_.size(); ++k) {
+    if (!inside_[k]) continue;
+    const UpdateReport r = ekf_.update(view_[k].id, view_[k].z, false);
+    if (r.status == EkfStatus::kOk) {
+      ++s->num_accepted;
+      updated_.push_back(view_[k].id);
+    } else {
+      ++s->filter_faults;
+    }
+  }
+  // 4. Remove the ones found moving (after `moving_after` consecutive verdicts).
+  for (std::size_t k = 0; k < view_.size(); ++k) {
+    const int id = view_[k].id;
+    int& outs = out_count_[static_cast<std::size_t>(id)];
+    if (inside_[k]) {
+      outs = 0;
+      continue;
+    }
+    ++s->num_rejected;
+    if (++outs >= options_.moving_after)
+      mark_moving(id, &in.obs[static_cast<std::size_t>(view_obs_[k])], s);
+  }
+  // 5. New landmarks and candidates.
+  handle_candidates(in, s);
+}
+
+void Robot::gate_view(FrameSummary* /*s*/) {
+  const int n = static_cast<int>(view_.size());
+  inside_.assign(view_.size(), 1);
+  if (options_.mode == Mode::kConsensus && n >= 2) {
+    gate_view_consensus();
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    GateRecord g{view_[static_cast<std::size_t>(i)].id, GateKind::kMulti, 0.0, ela_threshold_, true};
+    if (n == 1) {
+      // Single landmark in view: its ELA is the EKF's predicted observation.
+      const UpdateReport r = ekf_.check(g.landmark_id, view_[0].z);
+      g.kind = GateKind::kInnovation;
+      g.d2 = r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
+    } else {
+      g.d2 = ela_multi_d2(ekf_, view_.data(), n, i);  // eq 16
+    }
+    g.inside = g.d2 <= g.threshold;
+    inside_[static_cast<std::size_t>(i)] = g.inside;
+    gates_.push_back(g);
+  }
+}
+
+// Largest mutually consistent set of the landmarks in view; outside it = moving.
+// A best set of fewer than two falls back to each landmark's single test.
+void Robot::gate_view_consensus() {
+  const int n = static_cast<int>(view_.size());
+  solver_.reset(n);
+  for (int i = 0; i < n; ++i) {
+    const UpdateReport r = ekf_.check(view_[static_cast<std::size_t>(i)].id, view_[static_cast<std::size_t>(i)].z);
+    solver_.set_prior_d2(i, r.status == EkfStatus::kOk ? r.d2 : 1e12);
+    for (int j = i + 1; j < n; ++j)
+      if (pair_d2(ekf_, view_[static_cast<std::size_t>(i)], view_[static_cast<std::size_t>(j)]) <= ela_threshold_)
+        solver_.add_edge(i, j);
+  }
+  const std::uint64_t chosen = solver_.solve();
+  const bool fallback = __builtin_popcountll(chosen) < 2;
+  for (int i = 0; i < n; ++i) {
+    GateRecord g{view_[static_cast<std::size_t>(i)].id, GateKind::kConsensus, 0.0, ela_threshold_, true};
+    if (fallback) {
+      const UpdateReport r = ekf_.check(g.landmark_id, view_[static_cast<std::size_t>(i)].z);
+      g.kind = GateKind::kInnovation;
+      g.d2 = r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
+      g.inside = g.d2 <= g.threshold;
+    } else {
+      g.inside = (chosen >> i) & 1u;
+      g.d2 = g.inside ? 0.0 : std::numeric_limits<double>::infinity();
+    }
+    inside_[static_cast<std::size_t>(i)] = g.inside;
+    gates_.push_back(g);
+  }
+}
+
+// Steps 1-2 of section 5: a new landmark becomes a CANDIDATE; a candidate whose
+// new world position lies within its ELA for enough consecutive sightings is added.
+void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
+  for (int k = 0; k < in.num_obs; ++k) {
+    const Observation& o = in.obs[static_cast<std::size_t>(k)];
+    const int id = o.landmark_id;
+    if (ekf_.has_landmark(id) || handled_[static_cast<std::size_t>(id)] == in.frame) continue;
+    ++s->num_candidates;
+    Eigen::Matrix<double, 2, 3> Gx;
+    Eigen::Matrix2d Gz;
+    const Eigen::Vector2d p = inverse_observe(ekf_.pose(), o.z, &Gx, &Gz);
+    const Eigen::Matrix2d C =
+        Gx * ekf_.pose_cov() * Gx.transpose() + Gz * ekf_.measurement_cov() * Gz.transpose();
+    LMapEntry& e = lmap_[id];
+    if (e.status == LandmarkStatus::kCandidate) {
+      const Eigen::Vector2d r = p - e.position;
+      const double d2 = r.dot((C + e.cov).inverse() * r);
+      const bool inside = d2 <= candidate_threshold_;
+      gates_.push_back({id, GateKind::kCandidate, d2, candidate_threshold_, inside});
+      if (inside) {
+        const int need = e.was_moving ? options_.return_frames : options_.confirm_frames;
+        if (++e.consistent_sightings >= need) {
+          const EkfStatus st = ekf_.add_landmark(id, o.z);
+          if (st == EkfStatus::kOk) {
+            lmap_.set_status(id, LandmarkStatus::kStatic, in.frame);
+            e.missing_frames = 0;
+            out_count_[static_cast<std::size_t>(id)] = 0;
+            emit(e.was_moving ? EventKind::kReturn : EventKind::kAdd, id);
+            ++s->num_added;
+          } else {
+            ++s->filter_faults;  // kFull: it stays a candidate
+          }
+        }
+        continue;
+      }
+    }
+    // New, moving-and-seen-again, or inconsistent: (re)anchor the candidate here.
+    lmap_.set_status(id, LandmarkStatus::kCandidate, in.frame);
+    e.position = p;
+    e.cov = C;
+    e.consistent_sightings = 1;
+  }
+}
+
+// Step 4: a STATIC landmark well inside the field of view that has not been seen
+// for `missing_frames` frames has left.
+void Robot::check_missing(FrameSummary* s) {
+  if (options_.missing_frames <= 0) return;
+  const Pose2 pose = ekf_.pose();
+  const double expect_range = options_.sensor_range - options_.fov_margin;
+  for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
+    const int id = ekf_.id_at(slot);
+    LMapEntry& e = lmap_[id];
+    if (e.last_seen_frame == last_frame_) {
+      e.missing_frames = 0;
+      continue;
+    }
+    if ((ekf_.landmark(id) - pose.translation()).norm() >= expect_range) {
+      e.missing_frames = 0;
+      continue;
+    }
+    if (++e.missing_frames >= options_.missing_frames) mark_moving(id, nullptr, s);
+  }
+}
+
+// Remove a landmark as moving; it may come back as a candidate when it stops.
+void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
+  const Eigen::Vector2d last = ekf_.landmark(id);
+  const Eigen::Matrix2d last_cov = ekf_.landmark_cov(id);
+  if (ekf_.remove_landmark(id) != EkfStatus::kOk) {
+    ++s->filter_faults;
+    return;
+  }
+  LMapEntry& e = lmap_[id];
+  e.was_moving = true;
+  e.missing_frames = 0;
+  out_count_[static_cast<std::size_t>(id)] = 0;
+  handled_[static_cast<std::size_t>(id)] = last_frame_;
+  if (seen) {
+    Eigen::Matrix<double, 2, 3> Gx;
+    Eigen::Matrix2d Gz;
+    e.position = inverse_observe(ekf_.pose(), seen->z, &Gx, &Gz);
+    e.cov = Gx * ekf_.pose_cov() * Gx.transpose() + Gz * ekf_.measurement_cov() * Gz.transpose();
+    e.consistent_sightings = 1;
+    lmap_.set_status(id, LandmarkStatus::kCandidate, last_frame_);
+  } else {
+    lmap_.set_status(id, LandmarkStatus::kMoving, last_frame_);
+  }
+  emit_at(EventKind::kMoving, id, last, last_cov);
+  ++s->num_moving;
+}
+
+bool Robot::apply_notice(int landmark_id, int frame) {
+  if (!lmap_.valid_id(landmark_id)) return false;
+  LMapEntry& e = lmap_[landmark_id];
+  e.was_moving = true;  // coming back needs return_frames consistent sightings
+  if (!ekf_.has_landmark(landmark_id)) return false;
+  if (ekf_.remove_landmark(landmark_id) != EkfStatus::kOk) return false;
+  lmap_.set_status(landmark_id, LandmarkStatus::kMoving, frame);
+  e.missing_frames = 0;
+  out_count_[static_cast<std::size_t>(landmark_id)] = 0;
+  return true;
+}
+
+void Robot::emit(EventKind kind, int id) { emit_at(kind, id, ekf_.landmark(id), ekf_.landmark_cov(id)); }
+
+void Robot::emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C) {
+  if (events_.size() >= events_.capacity()) {  // never grow: the buffer is sized for a frame
+    ++events_dropped_;
+    return;
+  }
+  events_.push_back({kind, id, last_frame_, p, C});
+}
+
+}  // namespace elaslam

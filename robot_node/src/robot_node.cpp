@@ -1,0 +1,214 @@
+#include "elaslam/robot_node/robot_node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "elaslam/common/channels.hpp"
+
+namespace elaslam {
+namespace {
+
+constexpr double kMaxRange = 1e4;       // [m] anything beyond is a corrupt message
+constexpr double kMaxOdomVar = 1e3;     // [m^2/m], [rad^2/rad]: sanity bound on the noise model
+constexpr double kBearingSlack = 1e-9;  // [rad] tolerance on [-pi, pi]
+
+bool finite(double v) { return std::isfinite(v); }
+
+std::string str(const char* what, double v) {
+  std::ostringstream os;
+  os << what << " (got " << v << ")";
+  return os.str();
+}
+
+void set_cov2(double (&dst)[2][2], const Eigen::Matrix2d& C) {
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) dst[r][c] = C(r, c);
+}
+
+}  // namespace
+
+RobotNode::RobotNode(const RobotOptions& options, int robot_id)
+    : options_(options), robot_id_(robot_id), robot_(options, robot_id) {
+  events_.reserve(static_cast<std::size_t>(2 * kMaxObservations + options.ekf.capacity + 8));
+  id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
+}
+
+std::string RobotNode::validate(const sensor_frame_t& m) const {
+  if (m.robot_id != robot_id_) return str("robot_id is not this robot's", m.robot_id);
+  if (m.frame < 0) return str("frame is negative", m.frame);
+  if (m.num_obs < 0 || m.num_obs > kMaxObservations) return str("num_obs outside [0, 64]", m.num_obs);
+  if (!finite(m.odom_x) || !finite(m.odom_y) || !finite(m.odom_theta)) return "odometer reading is not finite";
+  if (std::fabs(m.odom_x) > 1e6 || std::fabs(m.odom_y) > 1e6) return "odometer position beyond 1e6 m";
+  for (double v : {m.odom_var_trans_per_m, m.odom_var_rot_per_rad, m.odom_var_rot_per_m})
+    if (!finite(v) || v < 0.0 || v > kMaxOdomVar) return str("odometry noise variance not in [0, 1e3]", v);
+  for (int k = 0; k < m.num_obs; ++k) {
+    const range_bearing_t& o = m.obs[k];
+    if (o.landmark_id < 0 || o.landmark_id >= options_.ekf.max_landmark_id)
+      return str("observation landmark_id outside [0, max_landmark_id)", o.landmark_id);
+    if (!finite(o.range) || o.range <= 0.0 || o.range > kMaxRange)
+      return str("observation range not in (0, 1e4] m", o.range);
+    if (!finite(o.bearing) || std::fabs(o.bearing) > kPi + kBearingSlack)
+      return str("observation bearing not in [-pi, pi]", o.bearing);
+  }
+  return "";
+}
+
+RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t now_utime, std::string* why) {
+  snapshot_ready_ = false;
+  events_.clear();
+  std::string problem = validate(msg);
+  // Two observations of one landmark in a frame: the contract allows one.
+  for (int k = 0; problem.empty() && k < msg.num_obs; ++k) {
+    auto& seen = id_seen_[static_cast<std::size_t>(msg.obs[k].landmark_id)];
+    if (seen) problem = str("landmark observed twice in one frame", msg.obs[k].landmark_id);
+    seen = 1;
+  }
+  for (int k = 0; k < msg.num_obs && k < kMaxObservations; ++k) {
+    const int id = msg.obs[k].landmark_id;
+    if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
+  }
+  if (problem.empty() && last_frame_ >= 0 && msg.frame > last_frame_ + options_.max_frame_gap)
+    problem = str("frame jumps further ahead than node.max_frame_gap", msg.frame);
+  if (!problem.empty()) {
+    ++counters_.rejected_inputs;
+    if (why) *why = problem;
+    return Verdict::kInvalid;
+  }
+  if (msg.frame == last_frame_) {
+    ++counters_.frames_duplicate;
+    if (why) *why = "duplicate frame " + std::to_string(msg.frame);
+    return Verdict::kDuplicate;
+  }
+  if (msg.frame < last_frame_) {
+    ++counters_.frames_out_of_order;
+    if (why) *why = "frame " + std::to_string(msg.frame) + " older than " + std::to_string(last_frame_);
+    return Verdict::kOutOfOrder;
+  }
+  if (last_frame_ >= 0) counters_.frames_gap += msg.frame - last_frame_ - 1;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  input_.frame = msg.frame;
+  input_.odometer = {msg.odom_x, msg.odom_y, wrap_angle(msg.odom_theta)};
+  input_.noise = {msg.odom_var_trans_per_m, msg.odom_var_rot_per_rad, msg.odom_var_rot_per_m};
+  input_.num_obs = msg.num_obs;
+  for (int k = 0; k < msg.num_obs; ++k)
+    input_.obs[static_cast<std::size_t>(k)] = {msg.obs[k].landmark_id, {msg.obs[k].range, msg.obs[k].bearing}};
+  const FrameSummary s = robot_.process(input_);
+  last_frame_ = msg.frame;
+  ++counters_.frames;
+  counters_.filter_faults += s.filter_faults;
+  fill_events(now_utime);
+  if (msg.frame % options_.snapshot_period_frames == 0) {
+    make_snapshot(now_utime);
+    snapshot_ready_ = true;
+  }
+  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count();
+  processing_.add(us);
+  fill_pose(msg, now_utime, s, us);
+  return Verdict::kProcessed;
+}
+
+void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s,
+                          std::int64_t us) {
+  const EkfSlam& f = robot_.filter();
+  const Pose2 p = f.pose();
+  const Eigen::Matrix3d C = f.pose_cov();
+  pose_.utime = now_utime;
+  pose_.frame = msg.frame;
+  pose_.robot_id = static_cast<int16_t>(robot_id_);
+  pose_.source_utime = msg.utime;
+  pose_.x = p.x;
+  pose_.y = p.y;
+  pose_.theta = p.theta;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) pose_.cov[r][c] = C(r, c);
+  pose_.processing_us = static_cast<int32_t>(std::min<std::int64_t>(us, INT32_MAX));
+  pose_.mean_diag_p = f.mean_diag();
+  pose_.num_obs = static_cast<int16_t>(s.num_obs);
+  pose_.num_accepted = static_cast<int16_t>(s.num_accepted);
+  pose_.num_rejected = static_cast<int16_t>(s.num_rejected);
+  pose_.num_landmarks = static_cast<int16_t>(f.num_landmarks());
+}
+
+void RobotNode::fill_events(std::int64_t now_utime) {
+  for (const MapEvent& e : robot_.events()) {
+    landmark_event_t m{};
+    m.utime = now_utime;
+    m.frame = e.frame;
+    m.robot_id = static_cast<int16_t>(robot_id_);
+    m.seq = ++seq_;
+    m.kind = static_cast<int8_t>(e.kind);
+    m.landmark_id = e.landmark_id;
+    m.x = e.position.x();
+    m.y = e.position.y();
+    set_cov2(m.cov, e.cov);
+    events_.push_back(m);
+  }
+  counters_.events_sent += static_cast<std::int64_t>(events_.size());
+}
+
+const lmap_snapshot_t& RobotNode::make_snapshot(std::int64_t now_utime) {
+  const EkfSlam& f = robot_.filter();
+  snapshot_.utime = now_utime;
+  snapshot_.frame = last_frame_;
+  snapshot_.robot_id = static_cast<int16_t>(robot_id_);
+  snapshot_.seq = seq_;
+  int n = 0;
+  for (int slot = 0; slot < f.num_landmarks() && n < channels::kMaxLandmarksPerMessage; ++slot, ++n) {
+    const int id = f.id_at(slot);
+    landmark_estimate_t& l = snapshot_.landmarks[n];
+    l.id = id;
+    const Eigen::Vector2d p = f.landmark(id);
+    l.x = p.x();
+    l.y = p.y();
+    set_cov2(l.cov, f.landmark_cov(id));
+  }
+  snapshot_.num_landmarks = static_cast<int16_t>(n);
+  int m = 0;
+  const LMap& lm = robot_.lmap();
+  for (int id = 0; id < lm.size() && m < channels::kMaxLandmarksPerMessage; ++id) {
+    const LMapEntry& e = lm[id];
+    if (e.status == LandmarkStatus::kMoving || (e.status == LandmarkStatus::kCandidate && e.was_moving))
+      snapshot_.moving_ids[m++] = id;
+  }
+  snapshot_.num_moving = static_cast<int16_t>(m);
+  return snapshot_;
+}
+
+bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
+  std::string problem;
+  if (msg.landmark_id < 0 || msg.landmark_id >= options_.ekf.max_landmark_id)
+    problem = str("landmark_id outside [0, max_landmark_id)", msg.landmark_id);
+  else if (msg.detected_by < 1 || msg.detected_by > channels::kMaxRobots)
+    problem = str("detected_by outside [1, 8]", msg.detected_by);
+  if (!problem.empty()) {
+    ++counters_.rejected_inputs;
+    if (why) *why = problem;
+    return false;
+  }
+  const bool removed = msg.detected_by != robot_id_ && robot_.apply_notice(msg.landmark_id, msg.frame);
+  ++(removed ? counters_.notices_applied : counters_.notices_ignored);
+  return true;
+}
+
+node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
+  node_status_t s{};
+  s.utime = now_utime;
+  s.frame = last_frame_;
+  s.node_kind = node_status_t::ROBOT;
+  s.node_id = static_cast<int16_t>(robot_id_);
+  s.frames = counters_.frames;
+  s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;
+  s.rejected_inputs = counters_.rejected_inputs;
+  s.decode_errors = counters_.decode_errors;
+  s.queue_drops = counters_.queue_drops;
+  s.filter_faults = counters_.filter_faults;
+  s.events_sent = counters_.events_sent;
+  s.processing_us_p50 = static_cast<int32_t>(processing_.quantile(0.5));
+  s.processing_us_p99 = static_cast<int32_t>(processing_.quantile(0.99));
+  s.processing_us_max = static_cast<int32_t>(std::min<std::int64_t>(processing_.max(), INT32_MAX));
+  return s;
+}
+
+}  // namespace elaslam

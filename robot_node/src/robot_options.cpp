@@ -1,0 +1,73 @@
+#include "elaslam/robot_node/robot_options.hpp"
+
+#include "elaslam/common/geometry.hpp"
+
+namespace elaslam {
+
+const char* to_string(Mode m) {
+  switch (m) {
+    case Mode::kEkf: return "ekf";
+    case Mode::kGated: return "gated";
+    case Mode::kEla: return "ela";
+    case Mode::kConsensus: return "consensus";
+  }
+  return "?";
+}
+
+bool parse_mode(const std::string& s, Mode* m) {
+  for (Mode c : {Mode::kEkf, Mode::kGated, Mode::kEla, Mode::kConsensus})
+    if (s == to_string(c)) {
+      *m = c;
+      return true;
+    }
+  return false;
+}
+
+void parse(config::Reader& r, RobotOptions* o) {
+  std::string mode = to_string(o->mode);
+  r.read_enum("mode", &mode, {"ekf", "gated", "ela", "consensus"});
+  parse_mode(mode, &o->mode);
+  r.section("filter", [&](config::Reader& f) {
+    f.read("capacity", &o->ekf.capacity, 1, 1024);
+    f.read("max_landmark_id", &o->ekf.max_landmark_id, 1, 1 << 20);
+    f.read("range_sigma_m", &o->ekf.range_sigma, 1e-6, 100.0);
+    double bearing_deg = rad2deg(o->ekf.bearing_sigma);
+    f.read("bearing_sigma_deg", &bearing_deg, 1e-6, 90.0);
+    o->ekf.bearing_sigma = deg2rad(bearing_deg);
+    f.read("gate_probability", &o->ekf.gate_probability, 0.5, 1.0 - 1e-9);
+    f.read_optional("joseph", &o->ekf.joseph);
+    f.read("initial_sigma_xy_m", &o->initial_sigma_xy, 0.0, 100.0);
+    double th_deg = rad2deg(o->initial_sigma_theta);
+    f.read("initial_sigma_theta_deg", &th_deg, 0.0, 180.0);
+    o->initial_sigma_theta = deg2rad(th_deg);
+  });
+  r.section("ela", [&](config::Reader& e) {
+    e.read("gate_probability", &o->ela_gate_probability, 0.5, 1.0 - 1e-9);
+    e.read("confirm_frames", &o->confirm_frames, 1, 1000);
+    e.read("return_frames", &o->return_frames, 1, 1000);
+    e.read("moving_after", &o->moving_after, 1, 1000);
+    e.read("missing_frames", &o->missing_frames, 0, 1000);
+    e.read("sensor_range_m", &o->sensor_range, 0.01, 1000.0);
+    e.read("fov_margin_m", &o->fov_margin, 0.0, 1000.0);
+    if (o->fov_margin >= o->sensor_range)
+      e.fail("fov_margin_m", "must be smaller than sensor_range_m, or no landmark is ever expected in view");
+  });
+  r.section("node", [&](config::Reader& n) {
+    n.read("snapshot_period_frames", &o->snapshot_period_frames, 1, 100000);
+    n.read("max_frame_gap", &o->max_frame_gap, 1, 100000);
+  });
+  if (o->ekf.capacity > o->ekf.max_landmark_id)
+    r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");
+}
+
+RobotOptions load_robot_options(const std::string& path, std::string* effective_yaml) {
+  config::Document doc = config::Document::from_file(path);
+  RobotOptions o;
+  doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
+  doc.allow({"scenario", "main", "lcm", "team"});
+  doc.finish();
+  if (effective_yaml) *effective_yaml = doc.effective_yaml();
+  return o;
+}
+
+}  // namespace elaslam

@@ -1,0 +1,55 @@
+// The whole team in one process, in lockstep (DESIGN.md section 1, way 2):
+// simulator + every robot node + main_robot, frame by frame, through an in-process
+// bus that carries the same encoded LCM messages as the live system. Order per
+// frame: sensors of frame k -> robots -> main_robot -> notices, before frame k+1.
+// Deterministic: the same config gives the same result (timing aside).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "elaslam/team/metrics.hpp"
+#include "elaslam/team/team_config.hpp"
+
+namespace elaslam {
+
+struct RunOverrides {
+  std::optional<Mode> mode;
+  std::optional<double> dynamism_percent;
+  std::optional<double> landmark_speed_mps;
+  std::optional<int> seed;
+};
+
+/// Apply overrides to a copy of the config (validated ranges; throws
+/// std::invalid_argument with the field named on a bad value).
+TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o);
+
+struct TrajectoryPoint {
+  double time_s = 0.0;
+  Pose2 pose;
+};
+
+struct RunResult {
+  RunMetrics metrics;
+  std::vector<FrameMetrics> frames;
+  std::vector<int> robot_ids;
+  std::vector<std::vector<TrajectoryPoint>> estimated;  // by robot index
+  std::vector<std::vector<TrajectoryPoint>> truth;      // by robot index
+  // Final global map (id, estimate, covariance) and moving ids, for plots.
+  struct MapLandmark {
+    int id;
+    Eigen::Vector2d p;
+    Eigen::Matrix2d cov;
+  };
+  std::vector<MapLandmark> final_map;
+  std::vector<int> final_moving;
+  std::vector<Eigen::Vector2d> final_truth;  // true landmark positions at the last frame
+  std::vector<std::uint8_t> truly_moving;
+  long long bus_messages = 0;  // messages carried by the in-process bus
+};
+
+/// Run the configured scenario end to end.
+RunResult run_team(const TeamConfig& config);
+
+}  // namespace elaslam

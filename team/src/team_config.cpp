@@ -1,0 +1,34 @@
+#include "elaslam/team/team_config.hpp"
+
+#include <cmath>
+
+namespace elaslam {
+
+std::string check_team(const TeamConfig& c) {
+  const double D2 = c.scenario.sensor.max_range_m();
+  if (std::fabs(c.robot.sensor_range - D2) > 1e-6 * (1.0 + D2))
+    return "robot.ela.sensor_range_m (" + std::to_string(c.robot.sensor_range) +
+           ") must equal scenario.sensor.fov_diameter_m / 2 (" + std::to_string(D2) +
+           "): the robots must know their own field of view";
+  if (c.scenario.landmarks.count > c.robot.ekf.max_landmark_id)
+    return "scenario.landmarks.count exceeds robot.filter.max_landmark_id";
+  if (c.scenario.landmarks.count > c.main.max_landmark_id) return "scenario.landmarks.count exceeds main.max_landmark_id";
+  return "";
+}
+
+TeamConfig load_team_config(const std::string& path) {
+  config::Document doc = config::Document::from_file(path);
+  TeamConfig c;
+  doc.section("scenario", [&](config::Reader& r) { sim::parse(r, &c.scenario); });
+  doc.section("robot", [&](config::Reader& r) { parse(r, &c.robot); });
+  doc.section("main", [&](config::Reader& r) { parse(r, &c.main); });
+  doc.allow({"lcm", "team"});
+  doc.finish();
+  const std::string problem = check_team(c);
+  if (!problem.empty()) throw config::ConfigError(path, {problem});
+  c.effective_yaml = doc.effective_yaml();
+  c.source = path;
+  return c;
+}
+
+}  // namespace elaslam

@@ -1,0 +1,147 @@
+#include "elaslam/team/team_run.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/simulator/messages.hpp"
+#include "elaslam/simulator/world.hpp"
+
+namespace elaslam {
+namespace {
+
+// The in-process bus: every message crosses it encoded, exactly as on LCM, so the
+// in-process run exercises the message contract the live team uses.
+class Bus {
+ public:
+  template <typename Msg>
+  Msg carry(const Msg& m) {
+    const int size = m.getEncodedSize();
+    if (buf_.size() < static_cast<std::size_t>(size)) buf_.resize(static_cast<std::size_t>(size));
+    Msg out;
+    if (m.encode(buf_.data(), 0, size) != size || out.decode(buf_.data(), 0, size) != size)
+      throw std::logic_error(std::string("in-process bus: cannot encode/decode ") + Msg::getTypeName());
+    ++messages_;
+    return out;
+  }
+  long long messages() const { return messages_; }
+
+ private:
+  std::vector<std::uint8_t> buf_;
+  long long messages_ = 0;
+};
+
+void fill_truth(const ground_truth_t& gt, FrameData* f) {
+  f->robot_ids.clear();
+  f->true_poses.clear();
+  for (int i = 0; i < gt.num_robots; ++i) {
+    f->robot_ids.push_back(gt.robot_ids[i]);
+    f->true_poses.push_back({gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta});
+  }
+  int max_id = -1;
+  for (int i = 0; i < gt.num_landmarks; ++i) max_id = std::max(max_id, gt.landmarks[i].id);
+  f->true_landmarks.assign(static_cast<std::size_t>(max_id + 1), Eigen::Vector2d::Zero());
+  f->truly_moving.assign(static_cast<std::size_t>(max_id + 1), 0);
+  for (int i = 0; i < gt.num_landmarks; ++i) {
+    const auto& l = gt.landmarks[i];
+    f->true_landmarks[static_cast<std::size_t>(l.id)] = {l.x, l.y};
+    f->truly_moving[static_cast<std::size_t>(l.id)] = l.moving ? 1 : 0;
+  }
+}
+
+void fill_map(const global_map_t& g, FrameData* f) {
+  f->map_landmarks.clear();
+  f->map_moving.clear();
+  for (int i = 0; i < g.num_landmarks; ++i)
+    f->map_landmarks.push_back({g.landmarks[i].id, {g.landmarks[i].x, g.landmarks[i].y}});
+  for (int i = 0; i < g.num_moving; ++i) f->map_moving.push_back(g.moving_ids[i]);
+}
+
+}  // namespace
+
+TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
+  TeamConfig c = base;
+  if (o.mode) c.robot.mode = *o.mode;
+  if (o.dynamism_percent) {
+    if (!(*o.dynamism_percent >= 0.0 && *o.dynamism_percent <= 100.0))
+      throw std::invalid_argument("dynamism must be in [0, 100] percent");
+    c.scenario.dynamism_percent = *o.dynamism_percent;
+  }
+  if (o.landmark_speed_mps) {
+    if (!(*o.landmark_speed_mps >= 0.0 && *o.landmark_speed_mps <= 100.0))
+      throw std::invalid_argument("speed must be in [0, 100] m/s");
+    c.scenario.landmark_speed_mps = *o.landmark_speed_mps;
+  }
+  if (o.seed) c.scenario.seed = *o.seed;
+  return c;
+}
+
+RunResult run_team(const TeamConfig& config) {
+  sim::World world(config.scenario);
+  const int R = world.num_robots();
+  std::vector<RobotNode> robots;
+  robots.reserve(static_cast<std::size_t>(R));
+  for (int i = 0; i < R; ++i) robots.emplace_back(config.robot, config.scenario.robots[static_cast<std::size_t>(i)].id);
+  MainNode main(config.main);
+  Bus bus;
+  MetricsAccumulator acc;
+  RunResult out;
+  out.estimated.resize(static_cast<std::size_t>(R));
+  out.truth.resize(static_cast<std::size_t>(R));
+
+  const std::int64_t t0 = 1'000'000'000'000'000;  // a fixed epoch: runs are reproducible
+  FrameData f;
+  for (int k = 0; k < config.scenario.frames; ++k) {
+    if (k > 0) world.step();
+    const double t = k * config.scenario.dt_s();
+    const std::int64_t utime = t0 + static_cast<std::int64_t>(std::llround(t * 1e6));
+    const ground_truth_t gt = bus.carry(sim::to_message(world, utime));
+    fill_truth(gt, &f);
+    f.frame = k;
+    f.time_s = t;
+    f.has_pose.assign(static_cast<std::size_t>(R), 0);
+    f.est_poses.assign(static_cast<std::size_t>(R), Pose2{});
+    f.mean_diag_p.assign(static_cast<std::size_t>(R), 0.0);
+    f.processing_us.assign(static_cast<std::size_t>(R), 0);
+    f.observed.clear();
+    // Sensors of frame k -> robots -> main_robot.
+    for (int i = 0; i < R; ++i) {
+      const sensor_frame_t s = bus.carry(sim::to_message(world.sensor_frame(i), utime));
+      for (int o = 0; o < s.num_obs; ++o) f.observed.push_back(s.obs[o].landmark_id);
+      RobotNode& node = robots[static_cast<std::size_t>(i)];
+      if (node.on_sensor(s, utime) != RobotNode::Verdict::kProcessed) continue;
+      const pose_estimate_t p = bus.carry(node.pose_msg());
+      f.has_pose[static_cast<std::size_t>(i)] = 1;
+      f.est_poses[static_cast<std::size_t>(i)] = {p.x, p.y, p.theta};
+      f.mean_diag_p[static_cast<std::size_t>(i)] = p.mean_diag_p;
+      f.processing_us[static_cast<std::size_t>(i)] = p.processing_us;
+      out.estimated[static_cast<std::size_t>(i)].push_back({t, {p.x, p.y, p.theta}});
+      out.truth[static_cast<std::size_t>(i)].push_back({t, world.robot_pose(i)});
+      for (const auto& ev : node.event_msgs()) main.on_event(bus.carry(ev));
+      if (node.snapshot_ready()) main.on_snapshot(bus.carry(node.snapshot_msg()));
+    }
+    // -> notices, before frame k + 1.
+    for (const auto& n : main.take_notices(utime)) {
+      const dynamic_notice_t msg = bus.carry(n);
+      for (auto& node : robots) node.on_notice(msg);
+    }
+    fill_map(bus.carry(main.global_map_msg(utime)), &f);
+    acc.add(f);
+  }
+  out.metrics = acc.finish();
+  out.frames = acc.frames();
+  out.robot_ids = acc.robot_ids();
+  for (int id = 0; id < main.map().max_landmark_id(); ++id) {
+    const GlobalEntry& g = main.map().entry(id);
+    if (g.status == GlobalStatus::kStatic) out.final_map.push_back({id, g.fused, g.fused_cov});
+    if (g.status == GlobalStatus::kMoving) out.final_moving.push_back(id);
+  }
+  out.final_truth = f.true_landmarks;
+  out.truly_moving = f.truly_moving;
+  out.bus_messages = bus.messages();
+  return out;
+}
+
+}  // namespace elaslam

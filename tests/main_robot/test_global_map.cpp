@@ -1,0 +1,230 @@
+// The global map: fusion, MOVING / RETURN, event ordering, snapshot repair,
+// persistence, and message validation.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include "elaslam/main_robot/main_node.hpp"
+
+namespace elaslam {
+namespace {
+
+GlobalMapOptions options(Fusion f = Fusion::kInformation) {
+  GlobalMapOptions o;
+  o.max_landmark_id = 32;
+  o.fusion = f;
+  return o;
+}
+
+GlobalEvent ev(int robot, std::int64_t seq, int kind, int id, double x = 0, double y = 0, double var = 0.01,
+               int frame = 0) {
+  GlobalEvent e;
+  e.robot_id = robot;
+  e.seq = seq;
+  e.kind = kind;
+  e.landmark_id = id;
+  e.position = {x, y};
+  e.cov = Eigen::Matrix2d::Identity() * var;
+  e.frame = frame;
+  return e;
+}
+
+TEST(GlobalMap, InformationFusionMatchesClosedForm) {
+  GlobalMap m(options());
+  GlobalEvent a = ev(1, 1, landmark_event_t::ADD, 3, 1.0, 2.0);
+  a.cov << 0.04, 0.01, 0.01, 0.09;
+  GlobalEvent b = ev(2, 1, landmark_event_t::ADD, 3, 1.2, 1.9);
+  b.cov << 0.02, -0.005, -0.005, 0.03;
+  m.apply(a, nullptr);
+  m.apply(b, nullptr);
+  const Eigen::Matrix2d I = a.cov.inverse() + b.cov.inverse();
+  const Eigen::Matrix2d C = I.inverse();
+  const Eigen::Vector2d p = C * (a.cov.inverse() * a.position + b.cov.inverse() * b.position);
+  const GlobalEntry& g = m.entry(3);
+  EXPECT_EQ(g.status, GlobalStatus::kStatic);
+  EXPECT_EQ(g.contributors(), 0b11);
+  EXPECT_TRUE(g.fused.isApprox(p, 1e-12));
+  EXPECT_TRUE(g.fused_cov.isApprox(C, 1e-12));
+}
+
+TEST(GlobalMap, CovarianceIntersectionIsConsistentAndNoTighterThanEither) {
+  GlobalMap m(options(Fusion::kCovarianceIntersection));
+  m.apply(ev(1, 1, landmark_event_t::ADD, 3, 1.0, 2.0, 0.04), nullptr);
+  m.apply(ev(2, 1, landmark_event_t::ADD, 3, 1.2, 2.0, 0.01), nullptr);
+  const GlobalEntry& g = m.entry(3);
+  // Weights 0.2 / 0.8 by trace: info = 0.2/0.04 + 0.8/0.01 = 85 per axis.
+  EXPECT_NEAR(g.fused_cov(0, 0), 1.0 / 85.0, 1e-12);
+  EXPECT_NEAR(g.fused.x(), (0.2 / 0.04 * 1.0 + 0.8 / 0.01 * 1.2) / 85.0, 1e-12);
+  // CI never claims more information than the sum of the two.
+  EXPECT_GT(g.fused_cov(0, 0), 1.0 / (1.0 / 0.04 + 1.0 / 0.01));
+}
+
+TEST(GlobalMap, MovingRemovesNotifiesOnceAndReturnLetsBack) {
+  GlobalMap m(options());
+  std::vector<Notice> notices;
+  m.apply(ev(1, 1, landmark_event_t::ADD, 5, 1, 1), &notices);
+  m.apply(ev(2, 1, landmark_event_t::ADD, 5, 1.1, 1), &notices);
+  const auto v0 = m.version();
+  m.apply(ev(2, 2, landmark_event_t::MOVING, 5, 0, 0, 0, 7), &notices);
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_EQ(notices[0].landmark_id, 5);
+  EXPECT_EQ(notices[0].detected_by, 2);
+  EXPECT_EQ(notices[0].frame, 7);
+  EXPECT_EQ(m.entry(5).status, GlobalStatus::kMoving);
+  EXPECT_EQ(m.entry(5).contributors(), 0);  // deleted from the map
+  EXPECT_GT(m.version(), v0);
+  // Another robot's MOVING for the same landmark: idempotent, no second notice.
+  m.apply(ev(1, 2, landmark_event_t::MOVING, 5), &notices);
+  EXPECT_EQ(notices.size(), 1u);
+  // A stale UPDATE while MOVING is kept aside but does not bring it back.
+  m.apply(ev(3, 1, landmark_event_t::UPDATE, 5, 2, 2), &notices);
+  EXPECT_EQ(m.entry(5).status, GlobalStatus::kMoving);
+  // RETURN lets it back.
+  m.apply(ev(1, 3, landmark_event_t::RETURN, 5, 3, 3, 0.01, 20), &notices);
+  EXPECT_EQ(m.entry(5).status, GlobalStatus::kStatic);
+  EXPECT_EQ(m.entry(5).status_frame, 20);
+}
+
+TEST(GlobalMap, DuplicatesAndReorderedEventsAreIgnored) {
+  GlobalMap m(options());
+  EXPECT_EQ(m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), nullptr), EventResult::kApplied);
+  EXPECT_EQ(m.apply(ev(1, 2, landmark_event_t::UPDATE, 2, 2, 2), nullptr), EventResult::kApplied);
+  const auto v = m.version();
+  EXPECT_EQ(m.apply(ev(1, 2, landmark_event_t::UPDATE, 2, 9, 9), nullptr), EventResult::kDuplicate);
+  EXPECT_EQ(m.apply(ev(1, 1, landmark_event_t::ADD, 2, 9, 9), nullptr), EventResult::kStale);
+  EXPECT_EQ(m.version(), v);
+  EXPECT_DOUBLE_EQ(m.entry(2).fused.x(), 2.0);
+  EXPECT_EQ(m.stream(1).duplicates, 2);
+}
+
+TEST(GlobalMap, GapIsNotedAndRepairedBySnapshot) {
+  GlobalMap m(options());
+  std::vector<Notice> notices;
+  m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), &notices);
+  m.apply(ev(1, 2, landmark_event_t::ADD, 4, 4, 4), &notices);
+  // seq 3 (a MOVING of 4) and 4 (ADD of 6) are lost; seq 5 arrives.
+  EXPECT_EQ(m.apply(ev(1, 5, landmark_event_t::UPDATE, 2, 1.5, 1), &notices), EventResult::kAppliedAfterGap);
+  EXPECT_TRUE(m.stream(1).gap_pending);
+  EXPECT_EQ(m.entry(4).status, GlobalStatus::kStatic);  // not yet known to move
+  // The snapshot: robot 1 holds 2 and 6, and 4 as moving.
+  std::vector<std::pair<int, RobotEstimate>> lms = {
+      {2, RobotEstimate{true, {1.6, 1.0}, Eigen::Matrix2d::Identity() * 0.01, 10}},
+      {6, RobotEstimate{true, {6.0, 6.0}, Eigen::Matrix2d::Identity() * 0.01, 10}}};
+  m.apply_snapshot(1, 5, 10, lms, {4}, &notices);
+  EXPECT_FALSE(m.stream(1).gap_pending);
+  EXPECT_EQ(m.entry(4).status, GlobalStatus::kMoving);
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_EQ(notices[0].landmark_id, 4);
+  EXPECT_EQ(m.entry(6).status, GlobalStatus::kStatic);
+  EXPECT_DOUBLE_EQ(m.entry(2).fused.x(), 1.6);
+  // Events covered by the snapshot are stale now.
+  EXPECT_EQ(m.apply(ev(1, 4, landmark_event_t::ADD, 6, 9, 9), &notices), EventResult::kStale);
+}
+
+TEST(GlobalMap, SnapshotReplacesThatRobotsContributionWholesale) {
+  GlobalMap m(options());
+  m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), nullptr);
+  m.apply(ev(2, 1, landmark_event_t::ADD, 2, 3, 1), nullptr);
+  m.apply(ev(1, 2, landmark_event_t::ADD, 7, 7, 7), nullptr);
+  m.apply_snapshot(1, 2, 10, {{2, RobotEstimate{true, {1.0, 1.0}, Eigen::Matrix2d::Identity() * 0.01, 10}}}, {},
+                   nullptr);
+  EXPECT_EQ(m.entry(2).contributors(), 0b11);
+  EXPECT_EQ(m.entry(7).contributors(), 0);  // robot 1 no longer holds 7
+  EXPECT_EQ(m.entry(2).by_robot[1].position.x(), 3.0);  // robot 2 untouched
+}
+
+TEST(GlobalMap, PersistenceRoundTripAndRestart) {
+  GlobalMap m(options());
+  std::vector<Notice> n;
+  m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), &n);
+  m.apply(ev(2, 1, landmark_event_t::ADD, 2, 1.2, 1.1), &n);
+  m.apply(ev(2, 2, landmark_event_t::ADD, 9, -3, 4), &n);
+  m.apply(ev(1, 2, landmark_event_t::MOVING, 9, 0, 0, 0, 12), &n);
+  const std::string text = m.to_json();
+  GlobalMap restarted(options());
+  std::string why;
+  ASSERT_TRUE(restarted.from_json(text, &why)) << why;
+  EXPECT_EQ(restarted.version(), m.version());
+  EXPECT_EQ(restarted.to_json(), text);
+  EXPECT_TRUE(restarted.entry(2).fused.isApprox(m.entry(2).fused, 1e-12));
+  EXPECT_EQ(restarted.entry(9).status, GlobalStatus::kMoving);
+  // The restarted map continues the robots' streams: old events are stale.
+  EXPECT_EQ(restarted.apply(ev(1, 2, landmark_event_t::UPDATE, 2, 5, 5), nullptr), EventResult::kDuplicate);
+  EXPECT_EQ(restarted.apply(ev(1, 3, landmark_event_t::UPDATE, 2, 5, 5), nullptr), EventResult::kApplied);
+}
+
+TEST(GlobalMap, MalformedStateIsRefusedAndMapUnchanged) {
+  GlobalMap m(options());
+  m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), nullptr);
+  const std::string before = m.to_json();
+  std::string why;
+  EXPECT_FALSE(m.from_json("{not json", &why));
+  EXPECT_FALSE(why.empty());
+  std::string bad = before;
+  bad.replace(bad.find("\"id\": 2"), 7, "\"id\": 99");
+  EXPECT_FALSE(m.from_json(bad, &why));
+  EXPECT_NE(why.find("99"), std::string::npos) << why;
+  EXPECT_EQ(m.to_json(), before);
+}
+
+landmark_event_t msg_event(int robot, std::int64_t seq, int kind, int id) {
+  landmark_event_t m{};
+  m.robot_id = static_cast<int16_t>(robot);
+  m.seq = seq;
+  m.kind = static_cast<int8_t>(kind);
+  m.landmark_id = id;
+  m.x = 1.0;
+  m.y = 2.0;
+  m.cov[0][0] = m.cov[1][1] = 0.01;
+  return m;
+}
+
+TEST(MainNode, BadMessagesAreCountedAndDropped) {
+  MainNode node(options());
+  std::string why;
+  EXPECT_TRUE(node.on_event(msg_event(1, 1, landmark_event_t::ADD, 3), &why)) << why;
+  const std::string state = node.map().to_json();
+  auto bad = msg_event(1, 2, landmark_event_t::ADD, 3);
+  bad.x = std::nan("");
+  EXPECT_FALSE(node.on_event(bad, &why));
+  EXPECT_NE(why.find("finite"), std::string::npos);
+  bad = msg_event(9, 2, landmark_event_t::ADD, 3);
+  EXPECT_FALSE(node.on_event(bad, &why));
+  EXPECT_NE(why.find("robot_id"), std::string::npos);
+  bad = msg_event(1, 2, landmark_event_t::ADD, 32);
+  EXPECT_FALSE(node.on_event(bad, &why));
+  EXPECT_NE(why.find("landmark_id"), std::string::npos);
+  bad = msg_event(1, 2, 7, 3);
+  EXPECT_FALSE(node.on_event(bad, &why));
+  bad = msg_event(1, 2, landmark_event_t::ADD, 3);
+  bad.cov[0][0] = -1.0;
+  EXPECT_FALSE(node.on_event(bad, &why));
+  lmap_snapshot_t snap{};
+  snap.robot_id = 1;
+  snap.num_landmarks = 300;
+  EXPECT_FALSE(node.on_snapshot(snap, &why));
+  EXPECT_NE(why.find("num_landmarks"), std::string::npos);
+  EXPECT_EQ(node.counters().rejected_inputs, 6);
+  EXPECT_EQ(node.map().to_json(), state);
+}
+
+TEST(MainNode, NoticesGetSequenceNumbersAndMapMessageListsMoving) {
+  MainNode node(options());
+  node.on_event(msg_event(1, 1, landmark_event_t::ADD, 3));
+  node.on_event(msg_event(1, 2, landmark_event_t::ADD, 4));
+  node.on_event(msg_event(2, 1, landmark_event_t::MOVING, 3));
+  const auto& n = node.take_notices(100);
+  ASSERT_EQ(n.size(), 1u);
+  EXPECT_EQ(n[0].seq, 1);
+  EXPECT_EQ(n[0].landmark_id, 3);
+  EXPECT_EQ(n[0].detected_by, 2);
+  EXPECT_TRUE(node.take_notices(101).empty());
+  const global_map_t& g = node.global_map_msg(200);
+  ASSERT_EQ(g.num_landmarks, 1);
+  EXPECT_EQ(g.landmarks[0].id, 4);
+  ASSERT_EQ(g.num_moving, 1);
+  EXPECT_EQ(g.moving_ids[0], 3);
+}
+
+}  // namespace
+}  // namespace elaslam

@@ -1,0 +1,84 @@
+// Constructed scenes for the robot-node tests: a filter holding a known map, and
+// frames observed from known true poses.
+#pragma once
+
+#include <random>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/robot.hpp"
+
+namespace elaslam::test {
+
+inline EkfOptions filter_options() {
+  EkfOptions o;
+  o.capacity = 64;
+  o.max_landmark_id = 64;
+  o.range_sigma = 0.05;
+  o.bearing_sigma = 0.01;
+  return o;
+}
+
+inline RobotOptions robot_options(Mode mode) {
+  RobotOptions o;
+  o.mode = mode;
+  o.ekf = filter_options();
+  o.sensor_range = 6.0;
+  o.fov_margin = 0.5;
+  o.confirm_frames = 3;
+  o.return_frames = 6;
+  o.moving_after = 2;
+  o.missing_frames = 3;
+  return o;
+}
+
+/// Landmarks on a ring of radius r around the origin.
+inline std::vector<Eigen::Vector2d> ring(int n, double r) {
+  std::vector<Eigen::Vector2d> v;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * kPi * i / n + 0.1;
+    v.emplace_back(r * std::cos(a), r * std::sin(a));
+  }
+  return v;
+}
+
+/// A filter at `pose` (tiny prior) that has mapped `lms` (ids 0..n-1) from exact observations.
+inline EkfSlam mapped_filter(const Pose2& pose, const std::vector<Eigen::Vector2d>& lms,
+                             const EkfOptions& o = filter_options()) {
+  EkfSlam ekf(o);
+  ekf.reset(pose, Eigen::Matrix3d::Identity() * 1e-6);
+  for (int i = 0; i < static_cast<int>(lms.size()); ++i) ekf.add_landmark(i, observe(pose, lms[static_cast<std::size_t>(i)]));
+  return ekf;
+}
+
+/// One frame seen from `truth` with odometer reading `odometer`; `noise` adds
+/// Gaussian range/bearing noise (sigmas of the filter options) when given.
+inline FrameInput frame_from(int frame, const Pose2& truth, const Pose2& odometer,
+                             const std::vector<Eigen::Vector2d>& lms, const std::vector<int>& ids,
+                             std::mt19937_64* noise = nullptr, const EkfOptions& o = filter_options()) {
+  FrameInput in;
+  in.frame = frame;
+  in.odometer = odometer;
+  in.noise = {1e-4, 1e-4, 1e-4};
+  std::normal_distribution<double> n01(0.0, 1.0);
+  for (int id : ids) {
+    RangeBearing z = observe(truth, lms[static_cast<std::size_t>(id)]);
+    if (noise) {
+      z.range += o.range_sigma * n01(*noise);
+      z.bearing = wrap_angle(z.bearing + o.bearing_sigma * n01(*noise));
+    }
+    in.obs[static_cast<std::size_t>(in.num_obs++)] = {id, z};
+  }
+  return in;
+}
+
+inline std::vector<int> all_ids(std::size_t n) {
+  std::vector<int> v;
+  for (std::size_t i = 0; i < n; ++i) v.push_back(static_cast<int>(i));
+  return v;
+}
+
+}  // namespace elaslam::test

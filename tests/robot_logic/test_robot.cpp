@@ -1,0 +1,180 @@
+// Algorithm 1, path by path, on constructed frames (no simulator).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "scene.hpp"
+
+namespace elaslam {
+namespace {
+
+int count_events(const Robot& r, EventKind k, int id = -1) {
+  return static_cast<int>(std::count_if(r.events().begin(), r.events().end(), [&](const MapEvent& e) {
+    return e.kind == k && (id < 0 || e.landmark_id == id);
+  }));
+}
+
+class RobotPaths : public ::testing::Test {
+ protected:
+  // A robot standing still among 6 landmarks 3 m away; noise-free frames unless said.
+  void SetUp() override { lms_ = test::ring(6, 3.0); }
+  FrameSummary step(Robot& r, const std::vector<int>& ids, std::mt19937_64* noise = nullptr) {
+    return r.process(test::frame_from(frame_++, pose_, pose_, lms_, ids, noise));
+  }
+  void confirm_all(Robot& r) {
+    for (int k = 0; k < 3; ++k) step(r, test::all_ids(lms_.size()));
+  }
+  Pose2 pose_{0.0, 0.0, 0.0};
+  std::vector<Eigen::Vector2d> lms_;
+  int frame_ = 0;
+};
+
+TEST_F(RobotPaths, NewBecomesCandidateThenStaticAfterConfirmFrames) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  // Frame 0: every landmark is new -> CANDIDATE, not in the filter.
+  FrameSummary s = step(r, test::all_ids(6));
+  EXPECT_EQ(s.num_candidates, 6);
+  EXPECT_EQ(r.filter().num_landmarks(), 0);
+  EXPECT_EQ(r.lmap()[0].status, LandmarkStatus::kCandidate);
+  EXPECT_EQ(r.lmap()[0].consistent_sightings, 1);
+  // Frame 1: consistent again, still a candidate.
+  step(r, test::all_ids(6));
+  EXPECT_EQ(r.lmap()[0].consistent_sightings, 2);
+  EXPECT_EQ(r.filter().num_landmarks(), 0);
+  // Frame 2: the third consistent sighting confirms: STATIC, in the filter, ADD sent.
+  s = step(r, test::all_ids(6));
+  EXPECT_EQ(s.num_added, 6);
+  EXPECT_EQ(r.filter().num_landmarks(), 6);
+  EXPECT_EQ(r.lmap()[3].status, LandmarkStatus::kStatic);
+  EXPECT_EQ(count_events(r, EventKind::kAdd), 6);
+  // Frame 3: observations now correct the filter and are reported as UPDATEs.
+  s = step(r, test::all_ids(6));
+  EXPECT_EQ(s.num_accepted, 6);
+  EXPECT_EQ(count_events(r, EventKind::kUpdate), 6);
+}
+
+TEST_F(RobotPaths, InconsistentCandidateIsReanchored) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  step(r, {0});
+  step(r, {0});
+  lms_[0] += Eigen::Vector2d(1.0, 0.0);  // jumps: the candidate starts over
+  step(r, {0});
+  EXPECT_EQ(r.lmap()[0].consistent_sightings, 1);
+  EXPECT_NEAR(r.lmap()[0].position.x(), lms_[0].x(), 1e-6);
+  EXPECT_EQ(r.filter().num_landmarks(), 0);
+}
+
+TEST_F(RobotPaths, StaticToMovingToCandidateAndBackAfterItStops) {
+  for (Mode mode : {Mode::kEla, Mode::kConsensus}) {
+    SCOPED_TRACE(to_string(mode));
+    frame_ = 0;
+    lms_ = test::ring(6, 3.0);
+    Robot r(test::robot_options(mode), 1);
+    confirm_all(r);
+    // Landmark 2 moves 0.8 m: the first out-of-ELA verdict only rejects it ...
+    lms_[2] += Eigen::Vector2d(0.0, 0.8);
+    FrameSummary s = step(r, test::all_ids(6));
+    EXPECT_EQ(s.num_rejected, 1);
+    EXPECT_EQ(s.num_accepted, 5);
+    EXPECT_TRUE(r.filter().has_landmark(2));
+    // ... it keeps moving: the second makes it MOVING, out of the filter.
+    lms_[2] += Eigen::Vector2d(0.0, 0.1);
+    s = step(r, test::all_ids(6));
+    EXPECT_EQ(s.num_moving, 1);
+    EXPECT_FALSE(r.filter().has_landmark(2));
+    EXPECT_EQ(count_events(r, EventKind::kMoving, 2), 1);
+    EXPECT_EQ(r.lmap()[2].status, LandmarkStatus::kCandidate);
+    EXPECT_TRUE(r.lmap()[2].was_moving);
+    // It stops. After return_frames consistent sightings it comes back: RETURN.
+    int returned_at = -1;
+    for (int k = 0; k < 10 && returned_at < 0; ++k) {
+      step(r, test::all_ids(6));
+      if (count_events(r, EventKind::kReturn, 2) == 1) returned_at = k;
+    }
+    EXPECT_EQ(returned_at, 4);  // the MOVING frame anchored sighting 1; +5 more = 6
+    EXPECT_TRUE(r.filter().has_landmark(2));
+    EXPECT_NEAR(r.filter().landmark(2).y(), lms_[2].y(), 0.05);
+  }
+}
+
+TEST_F(RobotPaths, ExpectedButMissingIsMoving) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  confirm_all(r);
+  // Landmark 4 (3 m away, inside 6 - 0.5 m) is not reported for 3 frames.
+  std::vector<int> without = {0, 1, 2, 3, 5};
+  step(r, without);
+  step(r, without);
+  EXPECT_TRUE(r.filter().has_landmark(4));
+  const FrameSummary s = step(r, without);
+  EXPECT_EQ(s.num_moving, 1);
+  EXPECT_FALSE(r.filter().has_landmark(4));
+  EXPECT_EQ(r.lmap()[4].status, LandmarkStatus::kMoving);
+  EXPECT_EQ(count_events(r, EventKind::kMoving, 4), 1);
+}
+
+TEST_F(RobotPaths, MissingRuleIgnoresLandmarksOutsideTheExpectedView) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.sensor_range = 3.2;  // 3 m away is beyond 3.2 - 0.5: not expected in view
+  Robot r(o, 1);
+  confirm_all(r);
+  for (int k = 0; k < 5; ++k) step(r, {0, 1, 2, 3, 5});
+  EXPECT_TRUE(r.filter().has_landmark(4));
+}
+
+TEST_F(RobotPaths, DynamicNoticeRemovesWithoutEventAndReturnNeedsReturnFrames) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  confirm_all(r);
+  EXPECT_TRUE(r.apply_notice(1, frame_));
+  EXPECT_FALSE(r.filter().has_landmark(1));
+  EXPECT_EQ(r.lmap()[1].status, LandmarkStatus::kMoving);
+  EXPECT_TRUE(r.events().empty() || count_events(r, EventKind::kMoving, 1) == 0);
+  EXPECT_FALSE(r.apply_notice(1, frame_));  // not held any more
+  int returned_at = -1;
+  for (int k = 0; k < 10 && returned_at < 0; ++k) {
+    step(r, test::all_ids(6));
+    if (count_events(r, EventKind::kReturn, 1) == 1) returned_at = k;
+  }
+  EXPECT_EQ(returned_at, 5);  // six consistent sightings
+}
+
+TEST_F(RobotPaths, EkfModeAddsAtOnceAndNeverRemoves) {
+  Robot r(test::robot_options(Mode::kEkf), 1);
+  FrameSummary s = step(r, test::all_ids(6));
+  EXPECT_EQ(s.num_added, 6);
+  lms_[2] += Eigen::Vector2d(2.0, 0.0);
+  s = step(r, test::all_ids(6));
+  EXPECT_EQ(s.num_accepted, 6);
+  EXPECT_EQ(s.num_rejected, 0);
+  EXPECT_TRUE(r.filter().has_landmark(2));
+}
+
+TEST_F(RobotPaths, GatedModeRejectsAnOutlierButKeepsTheLandmark) {
+  Robot r(test::robot_options(Mode::kGated), 1);
+  step(r, test::all_ids(6));
+  lms_[2] += Eigen::Vector2d(2.0, 0.0);
+  const FrameSummary s = step(r, test::all_ids(6));
+  EXPECT_EQ(s.num_rejected, 1);
+  EXPECT_EQ(s.num_accepted, 5);
+  EXPECT_TRUE(r.filter().has_landmark(2));
+  const auto& g = r.gate_records();
+  const auto it = std::find_if(g.begin(), g.end(), [](const GateRecord& x) { return x.landmark_id == 2; });
+  ASSERT_NE(it, g.end());
+  EXPECT_FALSE(it->inside);
+  EXPECT_GT(it->d2, it->threshold);
+}
+
+TEST_F(RobotPaths, EveryTestedObservationKeepsItsNumbers) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  confirm_all(r);
+  std::mt19937_64 rng(2);
+  step(r, test::all_ids(6), &rng);
+  ASSERT_EQ(r.gate_records().size(), 6u);
+  for (const GateRecord& g : r.gate_records()) {
+    EXPECT_EQ(g.kind, GateKind::kMulti);
+    EXPECT_GT(g.threshold, 9.0);  // chi2(0.99, 2) = 9.21
+    EXPECT_EQ(g.inside, g.d2 <= g.threshold);
+  }
+}
+
+}  // namespace
+}  // namespace elaslam
