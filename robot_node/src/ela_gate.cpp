@@ -75,13 +75,13 @@ double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j) {
   return mahalanobis2((i.m - j.m) - rel.mean, i.M + j.M + rel.cov);
 }
 
-double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i) {
+double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active) {
   // Mean (eq 16): product of the Gaussians predicted from each neighbour j, i.e.
   // information weights W_j = (sum_k C_k^-1)^-1 C_j^-1, summing to I.
   Eigen::Matrix2d Lambda = Eigen::Matrix2d::Zero();
   Eigen::Vector2d eta = Eigen::Vector2d::Zero();
   for (int j = 0; j < n; ++j) {
-    if (j == i) continue;
+    if (j == i || (active && !active[j])) continue;
     const LocalPrediction p = predict_from_neighbour(ekf, view[i].id, view[j]);
     const Eigen::LLT<Eigen::Matrix2d> llt(p.cov);
     if (llt.info() != Eigen::Success) continue;  // a degenerate neighbour adds no information
@@ -108,7 +108,7 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i) {
   Eigen::Vector2d J = Eigen::Vector2d::Zero();
   Eigen::Matrix2d map_cov = Rt * ekf.landmark_cov(view[i].id) * Rt.transpose();  // R^T P_ii R
   for (int j = 0; j < n; ++j) {
-    if (j == i) continue;
+    if (j == i || (active && !active[j])) continue;
     const LocalPrediction p = predict_from_neighbour(ekf, view[i].id, view[j]);
     const Eigen::LLT<Eigen::Matrix2d> lj(p.cov);
     if (lj.info() != Eigen::Success) continue;
@@ -120,7 +120,7 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i) {
     const Eigen::Matrix2d cross = Rt * ekf.landmark_cross_cov(view[i].id, view[j].id) * Aj.transpose();
     map_cov -= cross + cross.transpose();  // - R^T P_ij A_j^T - A_j P_ji R
     for (int k = 0; k < n; ++k) {
-      if (k == i) continue;
+      if (k == i || (active && !active[k])) continue;
       const LocalPrediction pk = predict_from_neighbour(ekf, view[i].id, view[k]);
       const Eigen::LLT<Eigen::Matrix2d> lk(pk.cov);
       if (lk.info() != Eigen::Success) continue;

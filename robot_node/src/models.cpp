@@ -1,0 +1,104 @@
+// Motion and observation models (paper eqs 3, 6, 7, 13, 15). Pure functions; the
+// Jacobians are analytic and checked against central differences in
+// tests/robot_node/test_models.cpp.
+#include "elaslam/robot_node/models.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace elaslam {
+
+namespace {
+// Variance floor [m^2 or rad^2]: keeps U positive definite for a robot standing
+// still (zero increment), far below any real odometry noise.
+constexpr double kMinOdometryVariance = 1e-12;
+// Below this range [m] the bearing of a landmark is undefined (it sits on the
+// robot centre) and the 1/r, 1/r^2 Jacobian terms blow up.
+constexpr double kMinObservableRange = 1e-12;
+}  // namespace
+
+Pose2 motion(const Pose2& pose, const Pose2& increment, Eigen::Matrix3d* F_x,
+             Eigen::Matrix3d* F_u) {
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  if (F_x != nullptr) {
+    // d(R (+) u)/dR: the increment's translation, rotated into W, swings with theta.
+    *F_x << 1.0, 0.0, -s * increment.x - c * increment.y,  //
+        0.0, 1.0, c * increment.x - s * increment.y,       //
+        0.0, 0.0, 1.0;
+  }
+  if (F_u != nullptr) {
+    // d(R (+) u)/du: the increment is expressed in B, so it enters rotated by theta.
+    *F_u << c, -s, 0.0,  //
+        s, c, 0.0,       //
+        0.0, 0.0, 1.0;
+  }
+  return compose(pose, increment);  // eq 3 (compose wraps the new heading)
+}
+
+Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise& noise) {
+  const double distance = std::hypot(increment.x, increment.y);  // [m]
+  const double var_trans = std::max(noise.var_trans_per_m * distance, kMinOdometryVariance);
+  const double var_rot =
+      std::max(noise.var_rot_per_rad * std::abs(increment.theta) + noise.var_rot_per_m * distance,
+               kMinOdometryVariance);
+  return Eigen::Vector3d(var_trans, var_trans, var_rot).asDiagonal();
+}
+
+RangeBearing observe(const Pose2& pose, const Eigen::Vector2d& p_LinW,
+                     Eigen::Matrix<double, 2, 3>* H_x, Eigen::Matrix2d* H_l) {
+  const double dx = p_LinW.x() - pose.x, dy = p_LinW.y() - pose.y;  // [m], in W
+  const double q = dx * dx + dy * dy;
+  const double r = std::sqrt(q);
+  RangeBearing z;
+  // The bearing is returned in [-pi, pi) as RangeBearing promises; the filter
+  // wraps the innovation again, where it matters.
+  z.bearing = wrap_angle(std::atan2(dy, dx) - pose.theta);
+  if (r < kMinObservableRange) {
+    // Singular point: bearing undefined, derivatives unbounded. Report range 0 and
+    // zero Jacobians so that a caller never sees NaN; the filter then applies no
+    // correction through this observation.
+    z.range = 0.0;
+    if (H_x != nullptr) H_x->setZero();
+    if (H_l != nullptr) H_l->setZero();
+    return z;
+  }
+  z.range = r;
+  // eq 13, the landmark part: d(r, b)/d(l).
+  Eigen::Matrix2d J_l;
+  J_l << dx / r, dy / r,  //
+      -dy / q, dx / q;
+  if (H_l != nullptr) *H_l = J_l;
+  if (H_x != nullptr) {
+    // Moving the robot by dt moves the landmark by -dt in relative terms; turning
+    // the robot by dtheta moves the bearing by -dtheta.
+    H_x->leftCols<2>() = -J_l;
+    H_x->col(2) << 0.0, -1.0;
+  }
+  return z;
+}
+
+Eigen::Vector2d inverse_observe(const Pose2& pose, const RangeBearing& z,
+                                Eigen::Matrix<double, 2, 3>* G_x, Eigen::Matrix2d* G_z) {
+  const double a = pose.theta + z.bearing;  // direction of the landmark in W [rad]
+  const double c = std::cos(a), s = std::sin(a);
+  if (G_x != nullptr) {
+    *G_x << 1.0, 0.0, -z.range * s,  //
+        0.0, 1.0, z.range * c;
+  }
+  if (G_z != nullptr) {
+    *G_z << c, -z.range * s,  //
+        s, z.range * c;
+  }
+  return {pose.x + z.range * c, pose.y + z.range * s};  // eq 15
+}
+
+Eigen::Vector2d observation_to_local(const RangeBearing& z, Eigen::Matrix2d* J_z) {
+  const double c = std::cos(z.bearing), s = std::sin(z.bearing);
+  if (J_z != nullptr) {
+    *J_z << c, -z.range * s,  //
+        s, z.range * c;
+  }
+  return {z.range * c, z.range * s};  // p_LinB [m]
+}
+
+}  // namespace elaslam

@@ -36,6 +36,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   view_.reserve(kMaxObservations);
   view_obs_.reserve(kMaxObservations);
   inside_.reserve(kMaxObservations);
+  d2_.reserve(kMaxObservations);
   updated_.reserve(kMaxObservations);
   out_count_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   handled_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
@@ -45,6 +46,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
 
 void Robot::reset() {
   initialised_ = false;
+  odometry_cov_sum_.setZero();
   last_frame_ = -1;
   lmap_.clear();
   std::fill(out_count_.begin(), out_count_.end(), 0);
@@ -88,7 +90,11 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     initialised_ = true;
   } else {
     const Pose2 increment = between(last_odometer_, in.odometer);
-    if (ekf_.predict(increment, odometry_covariance(increment, in.noise)) != EkfStatus::kOk) ++s->filter_faults;
+    const Eigen::Matrix3d U = odometry_covariance(increment, in.noise);
+    Eigen::Matrix3d F_u;
+    motion(ekf_.pose(), increment, nullptr, &F_u);
+    if (ekf_.predict(increment, U) != EkfStatus::kOk) ++s->filter_faults;
+    odometry_cov_sum_ += F_u * U * F_u.transpose();
   }
   last_odometer_ = in.odometer;
 }
@@ -173,22 +179,41 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
 void Robot::gate_view(FrameSummary* /*s*/) {
   const int n = static_cast<int>(view_.size());
   inside_.assign(view_.size(), 1);
+  if (n == 0) return;
   if (options_.mode == Mode::kConsensus && n >= 2) {
     gate_view_consensus();
     return;
   }
+  // Eq 16 for every landmark in view. A landmark found outside its ELA stops
+  // shaping the others' ELAs: the worst one is set aside and the rest re-tested,
+  // until all that remain agree (one moving neighbour would otherwise shift every
+  // other landmark's ELA by its displacement / (n - 1) and flag them too).
+  d2_.assign(view_.size(), 0.0);
+  int active = n;
+  while (active >= 2) {
+    int worst = -1;
+    for (int i = 0; i < n; ++i) {
+      if (!inside_[static_cast<std::size_t>(i)]) continue;
+      d2_[static_cast<std::size_t>(i)] = ela_multi_d2(ekf_, view_.data(), n, i, inside_.data());
+      if (d2_[static_cast<std::size_t>(i)] > ela_threshold_ &&
+          (worst < 0 || d2_[static_cast<std::size_t>(i)] > d2_[static_cast<std::size_t>(worst)]))
+        worst = i;
+    }
+    if (worst < 0) break;
+    inside_[static_cast<std::size_t>(worst)] = 0;
+    --active;
+  }
   for (int i = 0; i < n; ++i) {
-    GateRecord g{view_[static_cast<std::size_t>(i)].id, GateKind::kMulti, 0.0, ela_threshold_, true};
-    if (n == 1) {
-      // Single landmark in view: its ELA is the EKF's predicted observation.
-      const UpdateReport r = ekf_.check(g.landmark_id, view_[0].z);
+    GateRecord g{view_[static_cast<std::size_t>(i)].id, GateKind::kMulti, d2_[static_cast<std::size_t>(i)],
+                 ela_threshold_, inside_[static_cast<std::size_t>(i)] != 0};
+    if (active < 2 && g.inside) {
+      // A single landmark in view (or left): its ELA is the EKF's predicted observation.
+      const UpdateReport r = ekf_.check(g.landmark_id, view_[static_cast<std::size_t>(i)].z);
       g.kind = GateKind::kInnovation;
       g.d2 = r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
-    } else {
-      g.d2 = ela_multi_d2(ekf_, view_.data(), n, i);  // eq 16
+      g.inside = g.d2 <= g.threshold;
+      inside_[static_cast<std::size_t>(i)] = g.inside;
     }
-    g.inside = g.d2 <= g.threshold;
-    inside_[static_cast<std::size_t>(i)] = g.inside;
     gates_.push_back(g);
   }
 }
@@ -231,15 +256,9 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     const int id = o.landmark_id;
     if (ekf_.has_landmark(id) || handled_[static_cast<std::size_t>(id)] == in.frame) continue;
     ++s->num_candidates;
-    Eigen::Matrix<double, 2, 3> Gx;
-    Eigen::Matrix2d Gz;
-    const Eigen::Vector2d p = inverse_observe(ekf_.pose(), o.z, &Gx, &Gz);
-    const Eigen::Matrix2d C =
-        Gx * ekf_.pose_cov() * Gx.transpose() + Gz * ekf_.measurement_cov() * Gz.transpose();
     LMapEntry& e = lmap_[id];
     if (e.status == LandmarkStatus::kCandidate) {
-      const Eigen::Vector2d r = p - e.position;
-      const double d2 = r.dot((C + e.cov).inverse() * r);
+      const double d2 = candidate_d2(e, o.z);
       const bool inside = d2 <= candidate_threshold_;
       gates_.push_back({id, GateKind::kCandidate, d2, candidate_threshold_, inside});
       if (inside) {
@@ -260,11 +279,33 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
       }
     }
     // New, moving-and-seen-again, or inconsistent: (re)anchor the candidate here.
-    lmap_.set_status(id, LandmarkStatus::kCandidate, in.frame);
-    e.position = p;
-    e.cov = C;
-    e.consistent_sightings = 1;
+    anchor_candidate(id, o.z, in.frame);
   }
+}
+
+// The candidate's anchor: its world position g(R, y) now, the measurement part of
+// its covariance, and the odometry uncertainty accumulated so far. Pose errors at
+// two nearby frames are strongly correlated (the same drift), so the consistency
+// test below charges only what accrued between them, not the whole pose covariance
+// twice (which let landmarks moving at 0.5 m/s pass as static).
+void Robot::anchor_candidate(int id, const RangeBearing& z, int frame) {
+  LMapEntry& e = lmap_[id];
+  Eigen::Matrix2d Gz;
+  e.position = inverse_observe(ekf_.pose(), z, nullptr, &Gz);
+  e.cov = Gz * ekf_.measurement_cov() * Gz.transpose();
+  e.odometry_at_anchor = odometry_cov_sum_;
+  e.consistent_sightings = 1;
+  lmap_.set_status(id, LandmarkStatus::kCandidate, frame);
+}
+
+double Robot::candidate_d2(const LMapEntry& e, const RangeBearing& z) const {
+  Eigen::Matrix<double, 2, 3> Gx;
+  Eigen::Matrix2d Gz;
+  const Eigen::Vector2d p = inverse_observe(ekf_.pose(), z, &Gx, &Gz);
+  const Eigen::Matrix2d C = Gz * ekf_.measurement_cov() * Gz.transpose() + e.cov +
+                            Gx * (odometry_cov_sum_ - e.odometry_at_anchor) * Gx.transpose();
+  const Eigen::Vector2d r = p - e.position;
+  return r.dot(C.inverse() * r);
 }
 
 // Step 4: a STATIC landmark well inside the field of view that has not been seen
@@ -302,12 +343,7 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
   out_count_[static_cast<std::size_t>(id)] = 0;
   handled_[static_cast<std::size_t>(id)] = last_frame_;
   if (seen) {
-    Eigen::Matrix<double, 2, 3> Gx;
-    Eigen::Matrix2d Gz;
-    e.position = inverse_observe(ekf_.pose(), seen->z, &Gx, &Gz);
-    e.cov = Gx * ekf_.pose_cov() * Gx.transpose() + Gz * ekf_.measurement_cov() * Gz.transpose();
-    e.consistent_sightings = 1;
-    lmap_.set_status(id, LandmarkStatus::kCandidate, last_frame_);
+    anchor_candidate(id, seen->z, last_frame_);
   } else {
     lmap_.set_status(id, LandmarkStatus::kMoving, last_frame_);
   }

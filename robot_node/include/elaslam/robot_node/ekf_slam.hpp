@@ -62,6 +62,8 @@ class EkfSlam {
  public:
   using Layout = StateLayout;
 
+  /// Allocates everything the filter will ever use. Throws std::invalid_argument
+  /// on invalid options (start-up only; no other member throws).
   explicit EkfSlam(const EkfOptions& options);
 
   /// Forget every landmark and set the robot prior.
@@ -119,8 +121,15 @@ class EkfSlam {
 
  private:
   bool valid_id(int id) const { return id >= 0 && id < options_.max_landmark_id; }
-  void symmetrise();
-  bool covariance_healthy() const;
+  /// Input checks shared by check() and update(): kBadInput / kUnknownLandmark.
+  EkfStatus locate(int id, const RangeBearing& z, int* slot) const;
+  /// P H^T and the gain factors of one correction, into PHt_ and K_ (O(n)).
+  void compute_gain(Eigen::Index off, const Eigen::Matrix<double, 2, 5>& H,
+                    const Eigen::Matrix2d& L);
+  /// O(n) preview: would the correction leave X and P finite with diag(P) >= 0?
+  bool correction_healthy(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) const;
+  /// Mean and rank-2 (standard) or rank-4 (Joseph) covariance step, O(n^2).
+  void apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d& w);
 
   EkfOptions options_;
   Eigen::Matrix2d W_;
@@ -131,9 +140,9 @@ class EkfSlam {
   std::vector<int> id_to_slot_;  // max_landmark_id entries, -1 when absent
   std::vector<int> slot_to_id_;  // capacity entries
   // Scratch allocated once, used by predict/update/add/remove.
-  Eigen::MatrixXd PHt_;        // n x 2
-  Eigen::MatrixXd K_;          // n x 2
-  Eigen::MatrixXd tmp_rows_;   // 3 x n
+  Eigen::MatrixXd PHt_;        // n x 2: P H^T, then B = P H^T - K Z / 2 (Joseph)
+  Eigen::MatrixXd K_;          // n x 2: K (Joseph) or M = P H^T L^-T (standard)
+  Eigen::MatrixXd tmp_rows_;   // 3 x n: new P_RL in predict
 };
 
 }  // namespace elaslam

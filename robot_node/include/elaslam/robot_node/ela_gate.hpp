@@ -61,7 +61,11 @@ LocalPrediction predict_from_neighbour(const EkfSlam& ekf, int id_i, const InVie
 double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j);
 
 /// Eq 16: the ELA of view[i] as the product of the Gaussians predicted from every
-/// other landmark in view; returns d2 of m_i against it (covariance ELA + M_i).
-double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i);
+/// other landmark in view (only those with active[j] != 0 when `active` is given);
+/// returns d2 of m_i against it. The mean is the paper's product of Gaussians; the
+/// covariance of the residual is computed exactly from its parts (the neighbours'
+/// predictions share l_i, the heading and correlated map errors), so that a static
+/// landmark fails at the gate's nominal rate. O(n^2) per landmark.
+double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active = nullptr);
 
 }  // namespace elaslam

@@ -21,8 +21,9 @@ const char* to_string(LandmarkStatus s);
 
 struct LMapEntry {
   LandmarkStatus status = LandmarkStatus::kUnknown;
-  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] p_LinW, from g(R, y) (candidates: the anchor)
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] p_LinW from g(R, y) (candidates: the anchor)
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2] its measurement part, G_z W G_z^T
+  Eigen::Matrix3d odometry_at_anchor = Eigen::Matrix3d::Zero();  // robot's odometry covariance sum then
   int last_seen_frame = -1;
   int consistent_sightings = 0;  // consecutive sightings consistent with `position`
   int missing_frames = 0;        // consecutive frames expected in view but not seen

@@ -92,6 +92,8 @@ class Robot {
   void gate_view_consensus();
   void handle_candidates(const FrameInput& in, FrameSummary* s);
   void check_missing(FrameSummary* s);
+  void anchor_candidate(int id, const RangeBearing& z, int frame);
+  double candidate_d2(const LMapEntry& e, const RangeBearing& z) const;
   void mark_moving(int id, const Observation* seen, FrameSummary* s);
   void emit(EventKind kind, int id);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
@@ -106,11 +108,13 @@ class Robot {
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;
+  Eigen::Matrix3d odometry_cov_sum_ = Eigen::Matrix3d::Zero();  // sum of F_u U F_u^T, W
 
   // Per-frame scratch, reserved at construction.
   std::vector<InView> view_;
   std::vector<int> view_obs_;        // index into FrameInput::obs of view_[k]
   std::vector<std::uint8_t> inside_; // verdict per view_ entry
+  std::vector<double> d2_;           // ELA d2 per view_ entry
   std::vector<int> out_count_;       // per id: consecutive out-of-ELA sightings
   std::vector<int> updated_;         // ids corrected this frame
   std::vector<int> handled_;         // per id: frame at which the id was already handled

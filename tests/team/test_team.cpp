@@ -1,0 +1,120 @@
+// The whole team in one process: accuracy against ground truth, the ELA's benefit
+// under dynamism, notices between robots, determinism.
+#include <gtest/gtest.h>
+
+#include "../robot_logic/scene.hpp"
+#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/team/report.hpp"
+#include "elaslam/team/team_run.hpp"
+
+namespace elaslam {
+namespace {
+
+const TeamConfig& paper() {
+  static const TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+  return c;
+}
+
+RunResult run(Mode mode, double dynamism, double speed, int seed) {
+  RunOverrides o;
+  o.mode = mode;
+  o.dynamism_percent = dynamism;
+  o.landmark_speed_mps = speed;
+  o.seed = seed;
+  return run_team(apply_overrides(paper(), o));
+}
+
+TEST(TeamRun, StaticWorldEveryModeIsAccurate) {
+  for (Mode m : {Mode::kEkf, Mode::kGated, Mode::kEla, Mode::kConsensus}) {
+    SCOPED_TRACE(to_string(m));
+    const RunResult r = run(m, 0.0, 0.0, 7);
+    EXPECT_EQ(r.metrics.frames, 150);
+    EXPECT_LT(r.metrics.landmark_error_mean, 0.08);
+    EXPECT_GE(r.final_map.size(), 55u);  // of 72; the robots' views do not cover every corner
+    ASSERT_EQ(r.metrics.robots.size(), 3u);
+    for (const auto& rm : r.metrics.robots) {
+      EXPECT_EQ(rm.frames, 150);
+      EXPECT_LT(rm.error_mean, 0.2) << "robot " << rm.id;
+    }
+    EXPECT_EQ(r.final_moving.size(), 0u);
+  }
+}
+
+TEST(TeamRun, AtFiftyPercentDynamismElaBeatsEkfOnTheMapAndEveryRobot) {
+  for (int seed : {1, 2, 3}) {
+    SCOPED_TRACE(seed);
+    const RunResult ekf = run(Mode::kEkf, 50.0, 0.5, seed);
+    const RunResult ela = run(Mode::kEla, 50.0, 0.5, seed);
+    EXPECT_LT(ela.metrics.landmark_error_mean, ekf.metrics.landmark_error_mean);
+    for (std::size_t i = 0; i < 3; ++i)
+      EXPECT_LT(ela.metrics.robots[i].error_mean, ekf.metrics.robots[i].error_mean) << "robot " << i + 1;
+    EXPECT_GT(ela.metrics.recall, 0.7);
+    EXPECT_EQ(ekf.metrics.flagged, 0);
+  }
+}
+
+TEST(TeamRun, SameSeedSameMetricsApartFromTiming) {
+  const auto strip = [](nlohmann::json j) {
+    j.erase("timing");
+    return j.dump();
+  };
+  RunInfo info{"ela", 35.0, 0.7, 4, "paper.yaml", ""};
+  const std::string a = strip(metrics_json(info, run(Mode::kEla, 35.0, 0.7, 4)));
+  const std::string b = strip(metrics_json(info, run(Mode::kEla, 35.0, 0.7, 4)));
+  EXPECT_EQ(a, b);
+  const std::string c = strip(metrics_json(info, run(Mode::kEla, 35.0, 0.7, 5)));
+  EXPECT_NE(a, c);
+}
+
+// A landmark that one robot sees moving is dropped by the other after main_robot's
+// notice, before the other would have noticed on its own.
+TEST(TeamNotices, MovingLandmarkDetectedByOneRobotIsDroppedByTheOthers) {
+  RobotOptions o1 = test::robot_options(Mode::kEla);
+  RobotOptions o2 = o1;
+  o2.missing_frames = 0;  // robot 2 cannot tell by itself
+  RobotNode r1(o1, 1), r2(o2, 2);
+  GlobalMapOptions mo;
+  mo.max_landmark_id = 64;
+  MainNode main(mo);
+  auto lms = test::ring(6, 3.0);
+  const Pose2 pose{0, 0, 0};
+  auto feed = [&](RobotNode& n, int robot, int k, const std::vector<int>& ids) {
+    const FrameInput in = test::frame_from(k, pose, pose, lms, ids);
+    sensor_frame_t m{};
+    m.frame = k;
+    m.robot_id = static_cast<int16_t>(robot);
+    m.num_obs = static_cast<int16_t>(in.num_obs);
+    for (int i = 0; i < in.num_obs; ++i)
+      m.obs[i] = {in.obs[static_cast<std::size_t>(i)].landmark_id, in.obs[static_cast<std::size_t>(i)].z.range,
+                  in.obs[static_cast<std::size_t>(i)].z.bearing};
+    ASSERT_EQ(n.on_sensor(m, 0), RobotNode::Verdict::kProcessed);
+    for (const auto& e : n.event_msgs()) main.on_event(e);
+  };
+  auto notices = [&] {
+    for (const auto& n : main.take_notices(0)) r1.on_notice(n), r2.on_notice(n);
+  };
+  int k = 0;
+  for (; k < 4; ++k) {
+    feed(r1, 1, k, test::all_ids(6));
+    feed(r2, 2, k, test::all_ids(6));
+    notices();
+  }
+  ASSERT_TRUE(r2.robot().filter().has_landmark(2));
+  EXPECT_EQ(main.map().entry(2).contributors(), 0b11);
+  // Landmark 2 moves; only robot 1 still sees it.
+  for (; k < 6; ++k) {
+    lms[2] += Eigen::Vector2d(0.5, 0.0);
+    feed(r1, 1, k, test::all_ids(6));
+    feed(r2, 2, k, {0, 1, 3, 4, 5});
+    notices();
+  }
+  EXPECT_EQ(main.map().entry(2).status, GlobalStatus::kMoving);
+  EXPECT_EQ(main.map().entry(2).moving_by, 1);
+  EXPECT_FALSE(r1.robot().filter().has_landmark(2));
+  EXPECT_FALSE(r2.robot().filter().has_landmark(2));
+  EXPECT_EQ(r2.counters().notices_applied, 1);
+}
+
+}  // namespace
+}  // namespace elaslam
