@@ -1,0 +1,86 @@
+// The whole frame path of a robot node (every mode) and of main_robot allocates
+// nothing after start-up. Frames come from the simulator at 50 % dynamism so that
+// every branch of Algorithm 1 runs: candidates, ADD, MOVING, RETURN, missing,
+// notices, snapshots.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "../support/no_alloc.hpp"
+#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/simulator/messages.hpp"
+#include "elaslam/simulator/world.hpp"
+#include "elaslam/team/team_config.hpp"
+
+namespace elaslam {
+namespace {
+
+struct Tally {
+  long frames = 0, events[5] = {0, 0, 0, 0, 0}, notices = 0, snapshots = 0;
+};
+
+TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
+  const TeamConfig base = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+  for (Mode mode : {Mode::kEkf, Mode::kGated, Mode::kEla, Mode::kConsensus}) {
+    SCOPED_TRACE(to_string(mode));
+    TeamConfig c = base;
+    c.robot.mode = mode;
+    c.scenario.dynamism_percent = 50.0;
+    c.scenario.landmark_speed_mps = 0.5;
+    // Every sensor frame of the run, made before the region (the simulator is not
+    // part of a robot's frame path).
+    sim::World world(c.scenario);
+    const int R = world.num_robots();
+    std::vector<sensor_frame_t> frames;
+    for (int k = 0; k < c.scenario.frames; ++k) {
+      if (k > 0) world.step();
+      for (int i = 0; i < R; ++i) frames.push_back(sim::to_message(world.sensor_frame(i), k));
+    }
+    std::vector<RobotNode> robots;
+    for (int i = 0; i < R; ++i) robots.emplace_back(c.robot, c.scenario.robots[static_cast<std::size_t>(i)].id);
+    MainNode main(c.main);
+    Tally t;
+    {
+      test::NoAllocRegion region;
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        RobotNode& node = robots[f % static_cast<std::size_t>(R)];
+        if (node.on_sensor(frames[f], 0) != RobotNode::Verdict::kProcessed) continue;
+        ++t.frames;
+        for (const auto& e : node.event_msgs()) {
+          ++t.events[e.kind];
+          main.on_event(e);
+        }
+        if (node.snapshot_ready()) main.on_snapshot(node.snapshot_msg()), ++t.snapshots;
+        for (const auto& n : main.take_notices(0))
+          for (auto& r : robots) r.on_notice(n), ++t.notices;
+        main.global_map_msg(0);
+        node.status_msg(0);
+      }
+    }
+    EXPECT_EQ(test::allocations_in_region(), 0);
+    EXPECT_EQ(t.frames, static_cast<long>(frames.size()));
+    // The run exercised the paths it claims to cover.
+    EXPECT_GT(t.events[landmark_event_t::ADD], 50);
+    EXPECT_GT(t.events[landmark_event_t::UPDATE], 1000);
+    EXPECT_GT(t.snapshots, 30);
+    if (mode == Mode::kEla || mode == Mode::kConsensus) {
+      EXPECT_GT(t.events[landmark_event_t::MOVING], 10);
+      EXPECT_GT(t.events[landmark_event_t::RETURN], 0);
+      EXPECT_GT(t.notices, 10);
+    }
+  }
+}
+
+TEST(FrameNoAlloc, TheCounterSeesAnAllocation) {
+  std::vector<int>* volatile v = nullptr;
+  {
+    test::NoAllocRegion region;
+    v = new std::vector<int>();
+  }
+  EXPECT_EQ(test::allocations_in_region(), 1);
+  delete v;
+}
+
+}  // namespace
+}  // namespace elaslam
