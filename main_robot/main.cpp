@@ -55,8 +55,8 @@ class Shell {
   Shell(const Args& a, const GlobalMapOptions& o, lcm::LCM* lc) : args_(a), node_(o), lc_(lc) {}
 
   bool subscribe() {
-    auto* e = lc_->subscribe(channels::lmap_event(args_.suffix), &Shell::on_event, this);
-    auto* s = lc_->subscribe(channels::lmap_snapshot(args_.suffix), &Shell::on_snapshot, this);
+    auto* e = subscribe_raw<Shell, &Shell::on_event>(*lc_, channels::lmap_event(args_.suffix), this);
+    auto* s = subscribe_raw<Shell, &Shell::on_snapshot>(*lc_, channels::lmap_snapshot(args_.suffix), this);
     if (!e || !s) return false;
     // Events come in bursts (one per observed landmark per robot per frame): a deep
     // queue, on purpose; losses show up as seq gaps and are repaired by snapshots.
@@ -146,7 +146,10 @@ int run(const Args& a) {
   auto next_map = Clock::now(), next_status = Clock::now(), next_save = Clock::now();
   std::int64_t saved_version = shell.node().map().version();
   while (!stop_requested().load()) {
-    if (lc.handleTimeout(5) < 0) break;
+    if (lc.handleTimeout(5) < 0 && !stop_requested().load()) {  // < 0 also on EINTR from our signal
+      std::fprintf(stderr, "main_robot: LCM handle error\n");
+      break;
+    }
     const auto now = Clock::now();
     if (now >= next_map) shell.publish_map(), next_map += map_period;
     if (now >= next_status) shell.publish_status(), next_status += std::chrono::seconds(1);

@@ -35,8 +35,8 @@ class Shell {
   }
 
   bool subscribe() {
-    auto* s = lc_->subscribe(channels::sensor(args_.robot, args_.suffix), &Shell::on_sensor, this);
-    auto* n = lc_->subscribe(channels::dynamic_notice(args_.suffix), &Shell::on_notice, this);
+    auto* s = subscribe_raw<Shell, &Shell::on_sensor>(*lc_, channels::sensor(args_.robot, args_.suffix), this);
+    auto* n = subscribe_raw<Shell, &Shell::on_notice>(*lc_, channels::dynamic_notice(args_.suffix), this);
     if (!s || !n) return false;
     // LCM's default queue of 30 drops silently (LCM.md): size both on purpose. Losses
     // of sensor frames show up as frame gaps, of notices as seq gaps.
@@ -141,7 +141,7 @@ int run(const Args& a) {
   install_stop_handlers();
   auto next_status = std::chrono::steady_clock::now();
   while (!stop_requested().load()) {
-    if (lc.handleTimeout(100) < 0) {
+    if (lc.handleTimeout(100) < 0 && !stop_requested().load()) {  // < 0 also on EINTR from our signal
       std::fprintf(stderr, "robot_node %d: LCM handle error\n", a.robot);
       shell.final_line();
       return 1;
