@@ -1,0 +1,117 @@
+// The simulated experiment of the paper (section 4, DESIGN.md section 7): world,
+// landmark layout, moving landmarks, robots on semicircular paths, sensor and
+// odometry noise. SI units inside; angles in radians unless the name says _deg.
+// config/paper.yaml documents every key and the reasoning behind the values.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "elaslam/common/config.hpp"
+
+namespace elaslam::sim {
+
+/// Axis-aligned world rectangle, world frame W [m].
+struct WorldBounds {
+  double x_min_m = -10.0;
+  double x_max_m = 10.0;
+  double y_min_m = -10.0;
+  double y_max_m = 10.0;
+};
+
+/// Range-bearing sensor with a circular field of view of diameter D around the
+/// robot centre (paper Fig. 1), full 360 degrees.
+struct SensorOptions {
+  double fov_diameter_m = 8.0;          // D [m]; landmarks within D/2 are observable
+  double min_range_m = 0.1;             // [m] closer landmarks are not reported (bearing ill-defined)
+  double range_sigma_m = 0.05;          // [m] standard deviation of the range noise
+  double bearing_sigma_deg = 1.0;       // [deg] standard deviation of the bearing noise
+  double detection_probability = 1.0;   // probability that a landmark in view is reported
+
+  double max_range_m() const { return 0.5 * fov_diameter_m; }
+};
+
+/// Odometry noise, same meaning as the fields of sensor_frame_t.
+struct OdometryOptions {
+  double var_trans_per_m = 4e-4;   // [m^2/m] along and across the motion
+  double var_rot_per_rad = 1e-3;   // [rad^2/rad]
+  double var_rot_per_m = 3e-4;     // [rad^2/m]
+};
+
+enum class Layout { kGrid, kCloister, kRandom };
+
+/// Initial landmark positions. Only the keys of the chosen layout are required.
+struct LandmarkOptions {
+  Layout layout = Layout::kGrid;
+  int count = 72;
+  // grid: landmarks at the centres of a columns x rows division of the world.
+  int grid_columns = 9;
+  int grid_rows = 8;
+  // cloister: landmarks evenly spaced on `rings` concentric squares centred in the
+  // world, half-widths from inner to outer (Sola's toolbox "cloister").
+  int cloister_rings = 2;
+  double cloister_inner_half_width_m = 5.0;
+  double cloister_outer_half_width_m = 8.0;
+  // random: uniform in the world, at least min_spacing_m apart (layout stream).
+  double min_spacing_m = 1.0;
+};
+
+/// A robot driving a semicircle (180 degrees of arc) at constant speed; it stops
+/// at the end of the semicircle if it gets there before the run ends.
+struct RobotPathOptions {
+  int id = 1;                     // 1..8
+  double center_x_m = 0.0;        // circle centre, world frame W [m]
+  double center_y_m = 0.0;
+  double radius_m = 6.0;          // [m]
+  double start_angle_deg = 0.0;   // [deg] polar angle of the start point about the centre
+  bool ccw = true;                // direction of travel along the circle
+  double speed_mps = 1.0;         // [m/s] along the path
+};
+
+struct ScenarioOptions {
+  WorldBounds world;
+  int frames = 150;                 // frames per run, 0..frames-1
+  double rate_hz = 10.0;            // F [frames/s]
+  int seed = 1;                     // master seed of every random stream
+  SensorOptions sensor;
+  OdometryOptions odometry;
+  LandmarkOptions landmarks;
+  double dynamism_percent = 0.0;    // share of the landmarks that move [%]
+  double landmark_speed_mps = 0.1;  // [m/s] speed of the moving landmarks
+  int reversal_period_frames = 20;  // moving landmarks turn around every this many frames
+  std::vector<RobotPathOptions> robots;
+
+  double dt_s() const { return 1.0 / rate_hz; }
+  /// round(dynamism x N): the number of moving landmarks.
+  int moving_count() const;
+};
+
+/// One problem found by check_scenario: key path relative to the scenario section.
+struct Problem {
+  std::string key;
+  std::string what;
+};
+
+/// Read the `scenario` section's keys (ranges checked), then run check_scenario.
+void parse(config::Reader& r, ScenarioOptions* o);
+
+/// Cross-field checks (also the ones a command-line override can break): world
+/// non-empty, robot motion per frame below D (paper eq 14 and after), robot paths
+/// inside the world, unique robot ids, landmark speed per frame below D, layout
+/// feasible and inside the world, capacities of the message contract.
+std::vector<Problem> check_scenario(const ScenarioOptions& o);
+
+/// Load the `scenario` section of a YAML file; the sections of the other
+/// components (robot, main, lcm, team) are allowed and left alone.
+/// Throws config::ConfigError listing every problem with its key path.
+ScenarioOptions load_scenario(const std::string& path);
+/// The same from YAML text (tests). `source` names the text in errors.
+ScenarioOptions load_scenario_text(const std::string& text, const std::string& source = "<string>");
+
+/// A few lines describing the effective scenario, for start-up logs.
+std::string describe(const ScenarioOptions& o);
+
+const char* layout_name(Layout l);
+
+}  // namespace elaslam::sim

@@ -1,0 +1,226 @@
+#include "elaslam/simulator/scenario.hpp"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "elaslam/common/channels.hpp"
+#include "elaslam/common/geometry.hpp"
+#include "elaslam/simulator/layout.hpp"
+#include "elaslam/simulator/motion.hpp"
+
+namespace elaslam::sim {
+namespace {
+
+constexpr double kBig = 1e6;  // [m] generous bound for coordinates and lengths
+
+std::string num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+void parse_sensor(config::Reader& r, SensorOptions* s) {
+  r.read("fov_diameter_m", &s->fov_diameter_m, 1e-3, kBig);
+  r.read("min_range_m", &s->min_range_m, 0.0, kBig);
+  r.read("range_sigma_m", &s->range_sigma_m, 0.0, 100.0);
+  r.read("bearing_sigma_deg", &s->bearing_sigma_deg, 0.0, 90.0);
+  r.read("detection_probability", &s->detection_probability, 0.0, 1.0);
+}
+
+void parse_odometry(config::Reader& r, OdometryOptions* o) {
+  r.read("var_trans_per_m", &o->var_trans_per_m, 0.0, 10.0);
+  r.read("var_rot_per_rad", &o->var_rot_per_rad, 0.0, 10.0);
+  r.read("var_rot_per_m", &o->var_rot_per_m, 0.0, 10.0);
+}
+
+// The keys of the chosen layout are required; the others are optional (checked
+// when present) so that a file can keep them for switching layouts.
+void parse_landmarks(config::Reader& r, LandmarkOptions* l) {
+  std::string layout = "grid";
+  r.read_enum("layout", &layout, {"grid", "cloister", "random"});
+  l->layout = layout == "cloister" ? Layout::kCloister : layout == "random" ? Layout::kRandom : Layout::kGrid;
+  r.read("count", &l->count, 1, channels::kMaxLandmarksPerMessage);
+  auto want = [&](Layout which, const char* key) { return l->layout == which || r.has(key); };
+  if (want(Layout::kGrid, "grid_columns")) r.read("grid_columns", &l->grid_columns, 1, 256);
+  if (want(Layout::kGrid, "grid_rows")) r.read("grid_rows", &l->grid_rows, 1, 256);
+  if (want(Layout::kCloister, "cloister_rings")) r.read("cloister_rings", &l->cloister_rings, 1, 64);
+  if (want(Layout::kCloister, "cloister_inner_half_width_m"))
+    r.read("cloister_inner_half_width_m", &l->cloister_inner_half_width_m, 1e-3, kBig);
+  if (want(Layout::kCloister, "cloister_outer_half_width_m"))
+    r.read("cloister_outer_half_width_m", &l->cloister_outer_half_width_m, 1e-3, kBig);
+  if (want(Layout::kRandom, "min_spacing_m")) r.read("min_spacing_m", &l->min_spacing_m, 0.0, kBig);
+}
+
+void parse_robot(config::Reader& r, RobotPathOptions* p) {
+  r.read("id", &p->id, 1, channels::kMaxRobots);
+  std::vector<double> c{p->center_x_m, p->center_y_m};
+  r.read_vector("center_m", &c, 2, -kBig, kBig);
+  p->center_x_m = c[0];
+  p->center_y_m = c[1];
+  r.read("radius_m", &p->radius_m, 1e-3, kBig);
+  r.read("start_angle_deg", &p->start_angle_deg, -360.0, 360.0);
+  std::string dir = "ccw";
+  r.read_enum("direction", &dir, {"ccw", "cw"});
+  p->ccw = dir == "ccw";
+  r.read("speed_mps", &p->speed_mps, 0.0, 1000.0);
+}
+
+// Is every point of the part of the semicircle the robot drives inside the world?
+// Sampled every 0.5 degrees of arc plus the end point (error < 1e-5 x radius).
+bool path_inside(const ScenarioOptions& o, const RobotPathOptions& p, std::string* where) {
+  if (!(p.radius_m > 0.0 && p.speed_mps >= 0.0)) return true;  // out of range: reported by parse
+  const double t_end = (o.frames - 1) / o.rate_hz;
+  const double arc_end = std::min(p.speed_mps * t_end, kPi * p.radius_m);
+  const int n = static_cast<int>(std::ceil(arc_end / p.radius_m / deg2rad(0.5))) + 1;
+  for (int i = 0; i <= n; ++i) {
+    const double s = arc_end * i / n;
+    const Pose2 T = path_pose(p, p.speed_mps > 0.0 ? s / p.speed_mps : 0.0);
+    if (T.x < o.world.x_min_m || T.x > o.world.x_max_m || T.y < o.world.y_min_m || T.y > o.world.y_max_m) {
+      *where = "(" + num(T.x) + ", " + num(T.y) + ")";
+      return false;
+    }
+  }
+  return true;
+}
+
+void check_robots(const ScenarioOptions& o, std::vector<Problem>* out) {
+  std::set<int> ids;
+  const double D = o.sensor.fov_diameter_m;
+  for (std::size_t i = 0; i < o.robots.size(); ++i) {
+    const RobotPathOptions& p = o.robots[i];
+    const std::string key = "robots[" + std::to_string(i) + "]";
+    if (p.id < 1 || p.id > channels::kMaxRobots)
+      out->push_back({key + ".id", "must be in [1, " + std::to_string(channels::kMaxRobots) + "]"});
+    if (!ids.insert(p.id).second) out->push_back({key + ".id", "duplicate robot id " + std::to_string(p.id)});
+    const double step = p.speed_mps / o.rate_hz;
+    if (step >= D)
+      out->push_back({key + ".speed_mps", "the robot moves " + num(step) + " m per frame at " + num(o.rate_hz) +
+                                              " Hz, which must stay below the sensor's diameter D = " + num(D) +
+                                              " m (paper eq 14): lower the speed or raise rate_hz"});
+    std::string where;
+    if (!path_inside(o, p, &where))
+      out->push_back({key, "the path leaves the world at " + where + ": move center_m or shrink radius_m"});
+  }
+}
+
+}  // namespace
+
+int ScenarioOptions::moving_count() const {
+  return static_cast<int>(std::lround(dynamism_percent * landmarks.count / 100.0));
+}
+
+const char* layout_name(Layout l) {
+  switch (l) {
+    case Layout::kGrid: return "grid";
+    case Layout::kCloister: return "cloister";
+    case Layout::kRandom: return "random";
+  }
+  return "?";
+}
+
+std::vector<Problem> check_scenario(const ScenarioOptions& o) {
+  std::vector<Problem> out;
+  const WorldBounds& w = o.world;
+  if (!(w.x_min_m < w.x_max_m)) out.push_back({"world.x_max_m", "must be greater than world.x_min_m"});
+  if (!(w.y_min_m < w.y_max_m)) out.push_back({"world.y_max_m", "must be greater than world.y_min_m"});
+  if (!out.empty()) return out;  // everything below needs a world
+  if (o.frames < 1) out.push_back({"frames", "must be at least 1"});
+  if (o.reversal_period_frames < 1) out.push_back({"reversal_period_frames", "must be at least 1"});
+  const SensorOptions& s = o.sensor;
+  if (!(s.fov_diameter_m > 0.0) || !(s.range_sigma_m >= 0.0) || !(s.bearing_sigma_deg >= 0.0) ||
+      !(s.detection_probability >= 0.0 && s.detection_probability <= 1.0))
+    out.push_back({"sensor", "needs D > 0, sigmas >= 0 and a detection probability in [0, 1]"});
+  const OdometryOptions& od = o.odometry;
+  if (!(od.var_trans_per_m >= 0.0 && od.var_rot_per_rad >= 0.0 && od.var_rot_per_m >= 0.0))
+    out.push_back({"odometry", "variances must be >= 0"});
+  if (!(o.rate_hz > 0.0)) out.push_back({"rate_hz", "must be positive"});
+  if (!(o.rate_hz > 0.0) || !(s.fov_diameter_m > 0.0)) return out;  // the checks below divide by them
+  if (o.sensor.min_range_m >= o.sensor.max_range_m())
+    out.push_back({"sensor.min_range_m", "must be below the sensor range D/2 = " + num(o.sensor.max_range_m()) + " m"});
+  const double lm_step = o.landmark_speed_mps / o.rate_hz;
+  const double min_side = std::min(w.x_max_m - w.x_min_m, w.y_max_m - w.y_min_m);
+  if (lm_step >= o.sensor.fov_diameter_m || lm_step >= min_side)
+    out.push_back({"landmark_speed_mps", "moving landmarks would move " + num(lm_step) +
+                                             " m per frame, which must stay below D = " +
+                                             num(o.sensor.fov_diameter_m) +
+                                             " m (paper section 3.2) and below the world's size"});
+  if (o.dynamism_percent < 0.0 || o.dynamism_percent > 100.0)
+    out.push_back({"dynamism_percent", "must be in [0, 100], got " + num(o.dynamism_percent)});
+  if (o.robots.empty() || o.robots.size() > static_cast<std::size_t>(channels::kMaxRobots))
+    out.push_back({"robots", "need 1 to " + std::to_string(channels::kMaxRobots) + " robots"});
+  check_robots(o, &out);
+  std::vector<Eigen::Vector2d> layout;
+  std::string why;
+  if (!generate_layout(o, &layout, &why)) out.push_back({"landmarks", why});
+  return out;
+}
+
+void parse(config::Reader& r, ScenarioOptions* o) {
+  r.section("world", [&](config::Reader& s) {
+    s.read("x_min_m", &o->world.x_min_m, -kBig, kBig);
+    s.read("x_max_m", &o->world.x_max_m, -kBig, kBig);
+    s.read("y_min_m", &o->world.y_min_m, -kBig, kBig);
+    s.read("y_max_m", &o->world.y_max_m, -kBig, kBig);
+  });
+  r.read("frames", &o->frames, 1, 100000000);
+  r.read("rate_hz", &o->rate_hz, 1e-3, 100000.0);
+  r.read("seed", &o->seed, 0, 2147483647);
+  r.section("sensor", [&](config::Reader& s) { parse_sensor(s, &o->sensor); });
+  r.section("odometry", [&](config::Reader& s) { parse_odometry(s, &o->odometry); });
+  r.section("landmarks", [&](config::Reader& s) { parse_landmarks(s, &o->landmarks); });
+  r.read("dynamism_percent", &o->dynamism_percent, 0.0, 100.0);
+  r.read("landmark_speed_mps", &o->landmark_speed_mps, 0.0, 1000.0);
+  r.read("reversal_period_frames", &o->reversal_period_frames, 1, 100000000);
+  o->robots.clear();
+  r.list(
+      "robots",
+      [&](config::Reader& s, std::size_t) {
+        o->robots.emplace_back();
+        parse_robot(s, &o->robots.back());
+      },
+      1, static_cast<std::size_t>(channels::kMaxRobots));
+  if (o->robots.empty()) return;  // the list itself was bad: reported already
+  for (const Problem& p : check_scenario(*o)) r.fail(p.key, p.what);
+}
+
+namespace {
+ScenarioOptions load(config::Document& doc) {
+  ScenarioOptions o;
+  doc.allow({"robot", "main", "lcm", "team"});  // read by the other components
+  doc.section("scenario", [&](config::Reader& r) { parse(r, &o); });
+  doc.finish();
+  return o;
+}
+}  // namespace
+
+ScenarioOptions load_scenario_text(const std::string& text, const std::string& source) {
+  config::Document doc = config::Document::from_string(text, source);
+  return load(doc);
+}
+
+ScenarioOptions load_scenario(const std::string& path) {
+  config::Document doc = config::Document::from_file(path);
+  return load(doc);
+}
+
+std::string describe(const ScenarioOptions& o) {
+  std::ostringstream os;
+  os << "scenario: world [" << o.world.x_min_m << ", " << o.world.x_max_m << "] x [" << o.world.y_min_m << ", "
+     << o.world.y_max_m << "] m, " << o.frames << " frames at " << o.rate_hz << " Hz, seed " << o.seed << "\n"
+     << "  sensor: D = " << o.sensor.fov_diameter_m << " m, sigma range " << o.sensor.range_sigma_m
+     << " m, sigma bearing " << o.sensor.bearing_sigma_deg << " deg, p_detect " << o.sensor.detection_probability
+     << "\n"
+     << "  odometry: var_trans " << o.odometry.var_trans_per_m << " m^2/m, var_rot " << o.odometry.var_rot_per_rad
+     << " rad^2/rad + " << o.odometry.var_rot_per_m << " rad^2/m\n"
+     << "  landmarks: " << o.landmarks.count << " (" << layout_name(o.landmarks.layout) << "), dynamism "
+     << o.dynamism_percent << " % (" << o.moving_count() << " moving) at " << o.landmark_speed_mps
+     << " m/s, reversal every " << o.reversal_period_frames << " frames\n";
+  for (const auto& p : o.robots)
+    os << "  robot " << p.id << ": centre (" << p.center_x_m << ", " << p.center_y_m << ") m, radius "
+       << p.radius_m << " m, start " << p.start_angle_deg << " deg, " << (p.ccw ? "ccw" : "cw") << ", "
+       << p.speed_mps << " m/s\n";
+  return os.str();
+}
+
+}  // namespace elaslam::sim

@@ -1,0 +1,246 @@
+// System test of the simulator process over LCM (label `system`). Runs inside
+// tools/netns_run.sh, which provides a private network namespace and
+// LCM_DEFAULT_URL. Starts build/bin/simulator as a child process and listens.
+// All waits are bounded; nothing sleeps for synchronisation: the subscriptions
+// exist before the child starts, and loops run handleTimeout until a deadline.
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "elaslam/common/channels.hpp"
+#include "elaslam/ground_truth_t.hpp"
+#include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/sensor_frame_t.hpp"
+
+extern char** environ;
+
+namespace {
+
+const std::string kSimulator = std::string(ELASLAM_BINARY_DIR) + "/bin/simulator";
+const std::string kConfig = std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml";
+// Per-channel queue: larger than any run here, so the test can never drop a frame
+// even if this thread is descheduled for a while.
+constexpr int kQueueCapacity = 1024;
+
+/// The simulator as a child process, its stderr captured in a file.
+class Child {
+ public:
+  explicit Child(std::vector<std::string> args) {
+    char tmpl[] = "/tmp/elaslam_sim_stderr_XXXXXX";
+    const int fd = mkstemp(tmpl);
+    EXPECT_GE(fd, 0);
+    stderr_path_ = tmpl;
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, fd, STDERR_FILENO);
+    args.insert(args.begin(), kSimulator);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    EXPECT_EQ(posix_spawn(&pid_, kSimulator.c_str(), &fa, nullptr, argv.data(), environ), 0) << kSimulator;
+    posix_spawn_file_actions_destroy(&fa);
+    close(fd);
+  }
+  ~Child() {
+    if (pid_ > 0 && !exited_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    unlink(stderr_path_.c_str());
+  }
+  /// Non-blocking: true once the child has exited (status in exit_code()).
+  bool poll() {
+    if (exited_ || pid_ <= 0) return true;
+    int status = 0;
+    if (waitpid(pid_, &status, WNOHANG) == pid_) {
+      exited_ = true;
+      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+    return exited_;
+  }
+  /// Blocking (for children that exit at once, e.g. on a bad command line).
+  int wait() {
+    if (exited_ || pid_ <= 0) return exit_code_;
+    int status = 0;
+    if (waitpid(pid_, &status, 0) == pid_) {
+      exited_ = true;
+      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    }
+    return exit_code_;
+  }
+  void signal(int sig) { kill(pid_, sig); }
+  int exit_code() const { return exit_code_; }
+  std::string stderr_text() const {
+    std::ifstream in(stderr_path_);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  }
+
+ private:
+  pid_t pid_ = -1;
+  bool exited_ = false;
+  int exit_code_ = -1;
+  std::string stderr_path_;
+};
+
+/// Records what arrives on SENSOR_1..3 and GROUND_TRUTH; optionally answers each
+/// sensor frame with a POSE_<r> (a stand-in robot for --lockstep).
+class Listener {
+ public:
+  explicit Listener(bool answer_poses) : answer_(answer_poses) {
+    EXPECT_TRUE(lc_.good()) << "LCM not available: run under tools/netns_run.sh";
+    // subscribeFunction: LCM's member-function subscriptions crash under GCC 12 UBSan (vptr).
+    for (int r = 1; r <= 3; ++r)
+      lc_.subscribeFunction(elaslam::channels::sensor(r), &Listener::on_sensor, this)
+          ->setQueueCapacity(kQueueCapacity);
+    lc_.subscribeFunction(elaslam::channels::ground_truth(), &Listener::on_truth, this)
+        ->setQueueCapacity(kQueueCapacity);
+  }
+
+  /// Handle messages until `done()` holds and the child has exited, or the deadline.
+  template <typename Done>
+  void run(Child* child, Done done, int timeout_ms) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+    while (std::chrono::steady_clock::now() < end) {
+      lc_.handleTimeout(50);
+      const bool exited = child->poll();
+      if (exited && done()) break;
+      if (exited) {  // drain what is still queued, then stop: no more will come
+        while (lc_.handleTimeout(200) > 0) {
+        }
+        break;
+      }
+    }
+  }
+
+  std::vector<std::vector<int>> sensor_frames = std::vector<std::vector<int>>(4);  // [robot id] -> frames
+  std::vector<int> truth_frames;
+  std::vector<std::int64_t> sensor1_utime, truth_utime;
+  int bad_messages = 0;
+
+ private:
+  static void on_sensor(const lcm::ReceiveBuffer*, const std::string& channel, const elaslam::sensor_frame_t* m,
+                        Listener* self) {
+    self->sensor(channel, m);
+  }
+  static void on_truth(const lcm::ReceiveBuffer*, const std::string&, const elaslam::ground_truth_t* m,
+                       Listener* self) {
+    self->truth(m);
+  }
+  void sensor(const std::string& channel, const elaslam::sensor_frame_t* m) {
+    const int r = m->robot_id;
+    if (r < 1 || r > 3 || channel != elaslam::channels::sensor(r) || m->num_obs < 0 || m->num_obs > 64) {
+      ++bad_messages;
+      return;
+    }
+    sensor_frames[static_cast<std::size_t>(r)].push_back(m->frame);
+    if (r == 1) sensor1_utime.push_back(m->utime);
+    if (answer_) {
+      elaslam::pose_estimate_t p{};
+      p.frame = m->frame;
+      p.robot_id = m->robot_id;
+      p.source_utime = m->utime;
+      lc_.publish(elaslam::channels::pose(r), &p);
+    }
+  }
+  void truth(const elaslam::ground_truth_t* m) {
+    if (m->num_robots != 3 || m->num_landmarks != 72) ++bad_messages;
+    truth_frames.push_back(m->frame);
+    truth_utime.push_back(m->utime);
+  }
+
+  lcm::LCM lc_;
+  bool answer_;
+};
+
+std::vector<int> iota_frames(int n) {
+  std::vector<int> v;
+  for (int i = 0; i < n; ++i) v.push_back(i);
+  return v;
+}
+
+void expect_all_frames(const Listener& l, int n) {
+  for (int r = 1; r <= 3; ++r)
+    EXPECT_EQ(l.sensor_frames[static_cast<std::size_t>(r)], iota_frames(n)) << "SENSOR_" << r;
+  EXPECT_EQ(l.truth_frames, iota_frames(n)) << "GROUND_TRUTH";
+  EXPECT_EQ(l.sensor1_utime, l.truth_utime) << "one utime stamp per frame";
+  EXPECT_EQ(l.bad_messages, 0);
+}
+
+TEST(SystemSimulator, PublishesEveryFrameOnEveryChannel) {
+  Listener l(false);
+  Child sim({"--config", kConfig, "--frames", "20", "--rate", "50", "--start-delay-ms", "200", "--dynamism", "50"});
+  l.run(&sim, [&] { return l.truth_frames.size() == 20; }, 30000);
+  ASSERT_TRUE(sim.poll()) << "simulator still running after 30 s";
+  EXPECT_EQ(sim.exit_code(), 0) << sim.stderr_text();
+  expect_all_frames(l, 20);
+  EXPECT_NE(sim.stderr_text().find("20 frames published"), std::string::npos) << sim.stderr_text();
+}
+
+TEST(SystemSimulator, LockstepWaitsForEveryRobotsPose) {
+  Listener l(true);  // answers every SENSOR_<r> with POSE_<r>
+  Child sim({"--config", kConfig, "--frames", "30", "--rate", "1000", "--lockstep", "--lockstep-timeout-ms", "5000",
+             "--start-delay-ms", "200"});
+  l.run(&sim, [&] { return l.truth_frames.size() == 30; }, 40000);
+  ASSERT_TRUE(sim.poll());
+  EXPECT_EQ(sim.exit_code(), 0) << sim.stderr_text();
+  expect_all_frames(l, 30);
+  EXPECT_NE(sim.stderr_text().find("lockstep timeouts 0,"), std::string::npos) << sim.stderr_text();
+}
+
+TEST(SystemSimulator, LockstepTimeoutIsCountedAndTheRunGoesOn) {
+  Listener l(false);  // nobody answers
+  Child sim({"--config", kConfig, "--frames", "3", "--rate", "100", "--lockstep", "--lockstep-timeout-ms", "100"});
+  l.run(&sim, [&] { return l.truth_frames.size() == 3; }, 30000);
+  ASSERT_TRUE(sim.poll());
+  EXPECT_EQ(sim.exit_code(), 0) << sim.stderr_text();
+  EXPECT_NE(sim.stderr_text().find("lockstep timeouts 3,"), std::string::npos) << sim.stderr_text();
+}
+
+TEST(SystemSimulator, StopsCleanlyOnSigterm) {
+  Listener l(false);
+  Child sim({"--config", kConfig, "--frames", "1000000", "--rate", "100"});
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  bool signalled = false;
+  while (!sim.poll() && std::chrono::steady_clock::now() < end) {
+    l.run(&sim, [] { return true; }, 50);
+    if (!signalled && l.truth_frames.size() >= 5) {
+      sim.signal(SIGTERM);
+      signalled = true;
+    }
+  }
+  ASSERT_TRUE(sim.poll()) << "no exit within 20 s";
+  EXPECT_TRUE(signalled);
+  EXPECT_EQ(sim.exit_code(), 0) << sim.stderr_text();
+  EXPECT_NE(sim.stderr_text().find("stopped by signal"), std::string::npos) << sim.stderr_text();
+}
+
+TEST(SystemSimulator, BadCommandLineOrConfigExitsWith2) {
+  Child no_config({"--frames", "20"});
+  EXPECT_EQ(no_config.wait(), 2);
+  EXPECT_NE(no_config.stderr_text().find("--config"), std::string::npos) << no_config.stderr_text();
+  Child bad_range({"--config", kConfig, "--frames", "0"});
+  EXPECT_EQ(bad_range.wait(), 2);
+  Child missing({"--config", "/nonexistent.yaml"});
+  EXPECT_EQ(missing.wait(), 2);
+  EXPECT_NE(missing.stderr_text().find("cannot open"), std::string::npos) << missing.stderr_text();
+  // An override that breaks a cross-field check: robot 1 would move 12.7 m per frame > D = 8 m.
+  Child too_fast({"--config", kConfig, "--rate", "0.1"});
+  EXPECT_EQ(too_fast.wait(), 2);
+  EXPECT_NE(too_fast.stderr_text().find("scenario.robots[0].speed_mps"), std::string::npos)
+      << too_fast.stderr_text();
+}
+
+}  // namespace

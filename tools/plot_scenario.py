@@ -1,0 +1,120 @@
+#!/usr/bin/env python3
+"""Plot a scenario like the paper's Fig. 4: landmarks (moving ones with their
+paths over the run), the robots' paths, each robot's field of view at its start
+pose, on a 2 m grid.
+
+    .venv/bin/python tools/plot_scenario.py --config config/paper.yaml \
+        [--dynamism 50] [--speed 0.5] [--seed 1] --out runs/scenario.png
+
+It runs build/bin/scenario_dump (the simulator library itself, so the plot shows
+exactly what the simulator publishes) and reads its CSV.
+"""
+import argparse
+import csv
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROBOT_COLOURS = ["tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
+
+
+def run_dump(args, csv_path):
+    exe = args.dump or os.path.join(ROOT, "build", "bin", "scenario_dump")
+    if not os.access(exe, os.X_OK):
+        sys.exit(f"plot_scenario: {exe} not found: build first (cmake --build build)")
+    cmd = [exe, "--config", args.config, "--out", csv_path]
+    for flag, value in (("--dynamism", args.dynamism), ("--speed", args.speed), ("--seed", args.seed)):
+        if value is not None:
+            cmd += [flag, str(value)]
+    result = subprocess.run(cmd, stderr=subprocess.PIPE, text=True)
+    if result.returncode != 0:
+        sys.exit(f"plot_scenario: scenario_dump failed ({result.returncode}):\n{result.stderr}")
+
+
+def read_dump(csv_path):
+    meta, robots, landmarks = {}, {}, {}
+    with open(csv_path) as f:
+        lines = []
+        for line in f:
+            if line.startswith("#"):
+                key, _, value = line[1:].strip().partition("=")
+                meta[key] = float(value)
+            else:
+                lines.append(line)
+    for row in csv.DictReader(lines):
+        x, y = float(row["x"]), float(row["y"])
+        if row["kind"] == "robot":
+            robots.setdefault(int(row["id"]), []).append((x, y, float(row["theta"])))
+        elif row["kind"] == "landmark":
+            lm = landmarks.setdefault(int(row["id"]), {"xy": [], "moving": row["moving"] == "1"})
+            lm["xy"].append((x, y))
+    return meta, robots, landmarks
+
+
+def plot(meta, robots, landmarks, out):
+    fig, ax = plt.subplots(figsize=(7.5, 7.5))
+    for lm in landmarks.values():
+        x0, y0 = lm["xy"][0]
+        if lm["moving"]:
+            xs, ys = zip(*lm["xy"])
+            ax.plot(xs, ys, "-", color="tab:red", lw=1.0, alpha=0.7)
+            ax.plot(x0, y0, "o", mfc="none", mec="tab:red", ms=6)
+        else:
+            ax.plot(x0, y0, "k.", ms=7)
+    half_d = 0.5 * meta["fov_diameter_m"]
+    for i, (rid, poses) in enumerate(sorted(robots.items())):
+        c = ROBOT_COLOURS[i % len(ROBOT_COLOURS)]
+        xs, ys, _ = zip(*poses)
+        ax.plot(xs, ys, "-", color=c, lw=2, label=f"robot {rid}")
+        x0, y0, th0 = poses[0]
+        ax.add_patch(plt.Circle((x0, y0), half_d, fill=False, ls="--", color=c, lw=1))
+        ax.arrow(x0, y0, 0.8 * math.cos(th0), 0.8 * math.sin(th0), head_width=0.3, color=c)
+    ax.plot([], [], "k.", label="static landmark")
+    ax.plot([], [], "o-", mfc="none", color="tab:red", label="moving landmark (path)")
+    ax.plot([], [], "--", color="gray", label=f"field of view at start (D = {meta['fov_diameter_m']:g} m)")
+    ax.set_xlim(meta["x_min_m"] - 0.5, meta["x_max_m"] + 0.5)
+    ax.set_ylim(meta["y_min_m"] - 0.5, meta["y_max_m"] + 0.5)
+    ax.set_xticks(range(int(math.floor(meta["x_min_m"])), int(math.ceil(meta["x_max_m"])) + 1, 2))
+    ax.set_yticks(range(int(math.floor(meta["y_min_m"])), int(math.ceil(meta["y_max_m"])) + 1, 2))
+    ax.grid(True, lw=0.5, alpha=0.5)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    n_moving = sum(1 for lm in landmarks.values() if lm["moving"])
+    ax.set_title(f"{len(landmarks)} landmarks, {n_moving} moving ({meta['dynamism_percent']:g} %) at "
+                 f"{meta['landmark_speed_mps']:g} m/s; {int(meta['frames'])} frames at {meta['rate_hz']:g} Hz, "
+                 f"seed {int(meta['seed'])}", fontsize=9)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=3, fontsize=7)
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    fig.savefig(out, dpi=120, bbox_inches="tight")
+    plt.close(fig)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--config", required=True, help="scenario YAML (config/paper.yaml)")
+    p.add_argument("--dynamism", type=float, help="override scenario.dynamism_percent [%%]")
+    p.add_argument("--speed", type=float, help="override scenario.landmark_speed_mps [m/s]")
+    p.add_argument("--seed", type=int, help="override scenario.seed")
+    p.add_argument("--dump", help="path of scenario_dump (default build/bin/scenario_dump)")
+    p.add_argument("--csv", help="keep the dumped CSV here")
+    p.add_argument("--out", required=True, help="output PNG")
+    args = p.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        csv_path = args.csv or os.path.join(tmp, "scenario.csv")
+        run_dump(args, csv_path)
+        meta, robots, landmarks = read_dump(csv_path)
+    plot(meta, robots, landmarks, args.out)
+    print(f"plot_scenario: wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
