@@ -15,6 +15,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/lcm_util.hpp"
 #include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/pose_estimate_t.hpp"
 
 namespace elaslam {
 namespace {
@@ -57,7 +58,11 @@ class Shell {
   bool subscribe() {
     auto* e = subscribe_raw<Shell, &Shell::on_event>(*lc_, channels::lmap_event(args_.suffix), this);
     auto* s = subscribe_raw<Shell, &Shell::on_snapshot>(*lc_, channels::lmap_snapshot(args_.suffix), this);
-    if (!e || !s) return false;
+    // Every robot's POSE marks the end of its frame: GLOBAL_MAP for frame k goes out
+    // as soon as every robot seen so far has finished k (plus a periodic one).
+    auto* p = subscribe_raw<Shell, &Shell::on_pose>(*lc_, "POSE_[0-9]+" + args_.suffix, this);
+    if (!e || !s || !p) return false;
+    p->setQueueCapacity(1000);
     // Events come in bursts (one per observed landmark per robot per frame): a deep
     // queue, on purpose; losses show up as seq gaps and are repaired by snapshots.
     e->setQueueCapacity(args_.queue);
@@ -79,6 +84,14 @@ class Shell {
     std::string why;
     if (!node_.on_snapshot(m, &why)) warn("snapshot refused: " + why);
     send_notices();
+  }
+
+  void on_pose(const lcm::ReceiveBuffer* rb, const std::string&) {
+    pose_estimate_t m;
+    if (m.decode(rb->data, 0, static_cast<int>(rb->data_size)) < 0) return decode_error("pose_estimate_t");
+    const int done = node_.on_robot_frame(m.robot_id, m.frame);
+    if (done >= 0)
+      publish_msg(*lc_, channels::global_map(args_.suffix), node_.global_map_msg(now_utime(), done), &buf_);
   }
 
   void publish_map() { publish_msg(*lc_, channels::global_map(args_.suffix), node_.global_map_msg(now_utime()), &buf_); }

@@ -1,5 +1,6 @@
 #include "elaslam/main_robot/main_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -33,6 +34,7 @@ Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
 }  // namespace
 
 MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
+  robot_frame_.fill(-1);
   pending_.reserve(256);
   notices_.reserve(256);
   snap_lms_.reserve(channels::kMaxLandmarksPerMessage);
@@ -133,9 +135,24 @@ const std::vector<dynamic_notice_t>& MainNode::take_notices(std::int64_t now_uti
   return notices_;
 }
 
-const global_map_t& MainNode::global_map_msg(std::int64_t now_utime) {
+int MainNode::on_robot_frame(int robot_id, int frame) {
+  if (robot_id < 1 || robot_id > kMaxTeamRobots || frame < 0) {
+    ++counters_.rejected_inputs;
+    return -1;
+  }
+  int& f = robot_frame_[static_cast<std::size_t>(robot_id - 1)];
+  f = std::max(f, frame);
+  int all = -1;
+  for (int r : robot_frame_)
+    if (r >= 0) all = all < 0 ? r : std::min(all, r);
+  if (all <= completed_frame_) return -1;
+  completed_frame_ = all;
+  return all;
+}
+
+const global_map_t& MainNode::global_map_msg(std::int64_t now_utime, int frame) {
   msg_.utime = now_utime;
-  msg_.frame = map_.newest_frame();
+  msg_.frame = frame >= 0 ? frame : (completed_frame_ >= 0 ? completed_frame_ : map_.newest_frame());
   msg_.version = map_.version();
   int n = 0, m = 0;
   for (int id = 0; id < map_.max_landmark_id(); ++id) {

@@ -121,13 +121,14 @@ RunResult run_team(const TeamConfig& config) {
       out.truth[static_cast<std::size_t>(i)].push_back({t, world.robot_pose(i)});
       for (const auto& ev : node.event_msgs()) main.on_event(bus.carry(ev));
       if (node.snapshot_ready()) main.on_snapshot(bus.carry(node.snapshot_msg()));
+      main.on_robot_frame(p.robot_id, p.frame);  // as main_robot does on each POSE
     }
     // -> notices, before frame k + 1.
     for (const auto& n : main.take_notices(utime)) {
       const dynamic_notice_t msg = bus.carry(n);
       for (auto& node : robots) node.on_notice(msg);
     }
-    fill_map(bus.carry(main.global_map_msg(utime)), &f);
+    fill_map(bus.carry(main.global_map_msg(utime, k)), &f);
     acc.add(f);
   }
   out.metrics = acc.finish();

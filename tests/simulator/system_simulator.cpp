@@ -18,12 +18,11 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "../support/child_process.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
-
-extern char** environ;
 
 namespace {
 
@@ -33,67 +32,7 @@ const std::string kConfig = std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yam
 // even if this thread is descheduled for a while.
 constexpr int kQueueCapacity = 1024;
 
-/// The simulator as a child process, its stderr captured in a file.
-class Child {
- public:
-  explicit Child(std::vector<std::string> args) {
-    char tmpl[] = "/tmp/elaslam_sim_stderr_XXXXXX";
-    const int fd = mkstemp(tmpl);
-    EXPECT_GE(fd, 0);
-    stderr_path_ = tmpl;
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, fd, STDERR_FILENO);
-    args.insert(args.begin(), kSimulator);
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    EXPECT_EQ(posix_spawn(&pid_, kSimulator.c_str(), &fa, nullptr, argv.data(), environ), 0) << kSimulator;
-    posix_spawn_file_actions_destroy(&fa);
-    close(fd);
-  }
-  ~Child() {
-    if (pid_ > 0 && !exited_) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    unlink(stderr_path_.c_str());
-  }
-  /// Non-blocking: true once the child has exited (status in exit_code()).
-  bool poll() {
-    if (exited_ || pid_ <= 0) return true;
-    int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) == pid_) {
-      exited_ = true;
-      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    }
-    return exited_;
-  }
-  /// Blocking (for children that exit at once, e.g. on a bad command line).
-  int wait() {
-    if (exited_ || pid_ <= 0) return exit_code_;
-    int status = 0;
-    if (waitpid(pid_, &status, 0) == pid_) {
-      exited_ = true;
-      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    }
-    return exit_code_;
-  }
-  void signal(int sig) { kill(pid_, sig); }
-  int exit_code() const { return exit_code_; }
-  std::string stderr_text() const {
-    std::ifstream in(stderr_path_);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
-
- private:
-  pid_t pid_ = -1;
-  bool exited_ = false;
-  int exit_code_ = -1;
-  std::string stderr_path_;
-};
+using elaslam::test::Child;
 
 /// Records what arrives on SENSOR_1..3 and GROUND_TRUTH; optionally answers each
 /// sensor frame with a POSE_<r> (a stand-in robot for --lockstep).
@@ -181,7 +120,7 @@ void expect_all_frames(const Listener& l, int n) {
 
 TEST(SystemSimulator, PublishesEveryFrameOnEveryChannel) {
   Listener l(false);
-  Child sim({"--config", kConfig, "--frames", "20", "--rate", "50", "--start-delay-ms", "200", "--dynamism", "50"});
+  Child sim(kSimulator, {"--config", kConfig, "--frames", "20", "--rate", "50", "--start-delay-ms", "200", "--dynamism", "50"});
   l.run(&sim, [&] { return l.truth_frames.size() == 20; }, 30000);
   ASSERT_TRUE(sim.poll()) << "simulator still running after 30 s";
   EXPECT_EQ(sim.exit_code(), 0) << sim.stderr_text();
@@ -191,7 +130,7 @@ TEST(SystemSimulator, PublishesEveryFrameOnEveryChannel) {
 
 TEST(SystemSimulator, LockstepWaitsForEveryRobotsPose) {
   Listener l(true);  // answers every SENSOR_<r> with POSE_<r>
-  Child sim({"--config", kConfig, "--frames", "30", "--rate", "1000", "--lockstep", "--lockstep-timeout-ms", "5000",
+  Child sim(kSimulator, {"--config", kConfig, "--frames", "30", "--rate", "1000", "--lockstep", "--lockstep-timeout-ms", "5000",
              "--start-delay-ms", "200"});
   l.run(&sim, [&] { return l.truth_frames.size() == 30; }, 40000);
   ASSERT_TRUE(sim.poll());
@@ -202,7 +141,7 @@ TEST(SystemSimulator, LockstepWaitsForEveryRobotsPose) {
 
 TEST(SystemSimulator, LockstepTimeoutIsCountedAndTheRunGoesOn) {
   Listener l(false);  // nobody answers
-  Child sim({"--config", kConfig, "--frames", "3", "--rate", "100", "--lockstep", "--lockstep-timeout-ms", "100"});
+  Child sim(kSimulator, {"--config", kConfig, "--frames", "3", "--rate", "100", "--lockstep", "--lockstep-timeout-ms", "100"});
   l.run(&sim, [&] { return l.truth_frames.size() == 3; }, 30000);
   ASSERT_TRUE(sim.poll());
   EXPECT_EQ(sim.exit_code(), 0) << sim.stderr_text();
@@ -211,7 +150,7 @@ TEST(SystemSimulator, LockstepTimeoutIsCountedAndTheRunGoesOn) {
 
 TEST(SystemSimulator, StopsCleanlyOnSigterm) {
   Listener l(false);
-  Child sim({"--config", kConfig, "--frames", "1000000", "--rate", "100"});
+  Child sim(kSimulator, {"--config", kConfig, "--frames", "1000000", "--rate", "100"});
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   bool signalled = false;
   while (!sim.poll() && std::chrono::steady_clock::now() < end) {
@@ -228,16 +167,16 @@ TEST(SystemSimulator, StopsCleanlyOnSigterm) {
 }
 
 TEST(SystemSimulator, BadCommandLineOrConfigExitsWith2) {
-  Child no_config({"--frames", "20"});
+  Child no_config(kSimulator, {"--frames", "20"});
   EXPECT_EQ(no_config.wait(), 2);
   EXPECT_NE(no_config.stderr_text().find("--config"), std::string::npos) << no_config.stderr_text();
-  Child bad_range({"--config", kConfig, "--frames", "0"});
+  Child bad_range(kSimulator, {"--config", kConfig, "--frames", "0"});
   EXPECT_EQ(bad_range.wait(), 2);
-  Child missing({"--config", "/nonexistent.yaml"});
+  Child missing(kSimulator, {"--config", "/nonexistent.yaml"});
   EXPECT_EQ(missing.wait(), 2);
   EXPECT_NE(missing.stderr_text().find("cannot open"), std::string::npos) << missing.stderr_text();
   // An override that breaks a cross-field check: robot 1 would move 12.7 m per frame > D = 8 m.
-  Child too_fast({"--config", kConfig, "--rate", "0.1"});
+  Child too_fast(kSimulator, {"--config", kConfig, "--rate", "0.1"});
   EXPECT_EQ(too_fast.wait(), 2);
   EXPECT_NE(too_fast.stderr_text().find("scenario.robots[0].speed_mps"), std::string::npos)
       << too_fast.stderr_text();

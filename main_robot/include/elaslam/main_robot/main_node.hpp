@@ -3,6 +3,7 @@
 // STATUS_MAIN. The main_robot process and the in-process team run share it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -39,8 +40,16 @@ class MainNode {
   /// Notices produced since the last call, as messages (seq assigned); clears them.
   const std::vector<dynamic_notice_t>& take_notices(std::int64_t now_utime);
 
-  /// The global map as a message (at most 256 static landmarks, 256 moving ids).
-  const global_map_t& global_map_msg(std::int64_t now_utime);
+  /// Robot `robot_id` has finished frame `frame` (its POSE arrived; it publishes its
+  /// events before its POSE). Returns the newest frame that every robot seen so far
+  /// has finished when that advanced with this call, else -1: the moment to publish
+  /// GLOBAL_MAP for that frame.
+  int on_robot_frame(int robot_id, int frame);
+
+  /// The global map as a message (at most 256 static landmarks, 256 moving ids),
+  /// stamped with `frame` (default: the newest frame every robot has finished, or
+  /// before any POSE was seen, the newest frame of any event).
+  const global_map_t& global_map_msg(std::int64_t now_utime, int frame = -1);
   node_status_t status_msg(std::int64_t now_utime) const;
 
   GlobalMap& map() { return map_; }
@@ -56,6 +65,8 @@ class MainNode {
   std::vector<Notice> pending_;
   std::vector<dynamic_notice_t> notices_;
   std::int64_t notice_seq_ = 0;
+  std::array<int, kMaxTeamRobots> robot_frame_;  // last finished frame per robot, -1: never seen
+  int completed_frame_ = -1;
   global_map_t msg_{};
   std::vector<std::pair<int, RobotEstimate>> snap_lms_;
   std::vector<int> snap_moving_;
