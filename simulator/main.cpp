@@ -16,6 +16,7 @@
 #include <ctime>
 #include <iostream>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,9 @@ struct Args {
   int lockstep_timeout_ms = 1000;
   std::string lcm_url;
   int start_delay_ms = 0;
+  int wait_for_nodes = 0;
+  int wait_timeout_ms = 10000;
+  bool list_robots = false;
   bool has_rate = false, has_frames = false, has_dynamism = false, has_speed = false, has_seed = false;
 };
 
@@ -110,6 +114,11 @@ int parse_args(int argc, char** argv, Args* a) {
       ->capture_default_str()
       ->check(CLI::Range(1, 3600000));
   app.add_option("--lcm-url", a->lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, else LCM's default)");
+  app.add_option("--wait-for-nodes", a->wait_for_nodes,
+                 "before frame 0, wait until this many nodes announced themselves on STATUS_* (robots + main)")
+      ->check(CLI::Range(0, 64));
+  app.add_option("--wait-timeout-ms", a->wait_timeout_ms, "bound of --wait-for-nodes [ms]")->check(CLI::Range(1, 600000));
+  app.add_flag("--list-robots", a->list_robots, "print the scenario's robot ids (one line) and exit");
   app.add_option("--start-delay-ms", a->start_delay_ms, "wait before frame 0 so subscribers can join [ms]")
       ->capture_default_str()
       ->check(CLI::Range(0, 3600000));
@@ -329,6 +338,25 @@ void install_signal_handlers() {
   sigaction(SIGTERM, &sa, nullptr);
 }
 
+// Readiness of the team: every node publishes its STATUS_* channel at start. Waiting
+// for them (instead of a fixed start delay) means no frame goes out before every
+// subscriber exists.
+bool wait_for_nodes(lcm::LCM* lc, int n, int timeout_ms) {
+  std::set<std::string> seen;
+  auto* sub = lc->subscribeFunction(
+      "STATUS_(ROBOT_[0-9]+|MAIN)", +[](const lcm::ReceiveBuffer*, const std::string& ch, std::set<std::string>* s) { s->insert(ch); },
+      &seen);
+  const std::int64_t end = mono_ns() + static_cast<std::int64_t>(timeout_ms) * kNsPerMs;
+  while (static_cast<int>(seen.size()) < n && mono_ns() < end && !g_stop.load()) lc->handleTimeout(20);
+  lc->unsubscribe(sub);
+  if (static_cast<int>(seen.size()) >= n) {
+    std::fprintf(stderr, "simulator: %d nodes ready\n", n);
+    return true;
+  }
+  std::fprintf(stderr, "simulator: only %zu of %d nodes announced themselves within %d ms\n", seen.size(), n, timeout_ms);
+  return false;
+}
+
 int run(const Args& a, const ScenarioOptions& o) {
   const char* env_url = std::getenv("LCM_DEFAULT_URL");
   const std::string url = !a.lcm_url.empty() ? a.lcm_url : (env_url ? env_url : "");
@@ -342,6 +370,7 @@ int run(const Args& a, const ScenarioOptions& o) {
             << (a.lockstep ? ", lockstep (timeout " + std::to_string(a.lockstep_timeout_ms) + " ms)" : ", free running")
             << ", start delay " << a.start_delay_ms << " ms\n";
 
+  if (a.wait_for_nodes > 0 && !wait_for_nodes(&lc, a.wait_for_nodes, a.wait_timeout_ms)) return 1;
   World world(o);
   std::unique_ptr<PoseWaiter> waiter;
   if (a.lockstep) waiter = std::make_unique<PoseWaiter>(&lc, o);
@@ -382,6 +411,11 @@ int main(int argc, char** argv) {
   if (rc >= 0) return rc;
   ScenarioOptions options;
   if (!load(args, &options)) return 2;
+  if (args.list_robots) {
+    for (std::size_t i = 0; i < options.robots.size(); ++i) std::printf("%s%d", i ? " " : "", options.robots[i].id);
+    std::printf("\n");
+    return 0;
+  }
   install_signal_handlers();
   return run(args, options);
 }
