@@ -186,7 +186,7 @@ elif [ "$INSIDE" -eq 1 ]; then
   echo "run_team.sh: team in a private network namespace, LCM $LCM_DEFAULT_URL"
   launch same_host
 else
-  echo "run_team.sh: not root: using ${LCM_DEFAULT_URL:-LCM's default URL}. Multicast on loopback needs" >&2
+  echo "run_team.sh: not root: using ${LCM_DEFAULT_URL:-the LCM default URL}. Multicast on loopback needs" >&2
   echo "  sudo ip link set lo multicast on && sudo ip route add 224.0.0.0/4 dev lo" >&2
   launch same_host
 fi
