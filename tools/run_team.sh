@@ -53,7 +53,7 @@ OUT="$(cd "$OUT" && pwd)"
 
 if [ "$INSIDE" -eq 0 ]; then
   "$ROOT/tools/setup.sh" >/dev/null
-  cmake --build "$ROOT/build" --target simulator robot_node main_robot evaluate run_scenario -j "$(nproc)" >/dev/null
+  cmake --build "$ROOT/build" --target simulator robot_node main_robot run_scenario $([ -f "$ROOT/tools/evaluate.cpp" ] && echo evaluate) -j "$(nproc)" >/dev/null
 fi
 if [ "$IN_PROCESS" -eq 1 ]; then
   exec "$BIN/run_scenario" --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} "${SIM_ARGS[@]}"
