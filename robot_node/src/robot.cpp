@@ -46,7 +46,6 @@ Robot::Robot(const RobotOptions& options, int robot_id)
 
 void Robot::reset() {
   initialised_ = false;
-  odometry_cov_sum_.setZero();
   last_frame_ = -1;
   lmap_.clear();
   std::fill(out_count_.begin(), out_count_.end(), 0);
@@ -70,6 +69,7 @@ FrameSummary Robot::process(const FrameInput& in) {
   } else {
     process_ela(in, &s);
     check_missing(&s);
+    drop_unseen_candidates();
   }
   for (int id : updated_)
     if (ekf_.has_landmark(id)) emit(EventKind::kUpdate, id);
@@ -90,11 +90,7 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     initialised_ = true;
   } else {
     const Pose2 increment = between(last_odometer_, in.odometer);
-    const Eigen::Matrix3d U = odometry_covariance(increment, in.noise);
-    Eigen::Matrix3d F_u;
-    motion(ekf_.pose(), increment, nullptr, &F_u);
-    if (ekf_.predict(increment, U) != EkfStatus::kOk) ++s->filter_faults;
-    odometry_cov_sum_ += F_u * U * F_u.transpose();
+    if (ekf_.predict(increment, odometry_covariance(increment, in.noise)) != EkfStatus::kOk) ++s->filter_faults;
   }
   last_odometer_ = in.odometer;
 }
@@ -139,7 +135,7 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   view_obs_.clear();
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
-    if (!ekf_.has_landmark(o.landmark_id)) continue;
+    if (lmap_[o.landmark_id].status != LandmarkStatus::kStatic) continue;
     InView v;
     v.id = o.landmark_id;
     v.z = o.z;
@@ -224,88 +220,112 @@ void Robot::gate_view_consensus() {
   const int n = static_cast<int>(view_.size());
   solver_.reset(n);
   for (int i = 0; i < n; ++i) {
-    const UpdateReport r = ekf_.check(view_[static_cast<std::size_t>(i)].id, view_[static_cast<std::size_t>(i)].z);
+    const InView& vi = view_[static_cast<std::size_t>(i)];
+    const UpdateReport r = ekf_.check(vi.id, vi.z);
     solver_.set_prior_d2(i, r.status == EkfStatus::kOk ? r.d2 : 1e12);
     for (int j = i + 1; j < n; ++j)
-      if (pair_d2(ekf_, view_[static_cast<std::size_t>(i)], view_[static_cast<std::size_t>(j)]) <= ela_threshold_)
-        solver_.add_edge(i, j);
+      if (pair_d2(ekf_, vi, view_[static_cast<std::size_t>(j)]) <= ela_threshold_) solver_.add_edge(i, j);
   }
   const std::uint64_t chosen = solver_.solve();
   const bool fallback = __builtin_popcountll(chosen) < 2;
+  // The clique is the static reference. A landmark outside it may only have failed
+  // one pair test by chance (1 % per pair at the default gate, several pairs per
+  // landmark): it is re-tested against the whole clique with the fused ELA (eq 16
+  // restricted to the clique, inside_ as the mask) and admitted when it agrees.
+  for (int i = 0; i < n; ++i) inside_[static_cast<std::size_t>(i)] = (chosen >> i) & 1u;
+  const std::size_t first = gates_.size();
   for (int i = 0; i < n; ++i) {
-    GateRecord g{view_[static_cast<std::size_t>(i)].id, GateKind::kConsensus, 0.0, ela_threshold_, true};
-    if (fallback) {
-      const UpdateReport r = ekf_.check(g.landmark_id, view_[static_cast<std::size_t>(i)].z);
+    const InView& vi = view_[static_cast<std::size_t>(i)];
+    GateRecord g{vi.id, GateKind::kConsensus, 0.0, ela_threshold_, true};
+    if (fallback) {  // fewer than two agree: each landmark's single test
+      const UpdateReport r = ekf_.check(vi.id, vi.z);
       g.kind = GateKind::kInnovation;
       g.d2 = r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
       g.inside = g.d2 <= g.threshold;
-    } else {
-      g.inside = (chosen >> i) & 1u;
-      g.d2 = g.inside ? 0.0 : std::numeric_limits<double>::infinity();
+    } else if (!inside_[static_cast<std::size_t>(i)]) {
+      g.d2 = ela_multi_d2(ekf_, view_.data(), n, i, inside_.data());
+      g.inside = g.d2 <= g.threshold;
     }
-    inside_[static_cast<std::size_t>(i)] = g.inside;
     gates_.push_back(g);
   }
+  for (int i = 0; i < n; ++i) inside_[static_cast<std::size_t>(i)] = gates_[first + static_cast<std::size_t>(i)].inside;
 }
 
-// Steps 1-2 of section 5: a new landmark becomes a CANDIDATE; a candidate whose
-// new world position lies within its ELA for enough consecutive sightings is added.
+// Steps 1-2 of section 5, with candidates kept in the filter as inert states: a
+// new landmark is added to the filter at its first sighting (so its estimate is
+// anchored where the robot's pose was best known, and its correlation with the
+// pose is tracked from then on) but corrects nothing until it is confirmed. Each
+// re-sighting is its ELA test: the innovation against the filter's prediction,
+// whose covariance carries exactly the pose uncertainty accrued since the anchor.
+// Inconsistent: re-anchored here; `moving_after` times in a row: reported MOVING.
 void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
     const int id = o.landmark_id;
-    if (ekf_.has_landmark(id) || handled_[static_cast<std::size_t>(id)] == in.frame) continue;
-    ++s->num_candidates;
     LMapEntry& e = lmap_[id];
-    if (e.status == LandmarkStatus::kCandidate) {
-      const double d2 = candidate_d2(e, o.z);
-      const bool inside = d2 <= candidate_threshold_;
-      gates_.push_back({id, GateKind::kCandidate, d2, candidate_threshold_, inside});
+    if (e.status == LandmarkStatus::kStatic || handled_[static_cast<std::size_t>(id)] == in.frame) continue;
+    ++s->num_candidates;
+    record_sighting(id, o.z);
+    if (e.status == LandmarkStatus::kCandidate && ekf_.has_landmark(id)) {
+      const UpdateReport r = ekf_.check(id, o.z);
+      const bool inside = r.status == EkfStatus::kOk && r.d2 <= candidate_threshold_;
+      gates_.push_back({id, GateKind::kCandidate, r.d2, candidate_threshold_, inside});
       if (inside) {
-        const int need = e.was_moving ? options_.return_frames : options_.confirm_frames;
-        if (++e.consistent_sightings >= need) {
-          const EkfStatus st = ekf_.add_landmark(id, o.z);
-          if (st == EkfStatus::kOk) {
-            lmap_.set_status(id, LandmarkStatus::kStatic, in.frame);
-            e.missing_frames = 0;
-            out_count_[static_cast<std::size_t>(id)] = 0;
-            emit(e.was_moving ? EventKind::kReturn : EventKind::kAdd, id);
-            ++s->num_added;
-          } else {
-            ++s->filter_faults;  // kFull: it stays a candidate
-          }
-        }
+        out_count_[static_cast<std::size_t>(id)] = 0;
+        if (++e.consistent_sightings >= (e.was_moving ? options_.return_frames : options_.confirm_frames))
+          confirm(id, o.z, s);
         continue;
       }
+      ekf_.remove_landmark(id);
+      if (++out_count_[static_cast<std::size_t>(id)] >= options_.moving_after && !e.reported_moving) {
+        e.was_moving = e.reported_moving = true;
+        emit_at(EventKind::kMoving, id, e.position, e.cov);
+        ++s->num_moving;
+      }
     }
-    // New, moving-and-seen-again, or inconsistent: (re)anchor the candidate here.
-    anchor_candidate(id, o.z, in.frame);
+    // New, seen again after moving or after a gap, or inconsistent: (re)anchor here.
+    lmap_.set_status(id, LandmarkStatus::kCandidate, in.frame);
+    e.consistent_sightings = 1;
+    if (ekf_.add_landmark(id, o.z) != EkfStatus::kOk) ++s->filter_faults;  // kFull: candidate outside the filter
   }
 }
 
-// The candidate's anchor: its world position g(R, y) now, the measurement part of
-// its covariance, and the odometry uncertainty accumulated so far. Pose errors at
-// two nearby frames are strongly correlated (the same drift), so the consistency
-// test below charges only what accrued between them, not the whole pose covariance
-// twice (which let landmarks moving at 0.5 m/s pass as static).
-void Robot::anchor_candidate(int id, const RangeBearing& z, int frame) {
+// A candidate consistent for long enough becomes STATIC: it corrects the filter
+// from now on, starting with this frame's sighting.
+void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   LMapEntry& e = lmap_[id];
-  Eigen::Matrix2d Gz;
-  e.position = inverse_observe(ekf_.pose(), z, nullptr, &Gz);
-  e.cov = Gz * ekf_.measurement_cov() * Gz.transpose();
-  e.odometry_at_anchor = odometry_cov_sum_;
-  e.consistent_sightings = 1;
-  lmap_.set_status(id, LandmarkStatus::kCandidate, frame);
+  lmap_.set_status(id, LandmarkStatus::kStatic, last_frame_);
+  e.missing_frames = 0;
+  e.reported_moving = false;
+  out_count_[static_cast<std::size_t>(id)] = 0;
+  if (ekf_.update(id, z, false).status == EkfStatus::kOk) {
+    ++s->num_accepted;
+  } else {
+    ++s->filter_faults;
+  }
+  emit(e.was_moving ? EventKind::kReturn : EventKind::kAdd, id);
+  ++s->num_added;
 }
 
-double Robot::candidate_d2(const LMapEntry& e, const RangeBearing& z) const {
+// Candidates in the filter that were not seen this frame lose their streak: they
+// leave the filter (they never corrected it) and start over when seen again.
+void Robot::drop_unseen_candidates() {
+  for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
+    const int id = ekf_.id_at(slot);
+    LMapEntry& e = lmap_[id];
+    if (e.status == LandmarkStatus::kStatic || e.last_seen_frame == last_frame_) continue;
+    ekf_.remove_landmark(id);
+    e.consistent_sightings = 0;
+  }
+}
+
+// The L-map's record of a sighting: world position g(R, y) and its covariance.
+void Robot::record_sighting(int id, const RangeBearing& z) {
+  LMapEntry& e = lmap_[id];
   Eigen::Matrix<double, 2, 3> Gx;
   Eigen::Matrix2d Gz;
-  const Eigen::Vector2d p = inverse_observe(ekf_.pose(), z, &Gx, &Gz);
-  const Eigen::Matrix2d C = Gz * ekf_.measurement_cov() * Gz.transpose() + e.cov +
-                            Gx * (odometry_cov_sum_ - e.odometry_at_anchor) * Gx.transpose();
-  const Eigen::Vector2d r = p - e.position;
-  return r.dot(C.inverse() * r);
+  e.position = inverse_observe(ekf_.pose(), z, &Gx, &Gz);
+  e.cov = Gx * ekf_.pose_cov() * Gx.transpose() + Gz * ekf_.measurement_cov() * Gz.transpose();
 }
 
 // Step 4: a STATIC landmark well inside the field of view that has not been seen
@@ -317,6 +337,7 @@ void Robot::check_missing(FrameSummary* s) {
   for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
     const int id = ekf_.id_at(slot);
     LMapEntry& e = lmap_[id];
+    if (e.status != LandmarkStatus::kStatic) continue;
     if (e.last_seen_frame == last_frame_) {
       e.missing_frames = 0;
       continue;
@@ -338,12 +359,15 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
     return;
   }
   LMapEntry& e = lmap_[id];
-  e.was_moving = true;
+  e.was_moving = e.reported_moving = true;
   e.missing_frames = 0;
   out_count_[static_cast<std::size_t>(id)] = 0;
   handled_[static_cast<std::size_t>(id)] = last_frame_;
-  if (seen) {
-    anchor_candidate(id, seen->z, last_frame_);
+  if (seen) {  // re-anchored as a candidate where it is now
+    record_sighting(id, seen->z);
+    lmap_.set_status(id, LandmarkStatus::kCandidate, last_frame_);
+    e.consistent_sightings = 1;
+    if (ekf_.add_landmark(id, seen->z) != EkfStatus::kOk) ++s->filter_faults;
   } else {
     lmap_.set_status(id, LandmarkStatus::kMoving, last_frame_);
   }
@@ -354,13 +378,15 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
 bool Robot::apply_notice(int landmark_id, int frame) {
   if (!lmap_.valid_id(landmark_id)) return false;
   LMapEntry& e = lmap_[landmark_id];
-  e.was_moving = true;  // coming back needs return_frames consistent sightings
+  e.was_moving = e.reported_moving = true;  // coming back needs return_frames consistent sightings
   if (!ekf_.has_landmark(landmark_id)) return false;
+  const bool held = e.status == LandmarkStatus::kStatic;
   if (ekf_.remove_landmark(landmark_id) != EkfStatus::kOk) return false;
   lmap_.set_status(landmark_id, LandmarkStatus::kMoving, frame);
+  e.consistent_sightings = 0;
   e.missing_frames = 0;
   out_count_[static_cast<std::size_t>(landmark_id)] = 0;
-  return true;
+  return held;
 }
 
 void Robot::emit(EventKind kind, int id) { emit_at(kind, id, ekf_.landmark(id), ekf_.landmark_cov(id)); }

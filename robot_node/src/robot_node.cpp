@@ -155,9 +155,10 @@ const lmap_snapshot_t& RobotNode::make_snapshot(std::int64_t now_utime) {
   snapshot_.robot_id = static_cast<int16_t>(robot_id_);
   snapshot_.seq = seq_;
   int n = 0;
-  for (int slot = 0; slot < f.num_landmarks() && n < channels::kMaxLandmarksPerMessage; ++slot, ++n) {
+  for (int slot = 0; slot < f.num_landmarks() && n < channels::kMaxLandmarksPerMessage; ++slot) {
     const int id = f.id_at(slot);
-    landmark_estimate_t& l = snapshot_.landmarks[n];
+    if (robot_.lmap()[id].status != LandmarkStatus::kStatic) continue;  // candidates are not the map
+    landmark_estimate_t& l = snapshot_.landmarks[n++];
     l.id = id;
     const Eigen::Vector2d p = f.landmark(id);
     l.x = p.x();

@@ -31,23 +31,29 @@ class RobotPaths : public ::testing::Test {
 
 TEST_F(RobotPaths, NewBecomesCandidateThenStaticAfterConfirmFrames) {
   Robot r(test::robot_options(Mode::kEla), 1);
-  // Frame 0: every landmark is new -> CANDIDATE, not in the filter.
+  // Frame 0: every landmark is new -> CANDIDATE: an inert state in the filter.
   FrameSummary s = step(r, test::all_ids(6));
   EXPECT_EQ(s.num_candidates, 6);
-  EXPECT_EQ(r.filter().num_landmarks(), 0);
+  EXPECT_EQ(s.num_accepted, 0);
+  EXPECT_EQ(r.filter().num_landmarks(), 6);
   EXPECT_EQ(r.lmap()[0].status, LandmarkStatus::kCandidate);
   EXPECT_EQ(r.lmap()[0].consistent_sightings, 1);
-  // Frame 1: consistent again, still a candidate.
-  step(r, test::all_ids(6));
+  EXPECT_TRUE(r.events().empty());
+  // Frame 1: consistent again, still a candidate; it corrects nothing.
+  const Eigen::Vector3d pose_before(r.filter().pose().x, r.filter().pose().y, r.filter().pose().theta);
+  s = step(r, test::all_ids(6));
   EXPECT_EQ(r.lmap()[0].consistent_sightings, 2);
-  EXPECT_EQ(r.filter().num_landmarks(), 0);
-  // Frame 2: the third consistent sighting confirms: STATIC, in the filter, ADD sent.
+  EXPECT_EQ(s.num_accepted, 0);
+  EXPECT_EQ(Eigen::Vector3d(r.filter().pose().x, r.filter().pose().y, r.filter().pose().theta), pose_before);
+  EXPECT_EQ(count_events(r, EventKind::kAdd), 0);
+  // Frame 2: the third consistent sighting confirms: STATIC, ADD sent, and its
+  // sighting corrects the filter.
   s = step(r, test::all_ids(6));
   EXPECT_EQ(s.num_added, 6);
-  EXPECT_EQ(r.filter().num_landmarks(), 6);
+  EXPECT_EQ(s.num_accepted, 6);
   EXPECT_EQ(r.lmap()[3].status, LandmarkStatus::kStatic);
   EXPECT_EQ(count_events(r, EventKind::kAdd), 6);
-  // Frame 3: observations now correct the filter and are reported as UPDATEs.
+  // Frame 3: observations go through the ELA gate and are reported as UPDATEs.
   s = step(r, test::all_ids(6));
   EXPECT_EQ(s.num_accepted, 6);
   EXPECT_EQ(count_events(r, EventKind::kUpdate), 6);
@@ -57,11 +63,32 @@ TEST_F(RobotPaths, InconsistentCandidateIsReanchored) {
   Robot r(test::robot_options(Mode::kEla), 1);
   step(r, {0});
   step(r, {0});
-  lms_[0] += Eigen::Vector2d(1.0, 0.0);  // jumps: the candidate starts over
+  lms_[0] += Eigen::Vector2d(1.0, 0.0);  // jumps: the candidate starts over there
   step(r, {0});
   EXPECT_EQ(r.lmap()[0].consistent_sightings, 1);
   EXPECT_NEAR(r.lmap()[0].position.x(), lms_[0].x(), 1e-6);
-  EXPECT_EQ(r.filter().num_landmarks(), 0);
+  EXPECT_NEAR(r.filter().landmark(0).x(), lms_[0].x(), 1e-6);  // re-anchored in the filter
+  EXPECT_EQ(r.lmap()[0].status, LandmarkStatus::kCandidate);
+  // It keeps jumping: after moving_after inconsistent sightings it is reported MOVING.
+  lms_[0] += Eigen::Vector2d(1.0, 0.0);
+  step(r, {0});
+  EXPECT_EQ(count_events(r, EventKind::kMoving, 0), 1);
+  EXPECT_TRUE(r.lmap()[0].was_moving);
+  lms_[0] += Eigen::Vector2d(1.0, 0.0);
+  step(r, {0});
+  EXPECT_EQ(count_events(r, EventKind::kMoving, 0), 0);  // reported once
+}
+
+TEST_F(RobotPaths, CandidateUnseenForAFrameLeavesTheFilterAndStartsOver) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  step(r, {0, 1});
+  step(r, {0, 1});
+  step(r, {0});
+  EXPECT_FALSE(r.filter().has_landmark(1));
+  EXPECT_EQ(r.lmap()[1].consistent_sightings, 0);
+  step(r, {0, 1});
+  EXPECT_EQ(r.lmap()[1].consistent_sightings, 1);
+  EXPECT_TRUE(r.filter().has_landmark(1));
 }
 
 TEST_F(RobotPaths, StaticToMovingToCandidateAndBackAfterItStops) {
@@ -81,7 +108,7 @@ TEST_F(RobotPaths, StaticToMovingToCandidateAndBackAfterItStops) {
     lms_[2] += Eigen::Vector2d(0.0, 0.1);
     s = step(r, test::all_ids(6));
     EXPECT_EQ(s.num_moving, 1);
-    EXPECT_FALSE(r.filter().has_landmark(2));
+    EXPECT_NE(r.lmap()[2].status, LandmarkStatus::kStatic);
     EXPECT_EQ(count_events(r, EventKind::kMoving, 2), 1);
     EXPECT_EQ(r.lmap()[2].status, LandmarkStatus::kCandidate);
     EXPECT_TRUE(r.lmap()[2].was_moving);
@@ -92,7 +119,7 @@ TEST_F(RobotPaths, StaticToMovingToCandidateAndBackAfterItStops) {
       if (count_events(r, EventKind::kReturn, 2) == 1) returned_at = k;
     }
     EXPECT_EQ(returned_at, 4);  // the MOVING frame anchored sighting 1; +5 more = 6
-    EXPECT_TRUE(r.filter().has_landmark(2));
+    EXPECT_EQ(r.lmap()[2].status, LandmarkStatus::kStatic);
     EXPECT_NEAR(r.filter().landmark(2).y(), lms_[2].y(), 0.05);
   }
 }

@@ -13,7 +13,7 @@ namespace elaslam {
 
 enum class LandmarkStatus : std::uint8_t {
   kUnknown = 0,  // never seen
-  kCandidate,    // seen, not yet trusted; not in the filter
+  kCandidate,    // seen, not yet trusted: in the filter as an inert state (corrects nothing)
   kStatic,       // in the filter
   kMoving,       // found moving; out of the filter until it is seen again
 };
@@ -21,14 +21,14 @@ const char* to_string(LandmarkStatus s);
 
 struct LMapEntry {
   LandmarkStatus status = LandmarkStatus::kUnknown;
-  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] p_LinW from g(R, y) (candidates: the anchor)
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2] its measurement part, G_z W G_z^T
-  Eigen::Matrix3d odometry_at_anchor = Eigen::Matrix3d::Zero();  // robot's odometry covariance sum then
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] p_LinW from g(R, y) at the last sighting
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2] its covariance (pose and measurement)
   int last_seen_frame = -1;
   int consistent_sightings = 0;  // consecutive sightings consistent with `position`
   int missing_frames = 0;        // consecutive frames expected in view but not seen
   int status_frame = -1;         // frame of the last status change
   bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
+  bool reported_moving = false;  // a MOVING event went out and no ADD / RETURN since
 };
 
 class LMap {

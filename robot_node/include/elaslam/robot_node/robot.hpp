@@ -92,8 +92,9 @@ class Robot {
   void gate_view_consensus();
   void handle_candidates(const FrameInput& in, FrameSummary* s);
   void check_missing(FrameSummary* s);
-  void anchor_candidate(int id, const RangeBearing& z, int frame);
-  double candidate_d2(const LMapEntry& e, const RangeBearing& z) const;
+  void confirm(int id, const RangeBearing& z, FrameSummary* s);
+  void drop_unseen_candidates();
+  void record_sighting(int id, const RangeBearing& z);
   void mark_moving(int id, const Observation* seen, FrameSummary* s);
   void emit(EventKind kind, int id);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
@@ -108,7 +109,6 @@ class Robot {
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;
-  Eigen::Matrix3d odometry_cov_sum_ = Eigen::Matrix3d::Zero();  // sum of F_u U F_u^T, W
 
   // Per-frame scratch, reserved at construction.
   std::vector<InView> view_;
