@@ -71,8 +71,14 @@ FrameSummary Robot::process(const FrameInput& in) {
     check_missing(&s);
     drop_unseen_candidates();
   }
-  for (int id : updated_)
-    if (ekf_.has_landmark(id)) emit(EventKind::kUpdate, id);
+  // UPDATEs are rate-limited per landmark: they refresh main_robot's copy, which
+  // snapshots also repair, and one message per observation per frame would be most
+  // of the team's traffic (DESIGN: messages per frame bound the team's rate).
+  for (int id : updated_) {
+    LMapEntry& e = lmap_[id];
+    if (lmap_[id].status == LandmarkStatus::kStatic && in.frame - e.reported_frame >= options_.update_period_frames)
+      emit(EventKind::kUpdate, id);
+  }
   s.events_dropped = events_dropped_;
   events_dropped_ = 0;
   return s;
@@ -389,7 +395,10 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   return held;
 }
 
-void Robot::emit(EventKind kind, int id) { emit_at(kind, id, ekf_.landmark(id), ekf_.landmark_cov(id)); }
+void Robot::emit(EventKind kind, int id) {
+  lmap_[id].reported_frame = last_frame_;
+  emit_at(kind, id, ekf_.landmark(id), ekf_.landmark_cov(id));
+}
 
 void Robot::emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C) {
   if (events_.size() >= events_.capacity()) {  // never grow: the buffer is sized for a frame

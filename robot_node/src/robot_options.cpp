@@ -54,6 +54,7 @@ void parse(config::Reader& r, RobotOptions* o) {
   });
   r.section("node", [&](config::Reader& n) {
     n.read("snapshot_period_frames", &o->snapshot_period_frames, 1, 100000);
+    n.read("update_period_frames", &o->update_period_frames, 1, 100000);
     n.read("max_frame_gap", &o->max_frame_gap, 1, 100000);
   });
   if (o->ekf.capacity > o->ekf.max_landmark_id)

@@ -27,6 +27,7 @@ struct LMapEntry {
   int consistent_sightings = 0;  // consecutive sightings consistent with `position`
   int missing_frames = 0;        // consecutive frames expected in view but not seen
   int status_frame = -1;         // frame of the last status change
+  int reported_frame = -1000000; // frame of the last ADD / UPDATE / RETURN sent for it
   bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
   bool reported_moving = false;  // a MOVING event went out and no ADD / RETURN since
 };

@@ -30,6 +30,7 @@ struct RobotOptions {
 
   // Node behaviour.
   int snapshot_period_frames = 10;      // LMAP_SNAPSHOT every N frames
+  int update_period_frames = 1;         // at most one UPDATE event per landmark per N frames
   int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
 };
 
