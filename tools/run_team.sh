@@ -28,6 +28,7 @@ HOSTS=0
 IN_PROCESS=0
 INSIDE=0
 SIM_ARGS=()
+EVAL_ARGS=()
 
 usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 while [ $# -gt 0 ]; do
@@ -35,7 +36,8 @@ while [ $# -gt 0 ]; do
     --config) CONFIG="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
     --mode) MODE="$2"; shift 2 ;;
-    --rate|--dynamism|--speed|--seed|--frames) SIM_ARGS+=("$1" "$2"); shift 2 ;;
+    --dynamism|--speed|--seed) SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
+    --rate|--frames) SIM_ARGS+=("$1" "$2"); shift 2 ;;
     --port) PORT="$2"; shift 2 ;;
     --hosts) HOSTS=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
@@ -196,5 +198,5 @@ supervise || status=1
 stop_all || status=1
 [ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
 echo "run_team.sh: recorded $OUT/run.lcmlog"
-"$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --mode "${MODE_NAME:-unknown}"
+"$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --mode "${MODE_NAME:-unknown}" "${EVAL_ARGS[@]}"
 echo "run_team.sh: results in $OUT (metrics.json, frames.csv, trajectories/, logs/)"
