@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# System test: the live team (separate processes over LCM in a private network
+# namespace, recorded by lcm-logger) runs end to end, every robot publishes a pose
+# for every frame, and its metrics agree with the in-process run of the same
+# scenario and seed. Exit 77 (skip) when namespaces are not available.
+#   tests/system/team_live.sh BUILD_DIR
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BUILD="${1:?usage: team_live.sh BUILD_DIR}"
+OUT="$(mktemp -d)"
+trap 'rm -rf "$OUT"' EXIT
+[ "$(id -u)" -eq 0 ] || { echo "team_live: skipped (needs root for network namespaces)"; exit 77; }
+ip netns list >/dev/null 2>&1 || { echo "team_live: skipped (no ip netns)"; exit 77; }
+ARGS=(--dynamism 50 --speed 0.5 --seed 3)
+# The default rate (10 Hz, 15 s): the rate is part of the scenario (motion per frame).
+"$ROOT/tools/netns_run.sh" --port 7693 -- "$ROOT/tools/run_team.sh" --inside --out "$OUT/live" "${ARGS[@]}" \
+  > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
+"$BUILD/bin/run_scenario" --config "$ROOT/config/paper.yaml" --out "$OUT/inproc" "${ARGS[@]}" > /dev/null
+python3 - "$OUT/live/metrics.json" "$OUT/inproc/metrics.json" <<'PY'
+import json, sys
+live, ref = (json.load(open(p)) for p in sys.argv[1:3])
+fails = []
+def close(name, a, b, tol=1e-6):
+    if abs(a - b) > tol:
+        fails.append(f"{name}: live {a} vs in-process {b}")
+assert live["frames"] == ref["frames"] == 150, (live["frames"], ref["frames"])
+if live["frames_dropped"] != 0:
+    fails.append(f"frames dropped: {live['frames_dropped']}")
+for r_live, r_ref in zip(live["robots"], ref["robots"]):
+    if r_live["frames"] != 150:
+        fails.append(f"robot {r_live['id']}: poses for {r_live['frames']} of 150 frames")
+    close(f"robot {r_live['id']} error_mean", r_live["error_mean"], r_ref["error_mean"])
+    close(f"robot {r_live['id']} final_uncertainty", r_live["final_uncertainty"], r_ref["final_uncertainty"], 1e-9)
+close("landmark error", live["landmark_error"]["mean_euclidean"], ref["landmark_error"]["mean_euclidean"])
+close("precision", live["detection"]["precision"], ref["detection"]["precision"])
+close("recall", live["detection"]["recall"], ref["detection"]["recall"])
+print("live:", live["landmark_error"]["mean_euclidean"], [r["error_mean"] for r in live["robots"]],
+      "latency p50/p99 us:", live["latency_us"]["p50"], live["latency_us"]["p99"])
+if fails:
+    print("\n".join(fails)); sys.exit(1)
+PY
