@@ -39,3 +39,15 @@ print("live:", live["landmark_error"]["mean_euclidean"], [r["error_mean"] for r 
 if fails:
     print("\n".join(fails)); sys.exit(1)
 PY
+# The recording decodes in Python (PyPI lcm + the generated module), every event.
+PY="$ROOT/.venv/bin/python"
+if [ -x "$PY" ]; then
+  "$PY" "$ROOT/tools/decode_log.py" "$OUT/live/run.lcmlog" --build-dir "$BUILD" > "$OUT/decoded.txt"
+  for ch in POSE_1 POSE_2 POSE_3 SENSOR_1 GROUND_TRUTH; do
+    grep -q "^$ch  *150 decoded$" "$OUT/decoded.txt" || { echo "python decode: $ch"; cat "$OUT/decoded.txt"; exit 1; }
+  done
+  grep -q "^last GLOBAL_MAP: frame 149" "$OUT/decoded.txt" || { cat "$OUT/decoded.txt"; exit 1; }
+  echo "python decode: ok"
+else
+  echo "python decode: skipped (no .venv; tools/setup.sh makes it)"
+fi
