@@ -64,6 +64,40 @@ TEST(TeamRun, AtFiftyPercentDynamismElaBeatsEkfOnTheMapAndEveryRobot) {
   EXPECT_GT(ela_recall, 0.8);
 }
 
+// Simulator + one robot (robot 1 alone, no team): the robot node by itself.
+RunResult run_one_robot(Mode mode, double dynamism, double speed, int seed) {
+  RunOverrides o;
+  o.mode = mode;
+  o.dynamism_percent = dynamism;
+  o.landmark_speed_mps = speed;
+  o.seed = seed;
+  TeamConfig c = apply_overrides(paper(), o);
+  c.scenario.robots.resize(1);
+  return run_team(c);
+}
+
+TEST(OneRobot, StaticWorldSmallErrorAndLandmarksMapped) {
+  for (Mode m : {Mode::kEla, Mode::kConsensus}) {
+    const RunResult r = run_one_robot(m, 0.0, 0.0, 11);
+    EXPECT_LT(r.metrics.robots[0].error_mean, 0.1) << to_string(m);
+    EXPECT_GE(r.final_map.size(), 25u) << to_string(m);  // robot 1's half of the world
+    EXPECT_LT(r.metrics.landmark_error_mean, 0.08) << to_string(m);
+  }
+}
+
+TEST(OneRobot, AtFiftyPercentDynamismElaAndConsensusBeatEkf) {
+  for (double speed : {0.5, 0.9}) {
+    double ekf = 0, ela = 0, consensus = 0;
+    for (int seed : {1, 2, 3, 4, 5}) {
+      ekf += run_one_robot(Mode::kEkf, 50.0, speed, seed).metrics.robots[0].error_mean;
+      ela += run_one_robot(Mode::kEla, 50.0, speed, seed).metrics.robots[0].error_mean;
+      consensus += run_one_robot(Mode::kConsensus, 50.0, speed, seed).metrics.robots[0].error_mean;
+    }
+    EXPECT_LT(ela, ekf) << speed;
+    EXPECT_LT(consensus, ekf) << speed;
+  }
+}
+
 TEST(TeamRun, SameSeedSameMetricsApartFromTiming) {
   const auto strip = [](nlohmann::json j) {
     j.erase("timing");
