@@ -381,6 +381,19 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
   ++s->num_moving;
 }
 
+double Robot::map_mean_diag() const {
+  const auto P = ekf_.covariance();
+  double sum = P(0, 0) + P(1, 1) + P(2, 2);
+  int n = StateLayout::kPoseDim;
+  for (int slot = 0; slot < ekf_.num_landmarks(); ++slot) {
+    if (lmap_[ekf_.id_at(slot)].status != LandmarkStatus::kStatic) continue;
+    const int o = StateLayout::landmark_offset(slot);
+    sum += P(o, o) + P(o + 1, o + 1);
+    n += StateLayout::kLandmarkDim;
+  }
+  return sum / n;
+}
+
 bool Robot::apply_notice(int landmark_id, int frame) {
   if (!lmap_.valid_id(landmark_id)) return false;
   LMapEntry& e = lmap_[landmark_id];

@@ -124,7 +124,7 @@ void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, con
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) pose_.cov[r][c] = C(r, c);
   pose_.processing_us = static_cast<int32_t>(std::min<std::int64_t>(us, INT32_MAX));
-  pose_.mean_diag_p = f.mean_diag();
+  pose_.mean_diag_p = robot_.map_mean_diag();
   pose_.num_obs = static_cast<int16_t>(s.num_obs);
   pose_.num_accepted = static_cast<int16_t>(s.num_accepted);
   pose_.num_rejected = static_cast<int16_t>(s.num_rejected);

@@ -82,6 +82,9 @@ class Robot {
   const RobotOptions& options() const { return options_; }
   int robot_id() const { return robot_id_; }
   bool initialised() const { return initialised_; }
+  /// mean(diag(P)) over the robot pose and the STATIC landmarks: the uncertainty of
+  /// the map (paper eq 19); candidates, inert states in the filter, are not the map.
+  double map_mean_diag() const;
   int last_frame() const { return last_frame_; }
 
  private:

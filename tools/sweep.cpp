@@ -1,0 +1,181 @@
+// sweep: the paper's experiment grid (section 4, Tables 1-4, Figs 5-8) through the
+// in-process team run, in parallel, with our modes beside the paper's.
+//   sweep --config FILE [--modes ekf,gated,ela,consensus] [--dynamism 5,20,35,50,65,80]
+//         [--speed 0.1,0.3,0.5,0.7,0.9] [--runs 10] [--seed-base S] [--jobs J] --out DIR [--no-plots]
+// Run r of every cell and mode uses seed seed_base + r: every mode sees the same
+// worlds, so differences between modes are the methods', not the draws'. Results
+// are stored by job index, so the files are identical whatever J.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+
+#include "elaslam/team/report.hpp"
+#include "elaslam/team/team_run.hpp"
+#include "sweep_tables.hpp"
+
+namespace elaslam {
+namespace {
+
+std::vector<double> parse_list(const std::string& text, const char* what, double lo, double hi) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    std::size_t pos = 0;
+    double x = 0.0;
+    try {
+      x = std::stod(item, &pos);
+    } catch (const std::exception&) {
+      pos = 0;
+    }
+    if (pos == 0 || pos != item.size() || !(x >= lo && x <= hi))
+      throw std::invalid_argument(std::string(what) + ": '" + item + "' is not a number in [" + std::to_string(lo) +
+                                  ", " + std::to_string(hi) + "]");
+    v.push_back(x);
+  }
+  if (v.empty()) throw std::invalid_argument(std::string(what) + ": empty list");
+  return v;
+}
+
+std::vector<Mode> parse_modes(const std::string& text) {
+  std::vector<Mode> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    Mode m;
+    if (!parse_mode(item, &m)) throw std::invalid_argument("--modes: '" + item + "' is not ekf, gated, ela or consensus");
+    v.push_back(m);
+  }
+  if (v.empty()) throw std::invalid_argument("--modes: empty list");
+  return v;
+}
+
+void progress(std::size_t done, std::size_t total, double elapsed_s) {
+  const double left = done ? elapsed_s / static_cast<double>(done) * static_cast<double>(total - done) : 0.0;
+  if (isatty(STDERR_FILENO)) {
+    const int width = 40, filled = static_cast<int>(width * done / total);
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu runs, %.0f s left ", std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                 std::string(static_cast<std::size_t>(width - filled), '.').c_str(), done, total, left);
+    if (done == total) std::fprintf(stderr, "\n");
+  } else if (done == total || (done * 10 / total) != ((done - 1) * 10 / total)) {
+    std::fprintf(stderr, "sweep: %zu/%zu runs, %.0f s left\n", done, total, left);
+  }
+}
+
+// Run every job on `jobs` threads; results land at their job's index.
+void run_all(const TeamConfig& base, const std::vector<SweepJob>& jobs, int threads, std::vector<SweepResult>* out) {
+  out->assign(jobs.size(), SweepResult{});
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex report;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto worker = [&] {
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      const SweepJob& j = jobs[i];
+      RunOverrides o;
+      o.mode = j.mode;
+      o.dynamism_percent = j.dynamism;
+      o.landmark_speed_mps = j.speed;
+      o.seed = j.seed;
+      const RunResult r = run_team(apply_overrides(base, o));
+      (*out)[i] = summarise(r);
+      const std::size_t d = ++done;
+      std::lock_guard<std::mutex> lock(report);
+      progress(d, jobs.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace
+}  // namespace elaslam
+
+int main(int argc, char** argv) {
+  using namespace elaslam;
+  std::string config_path = "config/paper.yaml", out_dir, modes_text = "ekf,gated,ela,consensus";
+  std::string dyn_text = "5,20,35,50,65,80", speed_text = "0.1,0.3,0.5,0.7,0.9";
+  int runs = 10, seed_base = 1, jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  bool no_plots = false;
+  CLI::App app{"elaslam sweep: the paper's experiment grid, in parallel"};
+  app.add_option("--config", config_path, "YAML config")->check(CLI::ExistingFile);
+  app.add_option("--modes", modes_text, "comma-separated modes");
+  app.add_option("--dynamism", dyn_text, "comma-separated dynamism levels [%]");
+  app.add_option("--speed", speed_text, "comma-separated landmark speeds [m/s]");
+  app.add_option("--runs", runs, "runs per cell")->check(CLI::Range(1, 100000));
+  app.add_option("--seed-base", seed_base, "seed of run 0 (run r: seed_base + r)")->check(CLI::Range(0, 1 << 30));
+  app.add_option("--jobs", jobs, "threads (default: all cores)")->check(CLI::Range(1, 1024));
+  app.add_option("--out", out_dir, "output directory")->required();
+  app.add_flag("--no-plots", no_plots, "do not call tools/plot_sweep.py");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  SweepGrid grid;
+  TeamConfig base;
+  try {
+    grid.modes = parse_modes(modes_text);
+    grid.dynamism = parse_list(dyn_text, "--dynamism", 0.0, 100.0);
+    grid.speed = parse_list(speed_text, "--speed", 0.0, 100.0);
+    grid.runs = runs;
+    base = load_team_config(config_path);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sweep: %s\n", e.what());
+    return 2;
+  }
+  grid.robot_ids.clear();
+  for (const auto& r : base.scenario.robots) grid.robot_ids.push_back(r.id);
+  const std::vector<SweepJob> job_list = make_jobs(grid, seed_base);
+  std::fprintf(stderr, "sweep: %zu runs (%zu modes x %zu x %zu cells x %d runs) on %d threads\n", job_list.size(),
+               grid.modes.size(), grid.dynamism.size(), grid.speed.size(), runs, jobs);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<SweepResult> results;
+  run_all(base, job_list, jobs, &results);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  try {
+    write_sweep(out_dir, grid, job_list, results);
+    // One map like the paper's Fig 4: the middle cell's first run, in the first
+    // of ela / consensus / the first mode.
+    Mode map_mode = grid.modes.front();
+    for (Mode m : grid.modes)
+      if (m == Mode::kEla) map_mode = m;
+    RunOverrides o;
+    o.mode = map_mode;
+    o.dynamism_percent = grid.dynamism[grid.dynamism.size() / 2];
+    o.landmark_speed_mps = grid.speed[grid.speed.size() / 2];
+    o.seed = seed_base;
+    const TeamConfig c = apply_overrides(base, o);
+    const RunResult r = run_team(c);
+    RunInfo info{to_string(map_mode), c.scenario.dynamism_percent, c.scenario.landmark_speed_mps, seed_base,
+                 config_path, c.effective_yaml};
+    write_outputs(out_dir + "/maps/" + to_string(map_mode), metrics_json(info, r), r);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "sweep: %s\n", e.what());
+    return 1;
+  }
+  std::printf("sweep: %zu runs in %.1f s (%.1f runs/s); tables: %s/tables.md\n", job_list.size(), wall,
+              static_cast<double>(job_list.size()) / wall, out_dir.c_str());
+  const std::string root = std::filesystem::path(argv[0]).parent_path().string() + "/../..";
+  const std::string py = root + "/.venv/bin/python", script = root + "/tools/plot_sweep.py";
+  if (!no_plots) {
+    if (std::filesystem::exists(py) && std::filesystem::exists(script)) {
+      const std::string cmd = "'" + py + "' '" + script + "' '" + out_dir + "'";
+      if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "sweep: plotting failed (%s)\n", cmd.c_str());
+    } else {
+      std::fprintf(stderr, "sweep: no .venv (tools/setup.sh makes it): plot with .venv/bin/python tools/plot_sweep.py %s\n",
+                   out_dir.c_str());
+    }
+  }
+  return 0;
+}
