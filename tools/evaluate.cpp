@@ -44,7 +44,7 @@ struct LogData {
   std::map<int, std::map<int, PoseRecord>> poses;       // frame -> robot -> pose
   std::map<int, std::int64_t> sensor_utime;             // frame -> latest SENSOR utime
   std::map<int, std::vector<int>> observed;             // frame -> observed ids
-  std::map<int, MapRecord> maps;                        // frame -> last GLOBAL_MAP of that frame
+  std::map<int, MapRecord> maps;                        // frame -> first GLOBAL_MAP of that frame
   std::map<int, std::int64_t> first_map_receive;        // frame -> first receive of a map with that frame
   std::map<int, std::int64_t> node_dropped;             // robot -> last STATUS frames_dropped
   std::map<std::string, long> decode_errors;
@@ -90,7 +90,10 @@ void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
     m.full.push_back({l.id, {l.x, l.y}, C});
   }
   for (int i = 0; i < g.num_moving && i < 256; ++i) m.moving.push_back(g.moving_ids[i]);
-  d->maps[g.frame] = std::move(m);  // the last one received for the frame wins
+  // The first GLOBAL_MAP stamped k is the one main_robot sends when every robot has
+  // finished frame k; later ones stamped k (the periodic publication) may already
+  // hold some of frame k+1's events.
+  d->maps.emplace(g.frame, std::move(m));
   d->first_map_receive.emplace(g.frame, received);
 }
 
@@ -227,7 +230,7 @@ int main(int argc, char** argv) {
       r.estimated[i].push_back({f.time_s, f.est_poses[i]});
       r.truth[i].push_back({f.time_s, f.true_poses[i]});
     }
-    // The map of frame k: the last one stamped k, else the newest older one.
+    // The map of frame k: the first one stamped k, else the newest older one.
     const auto m = d.maps.upper_bound(k);
     if (m != d.maps.begin()) map = &std::prev(m)->second;
     f.map_landmarks = map ? map->landmarks : decltype(f.map_landmarks){};

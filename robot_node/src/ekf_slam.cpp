@@ -1,10 +1,13 @@
 // Fixed-memory planar EKF-SLAM (DESIGN.md section 4; paper eqs 3-15).
 //
 // Cost per call, n = state dimension: predict O(n), update O(n^2) (the rank-2/4
-// covariance downdate; everything else is O(n)), add and remove O(n). Nothing
-// here allocates after the constructor: scratch lives in members, small blocks
-// are fixed-size, and products that Eigen might route through its blocked GEMM
-// (which may allocate) are written as coefficient-wise expressions or loops.
+// covariance downdate on the lower triangle; everything else is O(n)), add and
+// remove O(n). Only the lower triangle of P (and the 3x3 robot block in full) is
+// kept current; the block accessors read it directly and covariance() completes
+// the upper triangle on demand. Nothing here allocates after the constructor:
+// scratch lives in members, small blocks are fixed-size, and products that Eigen
+// might route through its blocked GEMM (which may allocate) are written as
+// coefficient-wise expressions or loops (ekf_kernels.hpp).
 #include "elaslam/robot_node/ekf_slam.hpp"
 
 #include <algorithm>
@@ -13,94 +16,24 @@
 #include <stdexcept>
 #include <string>
 
+#include "ekf_kernels.hpp"
 #include "elaslam/common/stats.hpp"
 
 namespace elaslam {
 
 namespace {
 
-using Index = Eigen::Index;
-using Matrix25 = Eigen::Matrix<double, 2, 5>;
 using Matrix5 = Eigen::Matrix<double, 5, 5>;
-
-// A variance may come out this far below zero from rounding alone (relative to the
-// prior variance, plus an absolute (1 um)^2 / (1 urad)^2) before it counts as a
-// fault. Anything more negative means P was not positive semi-definite.
-constexpr double kNegativeVarianceRelTol = 1e-9;
-constexpr double kNegativeVarianceAbsTol = 1e-12;
-// |a_i| * |b_j| below this cannot overflow when two such products are summed.
-constexpr double kMaxProduct = 1e300;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool finite(const RangeBearing& z) { return std::isfinite(z.range) && std::isfinite(z.bearing); }
 
-// Runtime dispatch for the two O(n^2) kernels below: on x86-64 the loader picks
-// an AVX2+FMA build when the CPU has it (about 2x faster, DESIGN.md section 4
-// budget), else the baseline SSE2 build. Other targets get the plain build.
-#if defined(__x86_64__) && defined(__linux__) && defined(__GNUC__) && !defined(__clang__) && \
-    (__GNUC__ >= 11)
-#define ELASLAM_MULTIVERSION __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define ELASLAM_MULTIVERSION
-#endif
-
-// The covariance downdates work on the full active block, column by column, four
-// columns at a time so that each row's factors are loaded once. Entry (i, j) and
-// entry (j, i) evaluate the same products summed in the same order (float * and +
-// commute), so a symmetric P stays symmetric bit for bit with no separate
-// symmetrisation pass (which, being a strided transpose, would cost more than the
-// update itself). EkfSlam.CovarianceStaysExactlySymmetric checks this.
-inline double dot2(double u0, double u1, double v0, double v1) { return u0 * v0 + u1 * v1; }
-
-// P(0:n, 0:n) -= A A^T, A = [a0 a1] (n x 2).
-ELASLAM_MULTIVERSION void sym_rank2_downdate(double* __restrict P, Index ld, Index n,
-                                             const double* __restrict a0,
-                                             const double* __restrict a1) {
-  Index j = 0;
-  for (; j + 4 <= n; j += 4) {
-    double* __restrict c0 = P + j * ld;
-    double* __restrict c1 = c0 + ld;
-    double* __restrict c2 = c1 + ld;
-    double* __restrict c3 = c2 + ld;
-    for (Index i = 0; i < n; ++i) {
-      c0[i] -= dot2(a0[i], a1[i], a0[j], a1[j]);
-      c1[i] -= dot2(a0[i], a1[i], a0[j + 1], a1[j + 1]);
-      c2[i] -= dot2(a0[i], a1[i], a0[j + 2], a1[j + 2]);
-      c3[i] -= dot2(a0[i], a1[i], a0[j + 3], a1[j + 3]);
-    }
-  }
-  for (; j < n; ++j) {
-    double* __restrict c = P + j * ld;
-    for (Index i = 0; i < n; ++i) c[i] -= dot2(a0[i], a1[i], a0[j], a1[j]);
-  }
-}
-
-// P(0:n, 0:n) -= A B^T + B A^T, A = [a0 a1], B = [b0 b1] (n x 2).
-ELASLAM_MULTIVERSION void sym_rank4_downdate(double* __restrict P, Index ld, Index n,
-                                             const double* __restrict a0,
-                                             const double* __restrict a1,
-                                             const double* __restrict b0,
-                                             const double* __restrict b1) {
-  Index j = 0;
-  for (; j + 4 <= n; j += 4) {
-    double* __restrict c0 = P + j * ld;
-    double* __restrict c1 = c0 + ld;
-    double* __restrict c2 = c1 + ld;
-    double* __restrict c3 = c2 + ld;
-    for (Index i = 0; i < n; ++i) {
-      c0[i] -= dot2(a0[i], a1[i], b0[j], b1[j]) + dot2(b0[i], b1[i], a0[j], a1[j]);
-      c1[i] -= dot2(a0[i], a1[i], b0[j + 1], b1[j + 1]) + dot2(b0[i], b1[i], a0[j + 1], a1[j + 1]);
-      c2[i] -= dot2(a0[i], a1[i], b0[j + 2], b1[j + 2]) + dot2(b0[i], b1[i], a0[j + 2], a1[j + 2]);
-      c3[i] -= dot2(a0[i], a1[i], b0[j + 3], b1[j + 3]) + dot2(b0[i], b1[i], a0[j + 3], a1[j + 3]);
-    }
-  }
-  for (; j < n; ++j) {
-    double* __restrict c = P + j * ld;
-    for (Index i = 0; i < n; ++i) {
-      c[i] -= dot2(a0[i], a1[i], b0[j], b1[j]) + dot2(b0[i], b1[i], a0[j], a1[j]);
-    }
-  }
+// The 2x2 diagonal block at `off` from the lower triangle.
+Eigen::Matrix2d diagonal_block(const Eigen::MatrixXd& P, Index off) {
+  Eigen::Matrix2d B;
+  B << P(off, off), P(off + 1, off), P(off + 1, off), P(off + 1, off + 1);
+  return B;
 }
 
 // Everything about one observation that needs only the 5x5 block of P on the robot
@@ -124,8 +57,9 @@ EkfStatus innovate(const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off
   out->H << H_x, H_l;
   out->nu << y.range - h.range, wrap_angle(y.bearing - h.bearing);  // eq 8
   Matrix5 P5;
-  P5 << P.topLeftCorner<3, 3>(), P.block<3, 2>(0, off),  //
-      P.block<2, 3>(off, 0), P.block<2, 2>(off, off);
+  const Eigen::Matrix<double, 2, 3> P_lR = P.block<2, 3>(off, 0);  // lower storage
+  P5 << P.topLeftCorner<3, 3>(), P_lR.transpose(),  //
+      P_lR, diagonal_block(P, off);
   const Eigen::Matrix2d Z = out->H * P5 * out->H.transpose() + W;
   // 2x2 Cholesky by hand: the comparisons also reject NaN.
   const double z00 = Z(0, 0), z10 = 0.5 * (Z(1, 0) + Z(0, 1));
@@ -186,10 +120,14 @@ EkfSlam::EkfSlam(const EkfOptions& options) : options_(options) {
   PHt_ = Eigen::MatrixXd::Zero(n_max, 2);
   K_ = Eigen::MatrixXd::Zero(n_max, 2);
   tmp_rows_ = Eigen::MatrixXd::Zero(Layout::kPoseDim, n_max);
+  lm_cols_ = Eigen::MatrixXd::Zero(n_max, 2);
   reset(Pose2{}, Eigen::Matrix3d::Zero());
 }
 
 void EkfSlam::reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov) {
+  // Outside the active block P_ is kept zero (remove_landmark clears what it
+  // vacates), so clearing the active block is enough.
+  P_.topLeftCorner(state_dim(), state_dim()).setZero();
   for (int slot = 0; slot < num_landmarks_; ++slot) {
     id_to_slot_[static_cast<std::size_t>(slot_to_id_[static_cast<std::size_t>(slot)])] = -1;
     slot_to_id_[static_cast<std::size_t>(slot)] = -1;
@@ -198,11 +136,15 @@ void EkfSlam::reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov) {
   x_.setZero();
   x_.head<3>() << pose.x, pose.y, wrap_angle(pose.theta);
   P_.topLeftCorner<3, 3>() = 0.5 * (pose_cov + pose_cov.transpose());
+  upper_stale_ = false;
 }
 
 // ---- prediction (eqs 3-6) -----------------------------------------------------
 
 EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
+  // U must be a covariance: finite, symmetric, non-negative variances. (Positive
+  // semi-definiteness beyond that is the caller's; a negative variance it causes
+  // is refused below.)
   const bool finite_u = std::isfinite(increment.x) && std::isfinite(increment.y) &&
                         std::isfinite(increment.theta) && U.allFinite();
   if (!finite_u || (U - U.transpose()).cwiseAbs().maxCoeff() > 1e-9 * U.cwiseAbs().maxCoeff() ||
@@ -217,17 +159,19 @@ EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
   Eigen::Matrix3d P_RR = F_x * P_.topLeftCorner<3, 3>() * F_x.transpose() +
                          F_u * U * F_u.transpose();  // eq 5, robot block
   P_RR = 0.5 * (P_RR + P_RR.transpose()).eval();
-  // eq 5, cross terms: landmarks do not move, so P_RL <- F_x P_RL and no more.
-  auto P_RL_new = tmp_rows_.leftCols(m);
-  P_RL_new.noalias() = F_x * P_.block(0, Layout::kPoseDim, Layout::kPoseDim, m);
-  if (!P_RR.allFinite() || (P_RR.diagonal().array() < 0.0).any() || !P_RL_new.allFinite()) {
+  // eq 5, cross terms: landmarks do not move, so P_LR <- P_LR F_x^T and no more.
+  // P_LR sits below the robot block (lower storage); its new transpose goes to
+  // the 3 x m scratch.
+  auto P_LR_new_T = tmp_rows_.leftCols(m);
+  P_LR_new_T.noalias() = F_x * P_.block(Layout::kPoseDim, 0, m, Layout::kPoseDim).transpose();
+  if (!P_RR.allFinite() || (P_RR.diagonal().array() < 0.0).any() || !P_LR_new_T.allFinite()) {
     return EkfStatus::kCovarianceFault;
   }
 
   x_.head<3>() << next.x, next.y, next.theta;  // theta wrapped by compose()
   P_.topLeftCorner<3, 3>() = P_RR;
-  P_.block(0, Layout::kPoseDim, Layout::kPoseDim, m) = P_RL_new;
-  P_.block(Layout::kPoseDim, 0, m, Layout::kPoseDim) = P_RL_new.transpose();
+  P_.block(Layout::kPoseDim, 0, m, Layout::kPoseDim) = P_LR_new_T.transpose();
+  upper_stale_ = upper_stale_ || m > 0;
   return EkfStatus::kOk;
 }
 
@@ -287,21 +231,23 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
 // E Z E^T for an error E in K, so it stays positive semi-definite for any gain.
 void EkfSlam::compute_gain(Index off, const Matrix25& H, const Eigen::Matrix2d& L) {
   const Index n = state_dim();
-  for (int r = 0; r < 2; ++r) {
-    PHt_.col(r).head(n) = P_.col(0).head(n) * H(r, 0) + P_.col(1).head(n) * H(r, 1) +
-                          P_.col(2).head(n) * H(r, 2) + P_.col(off).head(n) * H(r, 3) +
-                          P_.col(off + 1).head(n) * H(r, 4);
-  }
-  // M = PHt L^-T: each row m_i = L^-1 pht_i.
-  K_.col(0).head(n) = PHt_.col(0).head(n) / L(0, 0);
-  K_.col(1).head(n) = (PHt_.col(1).head(n) - L(1, 0) * K_.col(0).head(n)) / L(1, 1);
-  if (!options_.joseph) return;
-  // K = M L^-1: each row k_i = L^-T m_i.
-  K_.col(1).head(n) /= L(1, 1);
-  K_.col(0).head(n) = (K_.col(0).head(n) - L(1, 0) * K_.col(1).head(n)) / L(0, 0);
-  const Eigen::Matrix2d half_Z = 0.5 * L * L.transpose();
-  for (int c = 0; c < 2; ++c) {
-    PHt_.col(c).head(n) -= K_.col(0).head(n) * half_Z(0, c) + K_.col(1).head(n) * half_Z(1, c);
+  // The landmark's two columns of P: above the landmark block they are read along
+  // its rows (lower storage), from the block down along the columns.
+  lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
+  lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);
+  lm_cols_(off, 1) = P_(off + 1, off);
+  lm_cols_.block(off + 1, 1, n - off - 1, 1) = P_.col(off + 1).segment(off + 1, n - off - 1);
+
+  const GainCoefficients c = gain_coefficients(H, L);
+  // Robot columns 0..2 of P are complete (the robot block is kept full).
+  if (options_.joseph) {
+    gain_rows_joseph(c, n, P_.col(0).data(), P_.col(1).data(), P_.col(2).data(),
+                     lm_cols_.col(0).data(), lm_cols_.col(1).data(), K_.col(0).data(),
+                     K_.col(1).data(), PHt_.col(0).data(), PHt_.col(1).data());
+  } else {
+    gain_rows_standard(c, n, P_.col(0).data(), P_.col(1).data(), P_.col(2).data(),
+                       lm_cols_.col(0).data(), lm_cols_.col(1).data(), K_.col(0).data(),
+                       K_.col(1).data());
   }
 }
 
@@ -310,23 +256,14 @@ void EkfSlam::compute_gain(Index off, const Matrix25& H, const Eigen::Matrix2d& 
 // may overflow. Then the O(n^2) step cannot make P or X non-finite.
 bool EkfSlam::correction_healthy(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) const {
   const Index n = state_dim();
-  const auto A = K_.topRows(n);
-  const auto B = PHt_.topRows(n);
-  // Mean step: Joseph K nu, standard M w (the same vector, eq 11).
-  const Eigen::Vector2d v = options_.joseph ? nu : w;
-  for (Index i = 0; i < n; ++i) {
-    const double dx = A(i, 0) * v(0) + A(i, 1) * v(1);
-    const double p = P_(i, i);
-    const double p_new = options_.joseph ? p - 2.0 * dot2(A(i, 0), A(i, 1), B(i, 0), B(i, 1))
-                                         : p - dot2(A(i, 0), A(i, 1), A(i, 0), A(i, 1));
-    if (!std::isfinite(x_(i) + dx) || !std::isfinite(p_new) ||
-        p_new < -(kNegativeVarianceRelTol * p + kNegativeVarianceAbsTol)) {
-      return false;
-    }
-  }
-  const double a_max = A.cwiseAbs().maxCoeff();
-  const double b_max = options_.joseph ? B.cwiseAbs().maxCoeff() : a_max;
-  return n == 0 || a_max * b_max < kMaxProduct;
+  // Mean step: Joseph K nu, standard M w (the same vector, eq 11). Diagonal step:
+  // Joseph 2 k_i . b_i, standard m_i . m_i.
+  const bool joseph = options_.joseph;
+  const double* b0 = joseph ? PHt_.col(0).data() : K_.col(0).data();
+  const double* b1 = joseph ? PHt_.col(1).data() : K_.col(1).data();
+  const Eigen::Vector2d& v = joseph ? nu : w;
+  return rows_healthy(n, P_.data(), P_.outerStride() + 1, x_.data(), K_.col(0).data(),
+                      K_.col(1).data(), b0, b1, v(0), v(1), joseph ? 2.0 : 1.0);
 }
 
 void EkfSlam::apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) {
@@ -334,14 +271,24 @@ void EkfSlam::apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d&
   const Index ld = P_.outerStride();
   if (options_.joseph) {
     x_.head(n) += K_.col(0).head(n) * nu(0) + K_.col(1).head(n) * nu(1);  // eq 11
-    sym_rank4_downdate(P_.data(), ld, n, K_.col(0).data(), K_.col(1).data(), PHt_.col(0).data(),
-                       PHt_.col(1).data());
+    lower_rank4_downdate(P_.data(), ld, n, K_.col(0).data(), K_.col(1).data(),
+                         PHt_.col(0).data(), PHt_.col(1).data());
   } else {
     // eq 11: K nu = M L^-1 nu = M w
     x_.head(n) += K_.col(0).head(n) * w(0) + K_.col(1).head(n) * w(1);
-    sym_rank2_downdate(P_.data(), ld, n, K_.col(0).data(), K_.col(1).data());  // eq 12
+    lower_rank2_downdate(P_.data(), ld, n, K_.col(0).data(), K_.col(1).data());  // eq 12
   }
   x_(Layout::kTheta) = wrap_angle(x_(Layout::kTheta));
+  // Keep the robot block full: columns 0..2 of P stay complete.
+  P_(0, 1) = P_(1, 0);
+  P_(0, 2) = P_(2, 0);
+  P_(1, 2) = P_(2, 1);
+  upper_stale_ = true;
+}
+
+void EkfSlam::complete_upper_triangle() const {
+  mirror_lower_to_upper(P_.data(), P_.outerStride(), state_dim());
+  upper_stale_ = false;
 }
 
 // ---- map management ---------------------------------------------------------------
@@ -363,56 +310,58 @@ EkfStatus EkfSlam::add_landmark(int id, const RangeBearing& z) {
                          G_z * W_ * G_z.transpose();
   P_ll = 0.5 * (P_ll + P_ll.transpose()).eval();
   // The new rows lie outside the active block: writing them first leaves the
-  // filter's state untouched if the result is refused below.
+  // filter's state untouched if the result is refused below. P_RX^T is the
+  // (complete) robot columns 0..2.
   auto P_lX = P_.block(off, 0, Layout::kLandmarkDim, n);
-  P_lX.noalias() = G_x * P_.topRows<3>().leftCols(n);
+  P_lX.noalias() = G_x * P_.leftCols<3>().topRows(n).transpose();
   if (!p_LinW.allFinite() || !P_ll.allFinite() || (P_ll.diagonal().array() < 0.0).any() ||
       !P_lX.allFinite()) {
+    P_lX.setZero();  // outside the active block P_ stays zero
     return EkfStatus::kCovarianceFault;
   }
-  P_.block(0, off, n, Layout::kLandmarkDim) = P_lX.transpose();
   P_.block<2, 2>(off, off) = P_ll;
   x_.segment<2>(off) = p_LinW;
   id_to_slot_[static_cast<std::size_t>(id)] = slot;
   slot_to_id_[static_cast<std::size_t>(slot)] = id;
   ++num_landmarks_;
+  upper_stale_ = true;
   return EkfStatus::kOk;
 }
 
 // Marginalising a Gaussian = dropping its rows and columns. To keep the active
-// block contiguous, the last slot's rows/columns move into the hole (O(n) copies).
+// block contiguous, the last slot's entries move into the hole (O(n) copies, all
+// within the lower triangle).
 EkfStatus EkfSlam::remove_landmark(int id) {
   if (!valid_id(id)) return EkfStatus::kBadInput;
   const int hole = slot_of(id);
   if (hole < 0) return EkfStatus::kUnknownLandmark;
   const int last = num_landmarks_ - 1;
   const Index oh = Layout::landmark_offset(hole), ol = Layout::landmark_offset(last);
-  const Index n_new = Layout::dim(last);  // active dimension after removal
   constexpr Index kL = Layout::kLandmarkDim;
   if (hole != last) {
     const int moved_id = slot_to_id_[static_cast<std::size_t>(last)];
-    // Columns first (contiguous), then the diagonal block, then the rows as the
-    // transpose of the new columns, skipping the diagonal block they share.
-    P_.block(0, oh, n_new, kL) = P_.block(0, ol, n_new, kL);
+    // Robot and the slots before the hole: along the rows.
+    P_.block(oh, 0, kL, oh) = P_.block(ol, 0, kL, oh);
+    // Slots between hole and last: P(s, hole) = P(last, s)^T.
+    const Index between = ol - (oh + kL);
+    P_.block(oh + kL, oh, between, kL) = P_.block(ol, oh + kL, kL, between).transpose();
     P_.block<2, 2>(oh, oh) = P_.block<2, 2>(ol, ol);
-    P_.block(oh, 0, kL, oh) = P_.block(0, oh, oh, kL).transpose();
-    const Index tail = n_new - (oh + kL);
-    P_.block(oh, oh + kL, kL, tail) = P_.block(oh + kL, oh, tail, kL).transpose();
     x_.segment<2>(oh) = x_.segment<2>(ol);
     id_to_slot_[static_cast<std::size_t>(moved_id)] = hole;
     slot_to_id_[static_cast<std::size_t>(hole)] = moved_id;
   }
   // Clear the vacated slot so that the inactive part of P stays zero.
-  P_.block(0, ol, n_new + kL, kL).setZero();
-  P_.block(ol, 0, kL, n_new + kL).setZero();
+  P_.block(0, ol, ol + kL, kL).setZero();
+  P_.block(ol, 0, kL, ol + kL).setZero();
   x_.segment<2>(ol).setZero();
   id_to_slot_[static_cast<std::size_t>(id)] = -1;
   slot_to_id_[static_cast<std::size_t>(last)] = -1;
   --num_landmarks_;
+  upper_stale_ = true;
   return EkfStatus::kOk;
 }
 
-// ---- accessors --------------------------------------------------------------------
+// ---- accessors (all read the lower triangle) ---------------------------------------
 
 bool EkfSlam::has_landmark(int id) const { return slot_of(id) >= 0; }
 
@@ -431,20 +380,27 @@ Eigen::Vector2d EkfSlam::landmark(int id) const {
   return x_.segment<2>(Layout::landmark_offset(slot));
 }
 
-Eigen::Matrix2d EkfSlam::landmark_cov(int id) const { return landmark_cross_cov(id, id); }
+Eigen::Matrix2d EkfSlam::landmark_cov(int id) const {
+  const int slot = slot_of(id);
+  if (slot < 0) return Eigen::Matrix2d::Constant(kNaN);
+  return diagonal_block(P_, Layout::landmark_offset(slot));
+}
 
 Eigen::Matrix2d EkfSlam::landmark_cross_cov(int id_i, int id_j) const {
   const int si = slot_of(id_i), sj = slot_of(id_j);
   if (si < 0 || sj < 0) return Eigen::Matrix2d::Constant(kNaN);
-  return P_.block<2, 2>(Layout::landmark_offset(si), Layout::landmark_offset(sj));
+  const Index oi = Layout::landmark_offset(si), oj = Layout::landmark_offset(sj);
+  if (si == sj) return diagonal_block(P_, oi);
+  return si > sj ? Eigen::Matrix2d(P_.block<2, 2>(oi, oj))
+                 : Eigen::Matrix2d(P_.block<2, 2>(oj, oi).transpose());
 }
 
 Eigen::Matrix<double, 3, 2> EkfSlam::pose_landmark_cov(int id) const {
   const int slot = slot_of(id);
   if (slot < 0) return Eigen::Matrix<double, 3, 2>::Constant(kNaN);
-  return P_.block<3, 2>(0, Layout::landmark_offset(slot));
+  return P_.block<2, 3>(Layout::landmark_offset(slot), 0).transpose();
 }
 
-double EkfSlam::mean_diag() const { return covariance().diagonal().mean(); }  // eq 19
+double EkfSlam::mean_diag() const { return P_.diagonal().head(state_dim()).mean(); }  // eq 19
 
 }  // namespace elaslam

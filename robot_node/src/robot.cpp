@@ -382,13 +382,13 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
 }
 
 double Robot::map_mean_diag() const {
-  const auto P = ekf_.covariance();
-  double sum = P(0, 0) + P(1, 1) + P(2, 2);
+  // Block accessors only: covariance() would complete the whole matrix.
+  double sum = ekf_.pose_cov().trace();
   int n = StateLayout::kPoseDim;
   for (int slot = 0; slot < ekf_.num_landmarks(); ++slot) {
-    if (lmap_[ekf_.id_at(slot)].status != LandmarkStatus::kStatic) continue;
-    const int o = StateLayout::landmark_offset(slot);
-    sum += P(o, o) + P(o + 1, o + 1);
+    const int id = ekf_.id_at(slot);
+    if (lmap_[id].status != LandmarkStatus::kStatic) continue;
+    sum += ekf_.landmark_cov(id).trace();
     n += StateLayout::kLandmarkDim;
   }
   return sum / n;

@@ -3,7 +3,7 @@
 // State X = [R; M]: R = (x, y, theta) of the robot in W, M = landmark positions in
 // W, one 2-vector per occupied slot. Mean, covariance and the id-to-slot tables are
 // allocated once, at construction, from the configured capacity; predict, update,
-// add_landmark and remove_landmark allocate nothing (tests/test_ekf_no_alloc.cpp).
+// add_landmark and remove_landmark allocate nothing (tests/robot_node/test_ekf_no_alloc.cpp).
 // Only this class changes the mean and covariance. Every operation returns a
 // status; none throws or exits on bad data.
 #pragma once
@@ -107,9 +107,14 @@ class EkfSlam {
   Eigen::Matrix2d landmark_cross_cov(int id_i, int id_j) const;  // P_ij = E[(l_i)(l_j)^T]
   Eigen::Matrix<double, 3, 2> pose_landmark_cov(int id) const;   // P_Rl
 
-  /// The active part of the mean and covariance (views, no copies).
+  /// The active part of the mean and covariance (views, no copies; valid until the
+  /// next non-const call). The filter keeps only the lower triangle of P current
+  /// (half the memory traffic per update); covariance() completes the upper one
+  /// first when it is stale, O(n^2). The block accessors above never need that.
+  /// Not thread-safe, not even for concurrent const calls.
   Eigen::Ref<const Eigen::VectorXd> mean() const { return x_.head(state_dim()); }
   Eigen::Ref<const Eigen::MatrixXd> covariance() const {
+    if (upper_stale_) complete_upper_triangle();
     return P_.topLeftCorner(state_dim(), state_dim());
   }
   /// mean(diag(P)) over the active state (paper eq 19).
@@ -130,19 +135,26 @@ class EkfSlam {
   bool correction_healthy(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) const;
   /// Mean and rank-2 (standard) or rank-4 (Joseph) covariance step, O(n^2).
   void apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d& w);
+  /// Copy the lower triangle of the active block into the upper one (symmetrise).
+  void complete_upper_triangle() const;
 
   EkfOptions options_;
   Eigen::Matrix2d W_;
   double gate_threshold_ = 0.0;
   int num_landmarks_ = 0;
   Eigen::VectorXd x_;          // capacity-sized mean
-  Eigen::MatrixXd P_;          // capacity-sized covariance
+  // Capacity-sized covariance. Current: the lower triangle (i >= j) of the active
+  // block, and the 3x3 robot block in full (so columns 0..2 are complete). The
+  // strict upper triangle is a cache, refreshed by covariance() when stale.
+  mutable Eigen::MatrixXd P_;
+  mutable bool upper_stale_ = false;
   std::vector<int> id_to_slot_;  // max_landmark_id entries, -1 when absent
   std::vector<int> slot_to_id_;  // capacity entries
   // Scratch allocated once, used by predict/update/add/remove.
   Eigen::MatrixXd PHt_;        // n x 2: P H^T, then B = P H^T - K Z / 2 (Joseph)
   Eigen::MatrixXd K_;          // n x 2: K (Joseph) or M = P H^T L^-T (standard)
-  Eigen::MatrixXd tmp_rows_;   // 3 x n: new P_RL in predict
+  Eigen::MatrixXd tmp_rows_;   // 3 x n: new P_LR^T in predict
+  Eigen::MatrixXd lm_cols_;    // n x 2: the observed landmark's two columns of P
 };
 
 }  // namespace elaslam

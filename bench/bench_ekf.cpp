@@ -1,0 +1,185 @@
+// EKF frame time: one frame = one predict + 15 updates, as the robot node does per
+// sensor frame, with 16 to 512 landmarks in the map. EkfSlam (sparse H, rank-2/4
+// covariance step, O(n^2) per update) against a dense textbook EKF in the same
+// binary (full n x n products with a dense 2 x n H, O(n^3) per update).
+//   build/bin/bench_ekf --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+// Results and the machine: docs/benchmarks.md.
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <benchmark/benchmark.h>
+
+#include "elaslam/robot_node/ekf_slam.hpp"
+
+namespace elaslam {
+namespace {
+
+constexpr int kUpdatesPerFrame = 15;
+
+// A robot at the origin among `n` landmarks within 20 m, with one fixed noisy
+// observation of each (the robot does not move: u = 0, but U is not).
+struct Scene {
+  explicit Scene(int n) {
+    std::mt19937_64 rng(1234);
+    std::uniform_real_distribution<double> pos(-20.0, 20.0);
+    std::normal_distribution<double> noise(0.0, 1.0);
+    for (int i = 0; i < n; ++i) {
+      Eigen::Vector2d l(pos(rng), pos(rng));
+      if (l.norm() < 1.0) l.x() += 2.0;
+      RangeBearing z = observe(Pose2{}, l);
+      z.range += 0.05 * noise(rng);
+      z.bearing += 0.005 * noise(rng);
+      observations.push_back(z);
+    }
+  }
+  std::vector<RangeBearing> observations;  // by id
+  Eigen::Matrix3d U = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+  Eigen::Matrix3d P0 = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+};
+
+EkfOptions options_for(int n, bool joseph) {
+  EkfOptions o;
+  o.capacity = n;
+  o.max_landmark_id = n;
+  o.range_sigma = 0.05;
+  o.bearing_sigma = 0.005;
+  o.joseph = joseph;
+  return o;
+}
+
+// ---- the dense textbook reference (eqs 4-5, 8-12, 15 as printed) ---------------------
+
+class DenseEkf {
+ public:
+  explicit DenseEkf(const EkfOptions& o) {
+    W_ = Eigen::Vector2d(o.range_sigma * o.range_sigma, o.bearing_sigma * o.bearing_sigma)
+             .asDiagonal();
+  }
+  void reset(const Eigen::Matrix3d& P0) {
+    X_ = Eigen::Vector3d::Zero();
+    P_ = P0;
+  }
+  void add(const RangeBearing& y) {
+    const Eigen::Index n = X_.size();
+    Eigen::Matrix<double, 2, 3> G_x;
+    Eigen::Matrix2d G_z;
+    const Eigen::Vector2d l = inverse_observe(pose(), y, &G_x, &G_z);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n + 2, n), Jz = Eigen::MatrixXd::Zero(n + 2, 2);
+    J.topRows(n).setIdentity();
+    J.block(n, 0, 2, 3) = G_x;
+    Jz.bottomRows<2>() = G_z;
+    Eigen::VectorXd X(n + 2);
+    X << X_, l;
+    X_ = X;
+    P_ = (J * P_ * J.transpose() + Jz * W_ * Jz.transpose()).eval();
+    // Workspace for the frame, sized once (allocation is not what we measure).
+    const Eigen::Index m = X_.size();
+    F_ = Eigen::MatrixXd::Identity(m, m);
+    G_ = Eigen::MatrixXd::Zero(m, 3);
+    H_ = Eigen::MatrixXd::Zero(2, m);
+    IKH_.resize(m, m);
+    tmp_.resize(m, m);
+    K_.resize(m, 2);
+  }
+  void predict(const Pose2& u, const Eigen::Matrix3d& U) {
+    Eigen::Matrix3d F_x, F_u;
+    const Pose2 next = motion(pose(), u, &F_x, &F_u);
+    F_.topLeftCorner<3, 3>() = F_x;
+    G_.topRows<3>() = F_u;
+    X_.head<3>() << next.x, next.y, next.theta;
+    tmp_.noalias() = F_ * P_;
+    P_.noalias() = tmp_ * F_.transpose();
+    P_.noalias() += G_ * U * G_.transpose();
+  }
+  void update(int slot, const RangeBearing& y) {
+    const Eigen::Index off = StateLayout::landmark_offset(slot);
+    Eigen::Matrix<double, 2, 3> H_x;
+    Eigen::Matrix2d H_l;
+    const RangeBearing h = observe(pose(), X_.segment<2>(off), &H_x, &H_l);
+    H_.setZero();
+    H_.leftCols<3>() = H_x;
+    H_.middleCols<2>(off) = H_l;
+    const Eigen::Vector2d nu(y.range - h.range, wrap_angle(y.bearing - h.bearing));
+    const Eigen::Matrix2d Z = H_ * P_ * H_.transpose() + W_;
+    K_.noalias() = P_ * H_.transpose() * Z.inverse();
+    X_ += K_ * nu;
+    X_(2) = wrap_angle(X_(2));
+    IKH_.setIdentity();
+    IKH_.noalias() -= K_ * H_;
+    tmp_.noalias() = IKH_ * P_;
+    P_.noalias() = tmp_ * IKH_.transpose();
+    P_.noalias() += K_ * W_ * K_.transpose();
+  }
+  Pose2 pose() const { return {X_(0), X_(1), X_(2)}; }
+
+ private:
+  Eigen::Matrix2d W_;
+  Eigen::VectorXd X_;
+  Eigen::MatrixXd P_, F_, G_, H_, IKH_, tmp_, K_;
+};
+
+// ---- benchmarks ----------------------------------------------------------------------------
+
+void run_ekf_frames(benchmark::State& state, bool joseph, bool full_view) {
+  const int n = static_cast<int>(state.range(0));
+  const Scene scene(n);
+  EkfSlam ekf(options_for(n, joseph));
+  ekf.reset(Pose2{}, scene.P0);
+  for (int id = 0; id < n; ++id) ekf.add_landmark(id, scene.observations[static_cast<std::size_t>(id)]);
+  int next = 0;
+  int failures = 0;
+  for (auto _ : state) {
+    failures += ekf.predict(Pose2{}, scene.U) != EkfStatus::kOk;
+    for (int k = 0; k < kUpdatesPerFrame; ++k) {
+      const int id = next;
+      next = (next + 1) % n;
+      failures += ekf.update(id, scene.observations[static_cast<std::size_t>(id)]).status !=
+                  EkfStatus::kOk;
+    }
+    if (full_view) benchmark::DoNotOptimize(ekf.covariance().data());
+    benchmark::ClobberMemory();
+  }
+  if (failures != 0) state.SkipWithError("a filter call failed");
+  state.counters["state_dim"] = ekf.state_dim();
+}
+
+void BM_EkfSlamFrame(benchmark::State& state) { run_ekf_frames(state, true, false); }
+void BM_EkfSlamFrameStandardForm(benchmark::State& state) { run_ekf_frames(state, false, false); }
+// The same frame, then the full covariance view (completes the upper triangle):
+// what a caller pays per frame if it needs all of P rather than blocks of it.
+void BM_EkfSlamFrameWithFullView(benchmark::State& state) { run_ekf_frames(state, true, true); }
+
+void BM_DenseEkfFrame(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Scene scene(n);
+  DenseEkf ekf(options_for(n, true));
+  ekf.reset(scene.P0);
+  for (int id = 0; id < n; ++id) ekf.add(scene.observations[static_cast<std::size_t>(id)]);
+  int next = 0;
+  for (auto _ : state) {
+    ekf.predict(Pose2{}, scene.U);
+    for (int k = 0; k < kUpdatesPerFrame; ++k) {
+      ekf.update(next, scene.observations[static_cast<std::size_t>(next)]);
+      next = (next + 1) % n;
+    }
+    benchmark::ClobberMemory();
+  }
+}
+
+void landmark_counts(benchmark::internal::Benchmark* b) {
+  for (const int n : {16, 72, 150, 256, 512}) b->Arg(n);
+  b->ArgName("landmarks")->Unit(benchmark::kMicrosecond);
+}
+
+BENCHMARK(BM_EkfSlamFrame)->Apply(landmark_counts);
+BENCHMARK(BM_EkfSlamFrameStandardForm)->Apply(landmark_counts);
+BENCHMARK(BM_EkfSlamFrameWithFullView)->Apply(landmark_counts);
+BENCHMARK(BM_DenseEkfFrame)->Apply(landmark_counts);
+
+}  // namespace
+}  // namespace elaslam
+
+BENCHMARK_MAIN();

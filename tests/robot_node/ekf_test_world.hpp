@@ -1,0 +1,221 @@
+// Test support for the EKF tests: a dense textbook EKF (the known answer), a small
+// random world, and random filter operations on both.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include "elaslam/robot_node/ekf_slam.hpp"
+
+namespace elaslam::test {
+
+using Layout = StateLayout;
+using Vec2 = Eigen::Vector2d;
+
+// ---- dense textbook EKF: the known answer ------------------------------------------
+
+// Full X, full P, dense Jacobians of the whole state; eqs 4-5, 8-12 and 15 as
+// printed, with O(n^3) products. Landmarks are kept in insertion order and removed
+// by deleting their rows and columns, so slots differ from EkfSlam's after a removal:
+// the comparison goes by id.
+class DenseEkf {
+ public:
+  explicit DenseEkf(const EkfOptions& o) : joseph_(o.joseph) {
+    W_ = Vec2(o.range_sigma * o.range_sigma, o.bearing_sigma * o.bearing_sigma).asDiagonal();
+  }
+  void reset(const Pose2& pose, const Eigen::Matrix3d& cov) {
+    X_ = Eigen::Vector3d(pose.x, pose.y, pose.theta);
+    P_ = cov;
+    ids_.clear();
+  }
+  void predict(const Pose2& u, const Eigen::Matrix3d& U) {
+    const Eigen::Index n = X_.size();
+    Eigen::Matrix3d F_x, F_u;
+    const Pose2 next = motion(pose(), u, &F_x, &F_u);
+    Eigen::MatrixXd F = Eigen::MatrixXd::Identity(n, n);
+    F.topLeftCorner<3, 3>() = F_x;
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, 3);
+    G.topRows<3>() = F_u;
+    X_.head<3>() << next.x, next.y, next.theta;
+    P_ = (F * P_ * F.transpose() + G * U * G.transpose()).eval();
+  }
+  void update(int id, const RangeBearing& y) {
+    const Eigen::Index n = X_.size(), off = offset(id);
+    Eigen::Matrix<double, 2, 3> H_x;
+    Eigen::Matrix2d H_l;
+    const RangeBearing h = observe(pose(), X_.segment<2>(off), &H_x, &H_l);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
+    H.leftCols<3>() = H_x;
+    H.middleCols<2>(off) = H_l;
+    const Vec2 nu(y.range - h.range, wrap_angle(y.bearing - h.bearing));
+    const Eigen::Matrix2d Z = H * P_ * H.transpose() + W_;
+    const Eigen::MatrixXd K = P_ * H.transpose() * Z.inverse();
+    X_ += K * nu;
+    X_(2) = wrap_angle(X_(2));
+    if (joseph_) {
+      const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
+      P_ = (IKH * P_ * IKH.transpose() + K * W_ * K.transpose()).eval();
+    } else {
+      P_ = (P_ - K * Z * K.transpose()).eval();
+    }
+  }
+  void add(int id, const RangeBearing& y) {
+    const Eigen::Index n = X_.size();
+    Eigen::Matrix<double, 2, 3> G_x;
+    Eigen::Matrix2d G_z;
+    const Vec2 l = inverse_observe(pose(), y, &G_x, &G_z);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n + 2, n), Jz = Eigen::MatrixXd::Zero(n + 2, 2);
+    J.topRows(n).setIdentity();
+    J.block(n, 0, 2, 3) = G_x;
+    Jz.bottomRows<2>() = G_z;
+    Eigen::VectorXd X(n + 2);
+    X << X_, l;
+    X_ = X;
+    P_ = (J * P_ * J.transpose() + Jz * W_ * Jz.transpose()).eval();
+    ids_.push_back(id);
+  }
+  void remove(int id) {
+    const Eigen::Index off = offset(id), n = X_.size();
+    std::vector<Eigen::Index> keep;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (i != off && i != off + 1) keep.push_back(i);
+    Eigen::VectorXd X(n - 2);
+    Eigen::MatrixXd P(n - 2, n - 2);
+    for (std::size_t i = 0; i < keep.size(); ++i) {
+      X(static_cast<Eigen::Index>(i)) = X_(keep[i]);
+      for (std::size_t j = 0; j < keep.size(); ++j)
+        P(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = P_(keep[i], keep[j]);
+    }
+    X_ = X;
+    P_ = P;
+    ids_.erase(ids_.begin() + (off - 3) / 2);
+  }
+
+  Pose2 pose() const { return {X_(0), X_(1), X_(2)}; }
+  const Eigen::VectorXd& X() const { return X_; }
+  const Eigen::MatrixXd& P() const { return P_; }
+  const std::vector<int>& ids() const { return ids_; }
+
+ private:
+  Eigen::Index offset(int id) const {
+    for (std::size_t k = 0; k < ids_.size(); ++k)
+      if (ids_[k] == id) return Layout::landmark_offset(static_cast<int>(k));
+    ADD_FAILURE() << "dense reference: unknown id " << id;
+    return 0;
+  }
+  bool joseph_;
+  Eigen::Matrix2d W_;
+  Eigen::VectorXd X_;
+  Eigen::MatrixXd P_;
+  std::vector<int> ids_;
+};
+
+// Largest difference between the two filters, matching landmarks by id.
+inline double max_difference(const EkfSlam& ekf, const DenseEkf& ref) {
+  if (ekf.state_dim() != ref.X().size()) return HUGE_VAL;
+  std::vector<Eigen::Index> index = {0, 1, 2};  // reference index -> EkfSlam index
+  for (const int id : ref.ids()) {
+    const int slot = ekf.slot_of(id);
+    if (slot < 0) return HUGE_VAL;
+    index.push_back(Layout::landmark_offset(slot));
+    index.push_back(Layout::landmark_offset(slot) + 1);
+  }
+  double d = 0.0;
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    const double dx = ekf.mean()(index[i]) - ref.X()(ii);
+    d = std::max(d, std::abs(i == Layout::kTheta ? wrap_angle(dx) : dx));
+    for (std::size_t j = 0; j < index.size(); ++j) {
+      d = std::max(d, std::abs(ekf.covariance()(index[i], index[j]) -
+                               ref.P()(ii, static_cast<Eigen::Index>(j))));
+    }
+  }
+  return d;
+}
+
+// ---- a small random world ---------------------------------------------------------------
+
+// The truth for the random operation sequences: a robot wandering among landmarks
+// with ids 0..num_ids-1 within 15 m of the origin.
+struct RandomWorld {
+  explicit RandomWorld(std::uint64_t seed, int num_ids = 25) : rng(seed) {
+    for (int id = 0; id < num_ids; ++id) landmarks.push_back({uniform(-15, 15), uniform(-15, 15)});
+  }
+  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+  double gauss(double sigma) { return std::normal_distribution<double>(0.0, sigma)(rng); }
+  int pick(int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); }
+  // True motion by a random increment; returns the noisy odometry reading.
+  Pose2 move() {
+    Pose2 u{uniform(0.0, 0.5), uniform(-0.1, 0.1), uniform(-0.3, 0.3)};
+    if (compose(truth, u).translation().norm() > 12.0) u.theta += kPi;  // turn back, stay in
+    truth = compose(truth, u);
+    return {u.x + gauss(0.02), u.y + gauss(0.02), u.theta + gauss(0.01)};
+  }
+  RangeBearing sense(int id, const EkfOptions& o) {
+    const RangeBearing h = observe(truth, landmarks[static_cast<std::size_t>(id)]);
+    return {std::max(h.range + gauss(o.range_sigma), 0.05),
+            wrap_angle(h.bearing + gauss(o.bearing_sigma))};
+  }
+  std::mt19937_64 rng;
+  Pose2 truth{0.0, 0.0, 0.3};
+  std::vector<Vec2> landmarks;
+};
+
+inline const OdometryNoise kOdoNoise{1e-3, 1e-3, 1e-4};
+
+struct OpCounts {
+  int predicts = 0, updates = 0, adds = 0, removes = 0;
+};
+
+// One random operation on both filters (the reference may be null). Every call
+// must succeed; the result is compared by the caller.
+inline OpCounts random_operation(RandomWorld& w, EkfSlam& ekf, DenseEkf* ref,
+                                 int max_landmarks) {
+  OpCounts c;
+  const double r = w.uniform(0.0, 1.0);
+  const int n = ekf.num_landmarks();
+  if (r < 0.3) {
+    const Pose2 u = w.move();
+    const Eigen::Matrix3d U = odometry_covariance(u, kOdoNoise);
+    EXPECT_EQ(ekf.predict(u, U), EkfStatus::kOk);
+    if (ref != nullptr) ref->predict(u, U);
+    c.predicts = 1;
+  } else if (r < 0.7 && n > 0) {
+    const int id = ekf.id_at(w.pick(n));
+    const RangeBearing z = w.sense(id, ekf.options());
+    EXPECT_EQ(ekf.update(id, z).status, EkfStatus::kOk);
+    if (ref != nullptr) ref->update(id, z);
+    c.updates = 1;
+  } else if (r < 0.9 && n < max_landmarks) {
+    int id = w.pick(static_cast<int>(w.landmarks.size()));
+    while (ekf.has_landmark(id)) id = (id + 1) % static_cast<int>(w.landmarks.size());
+    const RangeBearing z = w.sense(id, ekf.options());
+    EXPECT_EQ(ekf.add_landmark(id, z), EkfStatus::kOk);
+    if (ref != nullptr) ref->add(id, z);
+    c.adds = 1;
+  } else if (n > 0) {
+    const int id = ekf.id_at(w.pick(n));
+    EXPECT_EQ(ekf.remove_landmark(id), EkfStatus::kOk);
+    if (ref != nullptr) ref->remove(id);
+    c.removes = 1;
+  }
+  return c;
+}
+
+inline EkfOptions small_options(bool joseph) {
+  EkfOptions o;
+  o.capacity = 20;
+  o.max_landmark_id = 64;
+  o.range_sigma = 0.05;
+  o.bearing_sigma = 0.01;
+  o.joseph = joseph;
+  return o;
+}
+
+}  // namespace elaslam::test

@@ -1,0 +1,206 @@
+// Proof that the filter's frame path allocates nothing after construction
+// (DESIGN.md section 4). Two independent guards watch the region:
+//  - Eigen's EIGEN_RUNTIME_NO_MALLOC: every Eigen heap allocation asserts (this
+//    target defines it and turns asserts on, and compiles ekf_slam.cpp and
+//    models.cpp itself so the guard covers the filter code);
+//  - a replaced global operator new that counts calls made inside the region.
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <new>
+#include <random>
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+#include "elaslam/robot_node/ekf_slam.hpp"
+
+#ifndef EIGEN_RUNTIME_NO_MALLOC
+#error "test_ekf_no_alloc must be compiled with EIGEN_RUNTIME_NO_MALLOC"
+#endif
+#ifdef NDEBUG
+#error "test_ekf_no_alloc needs assertions (Eigen's guard is an eigen_assert)"
+#endif
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+
+void* counted_alloc(std::size_t size, std::size_t align) {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
+  if (size == 0) size = 1;
+  void* p = nullptr;
+  if (align <= alignof(std::max_align_t)) {
+    p = std::malloc(size);
+  } else if (posix_memalign(&p, align, size) != 0) {
+    p = nullptr;
+  }
+  return p;
+}
+void* counted_alloc_or_throw(std::size_t size, std::size_t align) {
+  void* p = counted_alloc(size, align);
+  if (p == nullptr) throw std::bad_alloc();
+  return p;
+}
+}  // namespace
+
+// Replacements of every allocating form of the global operator new.
+void* operator new(std::size_t n) { return counted_alloc_or_throw(n, 0); }
+void* operator new[](std::size_t n) { return counted_alloc_or_throw(n, 0); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return counted_alloc(n, 0); }
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return counted_alloc(n, 0); }
+void* operator new(std::size_t n, std::align_val_t a) {
+  return counted_alloc_or_throw(n, static_cast<std::size_t>(a));
+}
+void* operator new[](std::size_t n, std::align_val_t a) {
+  return counted_alloc_or_throw(n, static_cast<std::size_t>(a));
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace elaslam {
+namespace {
+
+// Inside this scope any Eigen heap allocation aborts and every operator new is counted.
+class NoAllocRegion {
+ public:
+  NoAllocRegion() {
+    g_allocations = 0;
+    Eigen::internal::set_is_malloc_allowed(false);
+    g_counting = true;
+  }
+  ~NoAllocRegion() {
+    g_counting = false;
+    Eigen::internal::set_is_malloc_allowed(true);
+  }
+  NoAllocRegion(const NoAllocRegion&) = delete;
+  NoAllocRegion& operator=(const NoAllocRegion&) = delete;
+};
+
+int* volatile g_sink = nullptr;  // keeps the compiler from eliding new/delete pairs
+
+// Statuses collected inside the region and checked outside it (gtest allocates).
+struct Tally {
+  std::array<int, 8> count{};
+  void add(EkfStatus s) { ++count[static_cast<std::size_t>(s)]; }
+  int of(EkfStatus s) const { return count[static_cast<std::size_t>(s)]; }
+};
+
+// Many frames of the node's work, successful and failing calls alike.
+void run_frames(EkfSlam& ekf, std::mt19937_64& rng, int frames, Tally* tally) {
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const int max_id = ekf.options().max_landmark_id;
+  for (int f = 0; f < frames; ++f) {
+    const Pose2 u{0.3 + 0.1 * uni(rng), 0.05 * uni(rng), 0.1 * uni(rng)};
+    tally->add(ekf.predict(u, odometry_covariance(u, OdometryNoise{1e-3, 1e-3, 1e-4})));
+    for (int k = 0; k < 12; ++k) {
+      const int id = static_cast<int>((uni(rng) + 1.0) * 0.5 * (max_id - 1));
+      const RangeBearing z{5.0 + 3.0 * uni(rng), 3.0 * uni(rng)};
+      if (!ekf.has_landmark(id)) {
+        tally->add(ekf.add_landmark(id, z));  // kOk or kFull
+        continue;
+      }
+      RangeBearing y = observe(ekf.pose(), ekf.landmark(id));
+      y.range = std::max(y.range + 0.05 * uni(rng), 0.01);
+      tally->add(ekf.check(id, y).status);
+      tally->add(ekf.update(id, y, k % 2 == 0).status);
+      if (k == 5) tally->add(ekf.update(id, {y.range + 50.0, y.bearing}, true).status);  // kGated
+    }
+    // Failing calls must not allocate either (no error strings, no exceptions).
+    tally->add(ekf.update(0, {nan, 0.0}).status);
+    tally->add(ekf.update(max_id, {1.0, 0.0}).status);
+    tally->add(ekf.add_landmark(-1, {1.0, 0.0}));
+    tally->add(ekf.predict({nan, 0.0, 0.0}, Eigen::Matrix3d::Identity()));
+    tally->add(ekf.remove_landmark(max_id + 3));
+    for (int id = 0; id < max_id; ++id) {  // the first unmapped id
+      if (ekf.has_landmark(id)) continue;
+      tally->add(ekf.check(id, {1.0, 0.0}).status);
+      tally->add(ekf.update(id, {1.0, 0.0}).status);
+      break;
+    }
+    // Readers: the block accessors, and the full view (completes the upper triangle).
+    if (ekf.num_landmarks() > 1) {
+      const Eigen::Matrix2d c = ekf.landmark_cross_cov(ekf.id_at(0), ekf.id_at(1)) +
+                                ekf.landmark_cov(ekf.id_at(1));
+      tally->add(c.allFinite() ? EkfStatus::kOk : EkfStatus::kCovarianceFault);
+    }
+    if (f % 10 == 0) {
+      const double trace = ekf.covariance().trace();
+      tally->add(std::isfinite(trace + ekf.mean_diag()) ? EkfStatus::kOk
+                                                        : EkfStatus::kCovarianceFault);
+    }
+    if (f % 3 == 0 && ekf.num_landmarks() > 0) {
+      const int slot = static_cast<int>((uni(rng) + 1.0) * 0.5 * (ekf.num_landmarks() - 1));
+      tally->add(ekf.remove_landmark(ekf.id_at(slot)));
+    }
+  }
+}
+
+class EkfNoAlloc : public ::testing::TestWithParam<bool> {};
+
+TEST_P(EkfNoAlloc, FramePathAllocatesNothing) {
+  EkfOptions o;
+  o.capacity = 24;
+  o.max_landmark_id = 40;
+  o.joseph = GetParam();
+  EkfSlam ekf(o);  // all allocation happens here
+  ekf.reset({0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+  std::mt19937_64 rng(4242);
+  Tally tally;
+  long allocations = -1;
+  {
+    NoAllocRegion guard;
+    run_frames(ekf, rng, 300, &tally);
+    allocations = g_allocations.load();
+  }
+  EXPECT_EQ(allocations, 0);
+  // The region really exercised every path.
+  EXPECT_GT(tally.of(EkfStatus::kOk), 3000);
+  EXPECT_GT(tally.of(EkfStatus::kFull), 0);
+  EXPECT_GT(tally.of(EkfStatus::kGated), 0);
+  EXPECT_GT(tally.of(EkfStatus::kBadInput), 1000);
+  EXPECT_GT(tally.of(EkfStatus::kUnknownLandmark), 0);
+  EXPECT_EQ(tally.of(EkfStatus::kCovarianceFault), 0);
+  EXPECT_EQ(tally.of(EkfStatus::kSingular), 0);
+  EXPECT_GT(ekf.num_landmarks(), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfNoAlloc, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& i) {
+                           return i.param ? std::string("Joseph") : std::string("Standard");
+                         });
+
+TEST(EkfNoAllocGuard, CounterSeesAnAllocation) {
+  long allocations = -1;
+  {
+    NoAllocRegion guard;
+    g_sink = new int(3);
+    delete g_sink;
+    allocations = g_allocations.load();
+  }
+  EXPECT_EQ(allocations, 1);
+}
+
+TEST(EkfNoAllocGuard, EigenGuardCatchesAHeapAllocation) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_DEATH(
+      {
+        NoAllocRegion guard;
+        Eigen::MatrixXd m(64, 64);
+        m.setZero();
+      },
+      "heap allocation is forbidden");
+}
+
+}  // namespace
+}  // namespace elaslam

@@ -1,0 +1,248 @@
+// Motion and observation models: analytic Jacobians against central differences at
+// random and at singular points, and the odometry noise model against hand-computed
+// numbers.
+#include "elaslam/robot_node/models.hpp"
+
+#include <cmath>
+#include <random>
+
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include "jacobian_check.hpp"
+
+namespace elaslam {
+namespace {
+
+using test::check_jacobian;
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Mat23 = Eigen::Matrix<double, 2, 3>;
+
+constexpr int kRandomPoints = 200;
+constexpr unsigned kThetaOutput = 1u << 2;    // output 2 of motion() is an angle
+constexpr unsigned kBearingOutput = 1u << 1;  // output 1 of observe() is an angle
+
+Pose2 to_pose(const Vec3& v) { return {v(0), v(1), v(2)}; }
+Vec3 to_vec(const Pose2& p) { return {p.x, p.y, p.theta}; }
+Vec2 to_vec(const RangeBearing& z) { return {z.range, z.bearing}; }
+RangeBearing to_rb(const Vec2& v) { return {v(0), v(1)}; }
+
+// Random test points: poses anywhere in a 100 m square with any heading, odometry
+// increments of a few metres, landmarks 0.5 to 30 m from the robot.
+struct Sampler {
+  std::mt19937_64 rng{20240611};
+  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+  Pose2 pose() { return {uniform(-50, 50), uniform(-50, 50), uniform(-kPi, kPi)}; }
+  Pose2 increment() { return {uniform(-2, 2), uniform(-2, 2), uniform(-1, 1)}; }
+  Vec2 landmark_near(const Pose2& p) {
+    const double r = uniform(0.5, 30), a = uniform(-kPi, kPi);
+    return {p.x + r * std::cos(a), p.y + r * std::sin(a)};
+  }
+  RangeBearing observation() { return {uniform(0.2, 30), uniform(-kPi, kPi)}; }
+};
+
+// ---- the checked functions, one per Jacobian ---------------------------------------
+
+void expect_motion_jacobians(const Pose2& pose, const Pose2& u) {
+  Eigen::Matrix3d F_x, F_u;
+  motion(pose, u, &F_x, &F_u);
+  const auto f_x = [&](const Vec3& r) { return to_vec(motion(to_pose(r), u)); };
+  const auto f_u = [&](const Vec3& v) { return to_vec(motion(pose, to_pose(v))); };
+  const auto cx = check_jacobian(f_x, to_vec(pose), F_x, kThetaOutput);
+  const auto cu = check_jacobian(f_u, to_vec(u), F_u, kThetaOutput);
+  EXPECT_TRUE(cx.ok) << "F_x: " << cx.message;
+  EXPECT_TRUE(cu.ok) << "F_u: " << cu.message;
+}
+
+void expect_observe_jacobians(const Pose2& pose, const Vec2& l) {
+  Mat23 H_x;
+  Eigen::Matrix2d H_l;
+  observe(pose, l, &H_x, &H_l);
+  const auto f_x = [&](const Vec3& r) { return to_vec(observe(to_pose(r), l)); };
+  const auto f_l = [&](const Vec2& p) { return to_vec(observe(pose, p)); };
+  const auto cx = check_jacobian(f_x, to_vec(pose), H_x, kBearingOutput);
+  const auto cl = check_jacobian(f_l, l, H_l, kBearingOutput);
+  EXPECT_TRUE(cx.ok) << "H_x: " << cx.message;
+  EXPECT_TRUE(cl.ok) << "H_l: " << cl.message;
+}
+
+void expect_inverse_observe_jacobians(const Pose2& pose, const RangeBearing& z) {
+  Mat23 G_x;
+  Eigen::Matrix2d G_z;
+  inverse_observe(pose, z, &G_x, &G_z);
+  const auto g_x = [&](const Vec3& r) { return inverse_observe(to_pose(r), z); };
+  const auto g_z = [&](const Vec2& y) { return inverse_observe(pose, to_rb(y)); };
+  const auto cx = check_jacobian(g_x, to_vec(pose), G_x);
+  const auto cz = check_jacobian(g_z, to_vec(z), G_z);
+  EXPECT_TRUE(cx.ok) << "G_x: " << cx.message;
+  EXPECT_TRUE(cz.ok) << "G_z: " << cz.message;
+}
+
+// ---- the checker itself ---------------------------------------------------------------
+
+TEST(EkfJacobianChecker, ReportsAWrongJacobian) {
+  // GIVEN the correct F_u at a heading where every entry is far from zero
+  const Pose2 pose{1.0, 2.0, 0.3}, u{0.5, -0.2, 0.1};
+  Eigen::Matrix3d F_x, F_u;
+  motion(pose, u, &F_x, &F_u);
+  const auto f_u = [&](const Vec3& v) { return to_vec(motion(pose, to_pose(v))); };
+  ASSERT_TRUE(check_jacobian(f_u, to_vec(u), F_u, kThetaOutput).ok);
+  // WHEN one sign is flipped THEN the checker fails and says by how much
+  Eigen::Matrix3d wrong = F_u;
+  wrong(0, 1) = -wrong(0, 1);
+  const auto c = check_jacobian(f_u, to_vec(u), wrong, kThetaOutput);
+  EXPECT_FALSE(c.ok);
+  EXPECT_GT(c.max_error, 0.1);
+  EXPECT_NE(c.message.find("mismatch"), std::string::npos);
+}
+
+TEST(EkfJacobianChecker, ReportsNaNAsFailure) {
+  const auto f = [](const Vec2& v) { return Vec2(v(0) * v(1), v(0)); };
+  Eigen::Matrix2d J;
+  J << 2.0, 1.0, 1.0, 0.0;  // correct at (1, 2)
+  EXPECT_TRUE(check_jacobian(f, Vec2(1.0, 2.0), J).ok);
+  J(1, 1) = std::nan("");
+  EXPECT_FALSE(check_jacobian(f, Vec2(1.0, 2.0), J).ok);
+}
+
+TEST(EkfJacobianChecker, WrapsAngleOutputs) {
+  // An output sitting on the +-pi seam: without wrapping, the difference is ~2 pi.
+  const auto f = [](const Vec2& v) { return Vec2(v(0), wrap_angle(kPi + v(1))); };
+  Eigen::Matrix2d J = Eigen::Matrix2d::Identity();
+  EXPECT_TRUE(check_jacobian(f, Vec2(0.0, 0.0), J, 1u << 1).ok);
+  EXPECT_FALSE(check_jacobian(f, Vec2(0.0, 0.0), J, 0u).ok);
+}
+
+// ---- motion (eqs 3, 6) -----------------------------------------------------------------
+
+TEST(EkfModels, MotionJacobiansAtRandomPoints) {
+  Sampler s;
+  for (int k = 0; k < kRandomPoints; ++k) expect_motion_jacobians(s.pose(), s.increment());
+}
+
+TEST(EkfModels, MotionJacobiansAcrossThePiSeam) {
+  // Heading just below +pi, turning left: the new heading wraps to about -pi.
+  expect_motion_jacobians({1.0, -2.0, kPi - 1e-9}, {0.3, 0.1, 1e-7});
+  expect_motion_jacobians({1.0, -2.0, -kPi + 1e-9}, {0.3, 0.1, -1e-7});
+  expect_motion_jacobians({0.0, 0.0, kPi - 1e-9}, {0.0, 0.0, 0.0});
+}
+
+TEST(EkfModels, MotionIsCompose) {
+  const Pose2 pose{1.0, 2.0, kPi / 2}, u{1.0, 0.5, kPi};
+  const Pose2 next = motion(pose, u);
+  EXPECT_NEAR(next.x, 0.5, 1e-12);
+  EXPECT_NEAR(next.y, 3.0, 1e-12);
+  EXPECT_NEAR(next.theta, -kPi / 2, 1e-12);  // wrapped into [-pi, pi)
+}
+
+// ---- observation (eqs 7, 13) -----------------------------------------------------------
+
+TEST(EkfModels, ObserveJacobiansAtRandomPoints) {
+  Sampler s;
+  for (int k = 0; k < kRandomPoints; ++k) {
+    const Pose2 pose = s.pose();
+    expect_observe_jacobians(pose, s.landmark_near(pose));
+  }
+}
+
+TEST(EkfModels, ObserveJacobiansWithTheLandmarkBehind) {
+  // Landmark straight behind: bearing at +-pi, perturbations flip its sign.
+  expect_observe_jacobians({0.0, 0.0, 0.0}, {-5.0, 0.0});
+  expect_observe_jacobians({0.0, 0.0, 0.0}, {-5.0, 1e-9});
+  expect_observe_jacobians({0.0, 0.0, 0.0}, {-5.0, -1e-9});
+  expect_observe_jacobians({3.0, 4.0, kPi - 1e-9}, {8.0, 4.0});
+}
+
+TEST(EkfModels, ObserveValues) {
+  const RangeBearing z = observe({1.0, 1.0, kPi / 2}, {1.0, 3.0});
+  EXPECT_NEAR(z.range, 2.0, 1e-12);
+  EXPECT_NEAR(z.bearing, 0.0, 1e-12);
+  const RangeBearing behind = observe({0.0, 0.0, 0.0}, {-2.0, 0.0});
+  EXPECT_NEAR(std::abs(behind.bearing), kPi, 1e-12);
+  EXPECT_GE(behind.bearing, -kPi);
+  EXPECT_LT(behind.bearing, kPi);
+}
+
+TEST(EkfModels, ObserveAtTheRobotCentreIsFinite) {
+  Mat23 H_x;
+  Eigen::Matrix2d H_l;
+  // Exactly at the centre: documented singular point, range 0 and zero Jacobians.
+  const RangeBearing z0 = observe({2.0, 3.0, 0.4}, {2.0, 3.0}, &H_x, &H_l);
+  EXPECT_EQ(z0.range, 0.0);
+  EXPECT_TRUE(std::isfinite(z0.bearing));
+  EXPECT_TRUE(H_x.isZero(0.0));
+  EXPECT_TRUE(H_l.isZero(0.0));
+  // Very close: large but finite values, no NaN anywhere.
+  for (const double d : {1e-13, 1e-11, 1e-8, 1e-5}) {
+    const RangeBearing z = observe({2.0, 3.0, 0.4}, {2.0 + d, 3.0 - d}, &H_x, &H_l);
+    EXPECT_TRUE(std::isfinite(z.range) && std::isfinite(z.bearing)) << "d = " << d;
+    EXPECT_TRUE(H_x.allFinite() && H_l.allFinite()) << "d = " << d;
+  }
+}
+
+// ---- inverse observation (eq 15) -------------------------------------------------------
+
+TEST(EkfModels, InverseObserveJacobiansAtRandomPoints) {
+  Sampler s;
+  for (int k = 0; k < kRandomPoints; ++k) expect_inverse_observe_jacobians(s.pose(), s.observation());
+}
+
+TEST(EkfModels, InverseObserveJacobiansAcrossThePiSeam) {
+  expect_inverse_observe_jacobians({0.0, 0.0, kPi - 1e-9}, {5.0, kPi - 1e-9});
+  expect_inverse_observe_jacobians({0.0, 0.0, 0.0}, {5.0, -kPi});
+  expect_inverse_observe_jacobians({0.0, 0.0, 0.0}, {1e-9, 0.3});  // near-zero range
+}
+
+TEST(EkfModels, InverseObserveInvertsObserve) {
+  Sampler s;
+  for (int k = 0; k < kRandomPoints; ++k) {
+    const Pose2 pose = s.pose();
+    const Vec2 l = s.landmark_near(pose);
+    EXPECT_LT((inverse_observe(pose, observe(pose, l)) - l).norm(), 1e-9);
+  }
+}
+
+TEST(EkfModels, ObservationToLocal) {
+  Sampler s;
+  for (int k = 0; k < kRandomPoints; ++k) {
+    const RangeBearing z = s.observation();
+    Eigen::Matrix2d J;
+    const Vec2 p = observation_to_local(z, &J);
+    EXPECT_LT((p - transform_to(Pose2{1.0, -2.0, 0.7},
+                                inverse_observe({1.0, -2.0, 0.7}, z))).norm(), 1e-9);
+    const auto f = [](const Vec2& y) { return observation_to_local(to_rb(y)); };
+    const auto c = check_jacobian(f, to_vec(z), J);
+    EXPECT_TRUE(c.ok) << c.message;
+  }
+}
+
+// ---- odometry noise --------------------------------------------------------------------
+
+TEST(EkfModels, OdometryCovarianceHandComputed) {
+  const OdometryNoise noise{0.01, 0.02, 0.003};
+  // d = hypot(3, 4) = 5 m, |dtheta| = 0.5 rad:
+  //   v_t = 0.01 * 5 = 0.05 m^2,  v_r = 0.02 * 0.5 + 0.003 * 5 = 0.025 rad^2.
+  const Eigen::Matrix3d U = odometry_covariance({3.0, 4.0, -0.5}, noise);
+  Eigen::Matrix3d expected = Eigen::Matrix3d::Zero();
+  expected.diagonal() << 0.05, 0.05, 0.025;
+  EXPECT_LT((U - expected).cwiseAbs().maxCoeff(), 1e-15) << U;
+  // A pure turn: no translation variance beyond the floor.
+  const Eigen::Matrix3d turn = odometry_covariance({0.0, 0.0, 2.0}, noise);
+  EXPECT_EQ(turn(0, 0), 1e-12);
+  EXPECT_NEAR(turn(2, 2), 0.04, 1e-15);
+}
+
+TEST(EkfModels, OdometryCovarianceFlooredWhenStanding) {
+  const Eigen::Matrix3d U = odometry_covariance({0.0, 0.0, 0.0}, {0.01, 0.02, 0.003});
+  EXPECT_EQ(U(0, 0), 1e-12);
+  EXPECT_EQ(U(1, 1), 1e-12);
+  EXPECT_EQ(U(2, 2), 1e-12);
+  EXPECT_EQ(U(0, 1), 0.0);
+  EXPECT_GT(U.determinant(), 0.0);  // positive definite
+  // Zero noise model also gives the floor, not a singular U.
+  EXPECT_EQ(odometry_covariance({1.0, 0.0, 0.1}, OdometryNoise{})(2, 2), 1e-12);
+}
+
+}  // namespace
+}  // namespace elaslam
