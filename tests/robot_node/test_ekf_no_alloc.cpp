@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
+#include "../support/no_alloc.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 
 #ifndef EIGEN_RUNTIME_NO_MALLOC
@@ -25,66 +26,10 @@
 #error "test_ekf_no_alloc needs assertions (Eigen's guard is an eigen_assert)"
 #endif
 
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<long> g_allocations{0};
-
-void* counted_alloc(std::size_t size, std::size_t align) {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1);
-  if (size == 0) size = 1;
-  void* p = nullptr;
-  if (align <= alignof(std::max_align_t)) {
-    p = std::malloc(size);
-  } else if (posix_memalign(&p, align, size) != 0) {
-    p = nullptr;
-  }
-  return p;
-}
-void* counted_alloc_or_throw(std::size_t size, std::size_t align) {
-  void* p = counted_alloc(size, align);
-  if (p == nullptr) throw std::bad_alloc();
-  return p;
-}
-}  // namespace
-
-// Replacements of every allocating form of the global operator new.
-void* operator new(std::size_t n) { return counted_alloc_or_throw(n, 0); }
-void* operator new[](std::size_t n) { return counted_alloc_or_throw(n, 0); }
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return counted_alloc(n, 0); }
-void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return counted_alloc(n, 0); }
-void* operator new(std::size_t n, std::align_val_t a) {
-  return counted_alloc_or_throw(n, static_cast<std::size_t>(a));
-}
-void* operator new[](std::size_t n, std::align_val_t a) {
-  return counted_alloc_or_throw(n, static_cast<std::size_t>(a));
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-
 namespace elaslam {
 namespace {
 
-// Inside this scope any Eigen heap allocation aborts and every operator new is counted.
-class NoAllocRegion {
- public:
-  NoAllocRegion() {
-    g_allocations = 0;
-    Eigen::internal::set_is_malloc_allowed(false);
-    g_counting = true;
-  }
-  ~NoAllocRegion() {
-    g_counting = false;
-    Eigen::internal::set_is_malloc_allowed(true);
-  }
-  NoAllocRegion(const NoAllocRegion&) = delete;
-  NoAllocRegion& operator=(const NoAllocRegion&) = delete;
-};
+using test::NoAllocRegion;  // tests/support/no_alloc.hpp: Eigen guard + counting operator new
 
 int* volatile g_sink = nullptr;  // keeps the compiler from eliding new/delete pairs
 
@@ -161,7 +106,7 @@ TEST_P(EkfNoAlloc, FramePathAllocatesNothing) {
   {
     NoAllocRegion guard;
     run_frames(ekf, rng, 300, &tally);
-    allocations = g_allocations.load();
+    allocations = test::allocations_in_region();
   }
   EXPECT_EQ(allocations, 0);
   // The region really exercised every path.
@@ -186,7 +131,7 @@ TEST(EkfNoAllocGuard, CounterSeesAnAllocation) {
     NoAllocRegion guard;
     g_sink = new int(3);
     delete g_sink;
-    allocations = g_allocations.load();
+    allocations = test::allocations_in_region();
   }
   EXPECT_EQ(allocations, 1);
 }
