@@ -16,13 +16,17 @@ const TeamConfig& paper() {
   return c;
 }
 
-RunResult run(Mode mode, double dynamism, double speed, int seed) {
+TeamConfig config_for(Mode mode, double dynamism, double speed, int seed) {
   RunOverrides o;
   o.mode = mode;
   o.dynamism_percent = dynamism;
   o.landmark_speed_mps = speed;
   o.seed = seed;
-  return run_team(apply_overrides(paper(), o));
+  return apply_overrides(paper(), o);
+}
+
+RunResult run(Mode mode, double dynamism, double speed, int seed) {
+  return run_team(config_for(mode, dynamism, speed, seed));
 }
 
 TEST(TeamRun, StaticWorldEveryModeIsAccurate) {
@@ -66,12 +70,7 @@ TEST(TeamRun, AtFiftyPercentDynamismElaBeatsEkfOnTheMapAndEveryRobot) {
 
 // Simulator + one robot (robot 1 alone, no team): the robot node by itself.
 RunResult run_one_robot(Mode mode, double dynamism, double speed, int seed) {
-  RunOverrides o;
-  o.mode = mode;
-  o.dynamism_percent = dynamism;
-  o.landmark_speed_mps = speed;
-  o.seed = seed;
-  TeamConfig c = apply_overrides(paper(), o);
+  TeamConfig c = config_for(mode, dynamism, speed, seed);
   c.scenario.robots.resize(1);
   return run_team(c);
 }
