@@ -16,6 +16,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/LU>
+
 #include "ekf_kernels.hpp"
 #include "elaslam/common/stats.hpp"
 
@@ -219,6 +221,48 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
     return report;
   }
   apply_correction(inn.nu, inn.w);
+  return report;
+}
+
+UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
+  UpdateReport report;
+  int slot = -1;
+  report.status = locate(id, z, &slot);
+  if (report.status != EkfStatus::kOk) return report;
+  const Index off = Layout::landmark_offset(slot);
+  const Index n = state_dim();
+  Innovation inn;
+  report.status = innovate(P_, x_, off, W_, z, &inn);
+  if (report.status != EkfStatus::kOk) return report;
+  report.d2 = inn.d2;
+  report.innovation = inn.nu;
+  // P H^T (n x 2) from the robot columns (complete) and the landmark's columns.
+  lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
+  lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);
+  lm_cols_(off, 1) = P_(off + 1, off);
+  lm_cols_.block(off + 1, 1, n - off - 1, 1) = P_.col(off + 1).segment(off + 1, n - off - 1);
+  auto PHt = PHt_.topRows(n);
+  PHt.noalias() = P_.leftCols<3>().topRows(n) * inn.H.leftCols<3>().transpose();
+  PHt.noalias() += lm_cols_.topRows(n) * inn.H.rightCols<2>().transpose();
+  // K_l = (P H^T)_l Z^-1 with Z = L L^T.
+  const Eigen::Matrix2d Z = inn.L * inn.L.transpose();
+  const Eigen::Matrix2d K_l = PHt.middleRows<2>(off) * Z.inverse();
+  Eigen::Matrix2d P_ll = P_.block<2, 2>(off, off).selfadjointView<Eigen::Lower>();
+  P_ll -= K_l * Z * K_l.transpose();
+  P_ll = 0.5 * (P_ll + P_ll.transpose()).eval();
+  const Eigen::Vector2d x_l = x_.segment<2>(off) + K_l * inn.nu;
+  if (!x_l.allFinite() || !P_ll.allFinite() || (P_ll.diagonal().array() < 0.0).any()) {
+    report.status = EkfStatus::kCovarianceFault;
+    return report;
+  }
+  // Row block l in lower storage: columns before it along its rows, rows after it
+  // down its columns.
+  P_.block(off, 0, 2, off).noalias() -= K_l * PHt.topRows(off).transpose();
+  const Index below = n - off - 2;
+  if (below > 0) P_.block(off + 2, off, below, 2).noalias() -= PHt.bottomRows(below) * K_l.transpose();
+  P_.block<2, 2>(off, off) = P_ll;
+  x_.segment<2>(off) = x_l;
+  upper_stale_ = true;
   return report;
 }
 

@@ -278,8 +278,11 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
       gates_.push_back({id, GateKind::kCandidate, r.d2, candidate_threshold_, inside});
       if (inside) {
         out_count_[static_cast<std::size_t>(id)] = 0;
-        if (++e.consistent_sightings >= (e.was_moving ? options_.return_frames : options_.confirm_frames))
+        if (++e.consistent_sightings >= (e.was_moving ? options_.return_frames : options_.confirm_frames)) {
           confirm(id, o.z, s);
+        } else if (options_.candidate_updates && ekf_.update_landmark_only(id, o.z).status != EkfStatus::kOk) {
+          ++s->filter_faults;
+        }
         continue;
       }
       ekf_.remove_landmark(id);

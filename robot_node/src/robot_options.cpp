@@ -45,6 +45,7 @@ void parse(config::Reader& r, RobotOptions* o) {
     e.read("gate_probability", &o->ela_gate_probability, 0.5, 1.0 - 1e-9);
     e.read("confirm_frames", &o->confirm_frames, 1, 1000);
     e.read("return_frames", &o->return_frames, 1, 1000);
+    e.read_optional("candidate_updates", &o->candidate_updates);
     e.read("moving_after", &o->moving_after, 1, 1000);
     e.read("missing_frames", &o->missing_frames, 0, 1000);
     e.read("sensor_range_m", &o->sensor_range, 0.01, 1000.0);
@@ -65,7 +66,7 @@ RobotOptions load_robot_options(const std::string& path, std::string* effective_
   config::Document doc = config::Document::from_file(path);
   RobotOptions o;
   doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow({"scenario", "main", "lcm", "team"});
+  doc.allow({"scenario", "main", "lcm", "team", "dataset"});
   doc.finish();
   if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;

@@ -65,6 +65,24 @@ class DenseEkf {
       P_ = (P_ - K * Z * K.transpose()).eval();
     }
   }
+  // Schmidt ("consider") update of landmark `id` alone: the textbook gain with
+  // every row but the landmark's zeroed, and the Joseph form (valid for any gain).
+  void update_landmark_only(int id, const RangeBearing& y) {
+    const Eigen::Index n = X_.size(), off = offset(id);
+    Eigen::Matrix<double, 2, 3> H_x;
+    Eigen::Matrix2d H_l;
+    const RangeBearing h = observe(pose(), X_.segment<2>(off), &H_x, &H_l);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
+    H.leftCols<3>() = H_x;
+    H.middleCols<2>(off) = H_l;
+    const Vec2 nu(y.range - h.range, wrap_angle(y.bearing - h.bearing));
+    const Eigen::Matrix2d Z = H * P_ * H.transpose() + W_;
+    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, 2);
+    K.middleRows<2>(off) = (P_ * H.transpose() * Z.inverse()).middleRows<2>(off);
+    X_ += K * nu;
+    const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
+    P_ = (IKH * P_ * IKH.transpose() + K * W_ * K.transpose()).eval();
+  }
   void add(int id, const RangeBearing& y) {
     const Eigen::Index n = X_.size();
     Eigen::Matrix<double, 2, 3> G_x;

@@ -67,6 +67,59 @@ INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfKnownAnswer, ::testing::Bool(),
                            return i.param ? std::string("Joseph") : std::string("Standard");
                          });
 
+// The landmark-only (consider) update used for candidates: it must equal the dense
+// Schmidt-Kalman update, leave the robot's mean and covariance and every other
+// landmark's marginal exactly as they were, and shrink the landmark's covariance.
+TEST(EkfSlam, LandmarkOnlyUpdateMatchesTheDenseSchmidtUpdate) {
+  for (const bool joseph : {true, false}) {
+    // GIVEN a filter and its dense reference after random operations
+    const EkfOptions o = small_options(joseph);
+    EkfSlam ekf(o);
+    DenseEkf ref(o);
+    RandomWorld w(0x5C4D1D7 + (joseph ? 1 : 0));
+    const Eigen::Matrix3d P0 = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+    ekf.reset(w.truth, P0);
+    ref.reset(w.truth, P0);
+    int checked = 0;
+    for (int k = 0; k < 300; ++k) {
+      random_operation(w, ekf, &ref, o.capacity);
+      if (ekf.num_landmarks() < 2) continue;
+      // WHEN one landmark is corrected alone
+      const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
+      const int other = ekf.id_at((ekf.slot_of(id) + 1) % ekf.num_landmarks());
+      const RangeBearing z = w.sense(id, o);
+      const Eigen::Vector3d x_before = ekf.mean().head<3>();
+      const Eigen::Matrix3d pose_cov = ekf.pose_cov();
+      const Vec2 other_mean = ekf.landmark(other);
+      const Eigen::Matrix2d other_cov = ekf.landmark_cov(other);
+      const Eigen::Matrix2d lm_cov = ekf.landmark_cov(id);
+      ASSERT_EQ(ekf.update_landmark_only(id, z).status, EkfStatus::kOk);
+      ref.update_landmark_only(id, z);
+      // THEN it matches the dense reference, and only the landmark has changed
+      ASSERT_LT(max_difference(ekf, ref), 1e-9) << "operation " << k;
+      EXPECT_EQ(ekf.mean().head<3>(), x_before);
+      EXPECT_EQ(ekf.pose_cov(), pose_cov);
+      EXPECT_EQ(ekf.landmark(other), other_mean);
+      EXPECT_EQ(ekf.landmark_cov(other), other_cov);
+      EXPECT_LT(ekf.landmark_cov(id).trace(), lm_cov.trace());
+      ++checked;
+    }
+    EXPECT_GE(checked, 100);
+  }
+}
+
+TEST(EkfSlam, LandmarkOnlyUpdateRefusesUnknownAndBadInput) {
+  const EkfOptions o = small_options(true);
+  EkfSlam ekf(o);
+  ekf.reset({0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+  ASSERT_EQ(ekf.add_landmark(3, {2.0, 0.1}), EkfStatus::kOk);
+  const Eigen::VectorXd x = ekf.mean();
+  EXPECT_EQ(ekf.update_landmark_only(4, {2.0, 0.1}).status, EkfStatus::kUnknownLandmark);
+  EXPECT_EQ(ekf.update_landmark_only(3, {-1.0, 0.1}).status, EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.update_landmark_only(3, {2.0, std::nan("")}).status, EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.mean(), x);
+}
+
 // EkfSlam keeps the lower triangle of P current and completes the upper one when
 // covariance() is called; the block accessors read the lower triangle only. They
 // must agree with the completed view, which must be a covariance.

@@ -82,6 +82,16 @@ class EkfSlam {
   /// options.gate_probability is refused with kGated (filter unchanged).
   UpdateReport update(int id, const RangeBearing& z, bool gate = false);
 
+  /// Correction of landmark `id` alone (a Schmidt-Kalman "consider" update): the
+  /// gain is the optimal one for the landmark's two rows and zero for every other
+  /// state, so the robot and the other landmarks keep their means and their
+  /// covariance block, while the landmark's mean, covariance and cross-covariances
+  /// are corrected: P_l. <- P_l. - K_l (H P), P_ll <- P_ll - K_l Z K_l^T. It is the
+  /// Joseph form with that gain, so P stays consistent (never more confident than
+  /// the measurements justify). Used for candidates that must not yet steer the
+  /// robot. O(n).
+  UpdateReport update_landmark_only(int id, const RangeBearing& z);
+
   /// Add landmark `id` by inverse observation (eq 15) with Jacobian augmentation.
   EkfStatus add_landmark(int id, const RangeBearing& z);
 

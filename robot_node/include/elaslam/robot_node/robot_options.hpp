@@ -23,6 +23,9 @@ struct RobotOptions {
   double ela_gate_probability = 0.99;   // chi-square probability of the ELA / consensus tests
   int confirm_frames = 3;               // consistent sightings before a candidate becomes STATIC
   int return_frames = 6;                // the same for a landmark that has been MOVING
+  /// Consistent candidate sightings refine the candidate's own estimate (a
+  /// landmark-only "consider" update) while the robot's pose stays untouched.
+  bool candidate_updates = true;
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
   int missing_frames = 3;               // expected-but-unseen frames before MOVING (0: rule off)
   double sensor_range = 4.0;            // [m] radius of the field of view (D / 2)
