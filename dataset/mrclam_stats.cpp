@@ -1,0 +1,322 @@
+// mrclam_stats: sensor and odometry noise of a UTIAS MRCLAM recording, measured
+// against its Vicon ground truth, to choose the noise values of config/mrclam.yaml.
+//   mrclam_stats --dataset DIR [--robots 1,2,3,4,5] [--rate F] [--json FILE]
+//
+// Range/bearing: every measurement of a static landmark (subjects 6-20) whose time
+// lies inside the robot's ground truth, against the range and bearing predicted from
+// the Vicon pose interpolated at that time; residual = measured - predicted (bearing
+// wrapped). Per robot and overall: count, median, robust sigma (1.4826 MAD), the
+// plain std of the residuals within 5 robust sigmas of the median, and the fraction
+// outside (outliers: misreads, occlusions).
+// Odometry: each robot alone over its own full window (FrameSource with one robot at
+// --rate). Scale = path length of the dead-reckoned odometer / of Vicon, both sampled
+// at the frames. Noise: consecutive windows of >= 1 m driven (Vicon); in each, the
+// odometer increment minus the Vicon increment (both in the frame of the robot at the
+// window start): along track, across track, heading. var per m = variance / mean
+// window length (about the mean: the scale bias excluded); ms per m = mean square /
+// mean window length (bias included: what a filter that models no bias should use).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "elaslam/dataset/mrclam.hpp"
+
+namespace {
+
+using namespace elaslam;
+using nlohmann::json;
+
+struct Robust {
+  long count = 0;
+  double median = 0.0, robust_sigma = 0.0, std_inliers = 0.0, mean_inliers = 0.0, outlier_fraction = 0.0;
+};
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const std::size_t n = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n), v.end());
+  const double hi = v[n];
+  if (v.size() % 2) return hi;
+  return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n)));
+}
+
+Robust robust(const std::vector<double>& r) {
+  Robust s;
+  s.count = static_cast<long>(r.size());
+  if (r.empty()) return s;
+  s.median = median_of(r);
+  std::vector<double> dev(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) dev[i] = std::fabs(r[i] - s.median);
+  s.robust_sigma = 1.4826 * median_of(dev);
+  double sum = 0.0, sum2 = 0.0;
+  long n = 0;
+  for (double x : r)
+    if (std::fabs(x - s.median) <= 5.0 * s.robust_sigma) {
+      sum += x;
+      sum2 += x * x;
+      ++n;
+    }
+  if (n > 1) {
+    s.mean_inliers = sum / static_cast<double>(n);
+    s.std_inliers = std::sqrt(std::max(0.0, (sum2 - sum * s.mean_inliers) / static_cast<double>(n - 1)));
+  }
+  s.outlier_fraction = 1.0 - static_cast<double>(n) / static_cast<double>(r.size());
+  return s;
+}
+
+json to_json(const Robust& s) {
+  return {{"count", s.count},          {"median", s.median},           {"robust_sigma", s.robust_sigma},
+          {"std_inliers", s.std_inliers}, {"mean_inliers", s.mean_inliers}, {"outlier_fraction", s.outlier_fraction}};
+}
+
+struct Residuals {
+  std::vector<double> range, bearing;
+};
+
+/// Range and bearing residuals of one robot's static-landmark measurements.
+Residuals sensor_residuals(const mrclam::Dataset& d, const mrclam::RobotSeries& s) {
+  Residuals out;
+  std::size_t hint = 0;
+  for (const mrclam::Measurement& z : s.measurements) {
+    const int subject = d.subject_of_barcode(z.barcode);
+    if (subject < mrclam::kFirstLandmarkSubject) continue;
+    const auto lm = std::find_if(d.landmarks().begin(), d.landmarks().end(),
+                                 [subject](const mrclam::LandmarkTruth& l) { return l.subject == subject; });
+    Pose2 T;
+    if (lm == d.landmarks().end() || !mrclam::interpolate(s.ground_truth, z.utime, &T, &hint)) continue;
+    const double dx = lm->x - T.x, dy = lm->y - T.y;
+    out.range.push_back(z.range - std::hypot(dx, dy));
+    out.bearing.push_back(wrap_angle(z.bearing - (std::atan2(dy, dx) - T.theta)));
+  }
+  return out;
+}
+
+struct OdoNoise {
+  double odo_path_m = 0.0, vicon_path_m = 0.0, duration_s = 0.0;
+  long windows = 0;
+  double mean_window_m = 0.0;
+  double along_mean = 0.0, along_var_per_m = 0.0, along_ms_per_m = 0.0;
+  double across_mean = 0.0, across_var_per_m = 0.0, across_ms_per_m = 0.0;
+  double heading_mean = 0.0, heading_var_per_m = 0.0, heading_ms_per_m = 0.0;
+  // heading error^2 ~ rot_per_rad |turned| + rot_per_m |driven| (least squares, >= 0).
+  double fit_rot_per_rad = 0.0, fit_rot_per_m = 0.0;
+};
+
+void moments(const std::vector<double>& e, double len, double* mean, double* var_per_m, double* ms_per_m) {
+  double s = 0.0, s2 = 0.0;
+  for (double x : e) {
+    s += x;
+    s2 += x * x;
+  }
+  const double n = static_cast<double>(e.size());
+  if (e.size() < 2) return;
+  *mean = s / n;
+  *var_per_m = (s2 - s * *mean) / (n - 1.0) / len;
+  *ms_per_m = s2 / n / len;
+}
+
+/// Least squares y ~ a x1 + b x2 with a, b >= 0.
+void fit_nonneg(const std::vector<double>& x1, const std::vector<double>& x2, const std::vector<double>& y, double* a,
+                double* b) {
+  double s11 = 0, s12 = 0, s22 = 0, s1y = 0, s2y = 0;
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    s11 += x1[i] * x1[i];
+    s12 += x1[i] * x2[i];
+    s22 += x2[i] * x2[i];
+    s1y += x1[i] * y[i];
+    s2y += x2[i] * y[i];
+  }
+  const double det = s11 * s22 - s12 * s12;
+  *a = det > 0 ? (s1y * s22 - s2y * s12) / det : -1.0;
+  *b = det > 0 ? (s2y * s11 - s1y * s12) / det : -1.0;
+  if (*a < 0.0 || *b < 0.0) {  // one term alone, the better of the two
+    const double a1 = s11 > 0 ? std::max(0.0, s1y / s11) : 0.0, b1 = s22 > 0 ? std::max(0.0, s2y / s22) : 0.0;
+    double r1 = 0, r2 = 0;
+    for (std::size_t i = 0; i < y.size(); ++i) {
+      r1 += std::pow(y[i] - a1 * x1[i], 2);
+      r2 += std::pow(y[i] - b1 * x2[i], 2);
+    }
+    *a = r1 <= r2 ? a1 : 0.0;
+    *b = r1 <= r2 ? 0.0 : b1;
+  }
+}
+
+OdoNoise odometry_noise(const mrclam::Dataset& d, int id, double rate_hz) {
+  mrclam::Options o;
+  o.robots = {id};
+  o.rate_hz = rate_hz;
+  const mrclam::FrameSource src(d, o);
+  OdoNoise r;
+  const int n = src.num_frames();
+  r.duration_s = static_cast<double>(n - 1) / rate_hz;
+  std::vector<double> along, across, heading, turned, driven;
+  int a = 0;
+  double win = 0.0;
+  for (int k = 1; k < n; ++k) {
+    const Pose2 &o0 = src.odometer(0, k - 1), &o1 = src.odometer(0, k);
+    const Pose2 &g0 = src.true_pose(0, k - 1), &g1 = src.true_pose(0, k);
+    const double step = std::hypot(g1.x - g0.x, g1.y - g0.y);
+    r.odo_path_m += std::hypot(o1.x - o0.x, o1.y - o0.y);
+    r.vicon_path_m += step;
+    win += step;
+    if (win >= 1.0) {
+      const Pose2 dodo = between(src.odometer(0, a), o1), dgt = between(src.true_pose(0, a), g1);
+      along.push_back(dodo.x - dgt.x);
+      across.push_back(dodo.y - dgt.y);
+      heading.push_back(wrap_angle(dodo.theta - dgt.theta));
+      // Heading turned (Vicon), summed over the frames of the window.
+      double t = 0.0;
+      for (int j = a + 1; j <= k; ++j)
+        t += std::fabs(wrap_angle(src.true_pose(0, j).theta - src.true_pose(0, j - 1).theta));
+      turned.push_back(t);
+      driven.push_back(win);
+      a = k;
+      win = 0.0;
+    }
+  }
+  r.windows = static_cast<long>(along.size());
+  if (r.windows < 2) return r;
+  double len = 0.0;
+  for (double x : driven) len += x;
+  r.mean_window_m = len / static_cast<double>(r.windows);
+  moments(along, r.mean_window_m, &r.along_mean, &r.along_var_per_m, &r.along_ms_per_m);
+  moments(across, r.mean_window_m, &r.across_mean, &r.across_var_per_m, &r.across_ms_per_m);
+  moments(heading, r.mean_window_m, &r.heading_mean, &r.heading_var_per_m, &r.heading_ms_per_m);
+  std::vector<double> h2(heading.size());
+  for (std::size_t i = 0; i < heading.size(); ++i) h2[i] = heading[i] * heading[i];
+  fit_nonneg(turned, driven, h2, &r.fit_rot_per_rad, &r.fit_rot_per_m);
+  return r;
+}
+
+json to_json(const OdoNoise& r) {
+  return {{"odometer_path_m", r.odo_path_m},
+          {"vicon_path_m", r.vicon_path_m},
+          {"scale", r.vicon_path_m > 0 ? r.odo_path_m / r.vicon_path_m : 0.0},
+          {"duration_s", r.duration_s},
+          {"windows", r.windows},
+          {"mean_window_m", r.mean_window_m},
+          {"along", {{"mean_m", r.along_mean}, {"var_per_m", r.along_var_per_m}, {"ms_per_m", r.along_ms_per_m}}},
+          {"across", {{"mean_m", r.across_mean}, {"var_per_m", r.across_var_per_m}, {"ms_per_m", r.across_ms_per_m}}},
+          {"heading",
+           {{"mean_rad", r.heading_mean}, {"var_per_m", r.heading_var_per_m}, {"ms_per_m", r.heading_ms_per_m}}},
+          {"fit_heading_ms", {{"rot_per_rad", r.fit_rot_per_rad}, {"rot_per_m", r.fit_rot_per_m}}}};
+}
+
+void print_sensor_row(const char* who, const Robust& rg, const Robust& br) {
+  std::printf("%-8s %7ld %9.4f %9.4f %9.4f %7.2f%% | %9.5f %9.5f %9.5f %7.2f%%\n", who, rg.count, rg.median,
+              rg.robust_sigma, rg.std_inliers, 100.0 * rg.outlier_fraction, br.median, br.robust_sigma,
+              br.std_inliers, 100.0 * br.outlier_fraction);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string dataset_dir, robots = "1,2,3,4,5", json_path;
+  double rate = 10.0;
+  CLI::App app{"elaslam mrclam_stats: sensor and odometry noise of an MRCLAM recording against Vicon"};
+  app.add_option("--dataset", dataset_dir, "dataset directory")->required()->check(CLI::ExistingDirectory);
+  app.add_option("--robots", robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
+  app.add_option("--rate", rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--json", json_path, "also write the numbers as JSON");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  std::vector<int> ids;
+  std::string why;
+  if (!mrclam::parse_robot_list(robots, &ids, &why)) {
+    std::fprintf(stderr, "mrclam_stats: --robots: %s\n", why.c_str());
+    return 2;
+  }
+  json out;
+  out["dataset"] = dataset_dir;
+  out["rate_hz"] = rate;
+  try {
+    const mrclam::Dataset d = mrclam::Dataset::load(dataset_dir, ids);
+    Residuals all;
+    std::vector<OdoNoise> odo;
+    std::printf("Range / bearing residuals (measured - predicted from Vicon), static landmarks 6-20\n");
+    std::printf("%-8s %7s %9s %9s %9s %8s | %9s %9s %9s %8s\n", "robot", "count", "rng_med", "rng_rsig",
+                "rng_std5", "rng_out", "brg_med", "brg_rsig", "brg_std5", "brg_out");
+    for (int id : ids) {
+      const Residuals r = sensor_residuals(d, d.robot(id));
+      const Robust rg = robust(r.range), br = robust(r.bearing);
+      print_sensor_row(("R" + std::to_string(id)).c_str(), rg, br);
+      out["robots"][std::to_string(id)]["range_m"] = to_json(rg);
+      out["robots"][std::to_string(id)]["bearing_rad"] = to_json(br);
+      all.range.insert(all.range.end(), r.range.begin(), r.range.end());
+      all.bearing.insert(all.bearing.end(), r.bearing.begin(), r.bearing.end());
+      odo.push_back(odometry_noise(d, id, rate));
+      out["robots"][std::to_string(id)]["odometry"] = to_json(odo.back());
+    }
+    const Robust rg = robust(all.range), br = robust(all.bearing);
+    print_sensor_row("all", rg, br);
+    out["overall"]["range_m"] = to_json(rg);
+    out["overall"]["bearing_rad"] = to_json(br);
+
+    std::printf("\nOdometry (each robot over its own window, frames at %.3g Hz; windows of >= 1 m driven)\n", rate);
+    std::printf("%-6s %8s %9s %9s %6s %7s | %9s %9s %9s | %9s %9s | %9s %9s %9s | %9s %9s\n", "robot", "time_s",
+                "odo_m", "vicon_m", "scale", "windows", "along_mu", "along_var", "along_ms", "cross_var",
+                "cross_ms", "head_mu", "head_var", "head_ms", "fit_rad", "fit_m");
+    double w_sum = 0, trans_ms = 0, trans_var = 0, head_ms = 0, head_var = 0, fit_rad = 0, fit_m = 0;
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      const OdoNoise& r = odo[i];
+      std::printf("R%-5d %8.1f %9.2f %9.2f %6.3f %7ld | %9.4f %9.5f %9.5f | %9.5f %9.5f | %9.4f %9.5f %9.5f | %9.5f %9.5f\n",
+                  ids[i], r.duration_s, r.odo_path_m, r.vicon_path_m, r.odo_path_m / r.vicon_path_m, r.windows,
+                  r.along_mean, r.along_var_per_m, r.along_ms_per_m, r.across_var_per_m, r.across_ms_per_m,
+                  r.heading_mean, r.heading_var_per_m, r.heading_ms_per_m, r.fit_rot_per_rad, r.fit_rot_per_m);
+      const double w = static_cast<double>(r.windows);
+      w_sum += w;
+      trans_ms += w * 0.5 * (r.along_ms_per_m + r.across_ms_per_m);
+      trans_var += w * 0.5 * (r.along_var_per_m + r.across_var_per_m);
+      head_ms += w * r.heading_ms_per_m;
+      head_var += w * r.heading_var_per_m;
+      fit_rad += w * r.fit_rot_per_rad;
+      fit_m += w * r.fit_rot_per_m;
+    }
+    if (w_sum > 0) {
+      trans_ms /= w_sum, trans_var /= w_sum, head_ms /= w_sum, head_var /= w_sum, fit_rad /= w_sum, fit_m /= w_sum;
+    }
+    std::printf("\nSuggested (window-weighted over robots):\n");
+    std::printf("  range_sigma_m     %.4f  (std within 5 robust sigmas; robust sigma %.4f)\n", rg.std_inliers,
+                rg.robust_sigma);
+    std::printf("  bearing_sigma_rad %.5f (%.3f deg; robust sigma %.5f)\n", br.std_inliers,
+                br.std_inliers * 180.0 / kPi, br.robust_sigma);
+    std::printf("  odom_var_trans_per_m %.5f  (mean square, along+across / 2; about the mean: %.5f)\n", trans_ms,
+                trans_var);
+    std::printf("  odom_var_rot_per_m   %.5f  (heading mean square per m; about the mean: %.5f)\n", head_ms, head_var);
+    std::printf("  fit heading^2 = %.5f |turned rad| + %.5f |driven m|  (odom_var_rot_per_rad, odom_var_rot_per_m)\n",
+                fit_rad, fit_m);
+    out["suggested"] = {{"range_sigma_m", rg.std_inliers},
+                        {"bearing_sigma_rad", br.std_inliers},
+                        {"odom_var_trans_per_m", trans_ms},
+                        {"odom_var_trans_per_m_about_mean", trans_var},
+                        {"odom_var_rot_per_m", head_ms},
+                        {"odom_var_rot_per_m_about_mean", head_var},
+                        {"fit_odom_var_rot_per_rad", fit_rad},
+                        {"fit_odom_var_rot_per_m", fit_m}};
+  } catch (const mrclam::DatasetError& e) {
+    std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
+    return 1;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
+    return 2;
+  }
+  if (!json_path.empty()) {
+    std::ofstream f(json_path);
+    f << out.dump(2) << "\n";
+    if (!f) {
+      std::fprintf(stderr, "mrclam_stats: cannot write %s\n", json_path.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}
