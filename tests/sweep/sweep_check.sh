@@ -35,3 +35,22 @@ for line in t1.splitlines():
         assert abs(statistics.mean(vals) - float(shown)) < 0.0006, (mode, m.group(1), shown, vals)
 print("sweep files consistent")
 PY
+# tools/plot_sweep.py on the reduced grid: every figure written, each a PNG.
+PY="$ROOT/.venv/bin/python"
+if [ -x "$PY" ]; then
+  "$PY" "$ROOT/tools/plot_sweep.py" "$OUT/j1" --out "$OUT/plots" >"$OUT/plot.log" 2>&1 \
+    || { echo "plot_sweep.py failed:"; cat "$OUT/plot.log"; exit 1; }
+  for f in fig4_map fig5_landmark_error fig6_robot_error fig6b_error_vs_speed fig7_error_over_time fig8_uncertainty detection; do
+    png="$OUT/plots/$f.png"
+    [ -s "$png" ] || { echo "plot_sweep.py did not write $f.png"; cat "$OUT/plot.log"; exit 1; }
+    [ "$(head -c 8 "$png" | od -An -tx1 | tr -d ' \n')" = "89504e470d0a1a0a" ] || { echo "$f.png is not a PNG"; exit 1; }
+  done
+  # A missing input column is an error that names the column.
+  sed '1s/,recall,/,recal,/' "$OUT/j1/runs.csv" >"$OUT/bad.csv" && mkdir -p "$OUT/bad" && mv "$OUT/bad.csv" "$OUT/bad/runs.csv"
+  cp "$OUT/j1/frames.csv" "$OUT/bad/"
+  if "$PY" "$ROOT/tools/plot_sweep.py" "$OUT/bad" >"$OUT/bad.log" 2>&1; then echo "plot_sweep.py accepted a runs.csv without recall"; exit 1; fi
+  grep -q "recall" "$OUT/bad.log" || { echo "plot_sweep.py error does not name the missing column:"; cat "$OUT/bad.log"; exit 1; }
+  echo "plots written: $(ls "$OUT/plots" | tr '\n' ' ')"
+else
+  echo "plot check skipped: no $PY (tools/setup.sh makes it)"
+fi
