@@ -34,7 +34,7 @@ GlobalMapOptions load_options(const std::string& path) {
   config::Document doc = config::Document::from_file(path);
   GlobalMapOptions o;
   doc.section("main", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow({"scenario", "robot", "lcm", "team"});
+  doc.allow({"scenario", "robot", "lcm", "team", "dataset"});
   doc.finish();
   return o;
 }
