@@ -77,8 +77,84 @@ json to_json(const Robust& s) {
 }
 
 struct Residuals {
-  std::vector<double> range, bearing;
+  std::vector<double> range, bearing;           // residuals
+  std::vector<double> measured_range, measured_bearing;
 };
+
+/// Range scale calibration: fit range residual = r (k0 + k1 b^2) by least squares
+/// over the measurements with |range residual| < 1 m and |bearing residual| < 0.1
+/// rad (r, b as measured); the importer divides each range by 1 + k0 + k1 b^2.
+/// How far the velocity commands lead the motion: the delay d [s] for
+/// which the command in force at t - d best matches Vicon's angular rate at t (least
+/// squares over a 50 Hz grid, d in [-0.5, 0.8] s by 0.02 s).
+double odometry_lag(const mrclam::RobotSeries& s) {
+  const auto& gt = s.ground_truth;
+  const auto& od = s.odometry;
+  if (gt.size() < 2 || od.size() < 2) return 0.0;
+  const std::int64_t t0 = std::max(gt.front().utime, od.front().utime) + 5'000'000;
+  const std::int64_t t1 = std::min(gt.back().utime, od.back().utime) - 5'000'000;
+  constexpr std::int64_t kStep = 20'000;
+  std::vector<std::int64_t> t;
+  std::vector<double> rate;
+  std::size_t hint = 0;
+  Pose2 prev;
+  bool have_prev = false;
+  for (std::int64_t u = t0; u <= t1; u += kStep) {
+    Pose2 p;
+    if (!mrclam::interpolate(gt, u, &p, &hint)) continue;
+    if (have_prev) {
+      t.push_back(u);
+      rate.push_back(wrap_angle(p.theta - prev.theta) / (kStep * 1e-6));
+    }
+    prev = p;
+    have_prev = true;
+  }
+  double best_lag = 0.0, best_err = HUGE_VAL;
+  for (int i = -25; i <= 40; ++i) {
+    const std::int64_t lag = i * kStep;
+    double err = 0.0;
+    std::size_t c = 0;
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      while (c + 1 < od.size() && od[c + 1].utime <= t[k] - lag) ++c;
+      const double e = od[c].w - rate[k];
+      err += e * e;
+    }
+    if (err < best_err) best_err = err, best_lag = lag * 1e-6;
+  }
+  return best_lag;
+}
+
+struct RangeScale {
+  double k0 = 0.0, k1 = 0.0, std_before = 0.0, std_after = 0.0;
+  long used = 0;
+};
+RangeScale fit_range_scale(const Residuals& r) {
+  double a00 = 0, a01 = 0, a11 = 0, y0 = 0, y1 = 0;
+  std::vector<std::size_t> in;
+  for (std::size_t i = 0; i < r.range.size(); ++i) {
+    if (!(std::fabs(r.range[i]) < 1.0 && std::fabs(r.bearing[i]) < 0.1)) continue;
+    in.push_back(i);
+    const double x0 = r.measured_range[i], x1 = r.measured_range[i] * r.measured_bearing[i] * r.measured_bearing[i];
+    a00 += x0 * x0, a01 += x0 * x1, a11 += x1 * x1, y0 += x0 * r.range[i], y1 += x1 * r.range[i];
+  }
+  RangeScale f;
+  f.used = static_cast<long>(in.size());
+  const double det = a00 * a11 - a01 * a01;
+  if (in.size() < 3 || !(std::fabs(det) > 0.0)) return f;
+  f.k0 = (a11 * y0 - a01 * y1) / det;
+  f.k1 = (a00 * y1 - a01 * y0) / det;
+  double s0 = 0, q0 = 0, s1 = 0, q1 = 0;
+  for (std::size_t i : in) {
+    const double b = r.measured_bearing[i];
+    const double corrected = r.measured_range[i] / (1.0 + f.k0 + f.k1 * b * b);
+    const double e1 = r.range[i] - (r.measured_range[i] - corrected);
+    s0 += r.range[i], q0 += r.range[i] * r.range[i], s1 += e1, q1 += e1 * e1;
+  }
+  const double n = static_cast<double>(in.size());
+  f.std_before = std::sqrt(std::max(0.0, q0 / n - (s0 / n) * (s0 / n)));
+  f.std_after = std::sqrt(std::max(0.0, q1 / n - (s1 / n) * (s1 / n)));
+  return f;
+}
 
 /// Range and bearing residuals of one robot's static-landmark measurements.
 Residuals sensor_residuals(const mrclam::Dataset& d, const mrclam::RobotSeries& s) {
@@ -94,6 +170,8 @@ Residuals sensor_residuals(const mrclam::Dataset& d, const mrclam::RobotSeries& 
     const double dx = lm->x - T.x, dy = lm->y - T.y;
     out.range.push_back(z.range - std::hypot(dx, dy));
     out.bearing.push_back(wrap_angle(z.bearing - (std::atan2(dy, dx) - T.theta)));
+    out.measured_range.push_back(z.range);
+    out.measured_bearing.push_back(z.bearing);
   }
   return out;
 }
@@ -218,13 +296,17 @@ void print_sensor_row(const char* who, const Robust& rg, const Robust& br) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string dataset_dir, robots = "1,2,3,4,5", json_path;
+  std::string dataset_dir, robots = "1,2,3,4,5", json_path, config_path;
   double rate = 10.0;
   CLI::App app{"elaslam mrclam_stats: sensor and odometry noise of an MRCLAM recording against Vicon"};
   app.add_option("--dataset", dataset_dir, "dataset directory")->required()->check(CLI::ExistingDirectory);
   app.add_option("--robots", robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
   app.add_option("--rate", rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
   app.add_option("--json", json_path, "also write the numbers as JSON");
+  app.add_option("--config", config_path,
+                 "also measure the residuals of the frames as the filter receives them, imported with this "
+                 "config's dataset section (calibration, motion compensation, odometry delay)")
+      ->check(CLI::ExistingFile);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -243,6 +325,7 @@ int main(int argc, char** argv) {
     const mrclam::Dataset d = mrclam::Dataset::load(dataset_dir, ids);
     Residuals all;
     std::vector<OdoNoise> odo;
+    std::vector<double> lags;
     std::printf("Range / bearing residuals (measured - predicted from Vicon), static landmarks 6-20\n");
     std::printf("%-8s %7s %9s %9s %9s %8s | %9s %9s %9s %8s\n", "robot", "count", "rng_med", "rng_rsig",
                 "rng_std5", "rng_out", "brg_med", "brg_rsig", "brg_std5", "brg_out");
@@ -254,13 +337,61 @@ int main(int argc, char** argv) {
       out["robots"][std::to_string(id)]["bearing_rad"] = to_json(br);
       all.range.insert(all.range.end(), r.range.begin(), r.range.end());
       all.bearing.insert(all.bearing.end(), r.bearing.begin(), r.bearing.end());
+      all.measured_range.insert(all.measured_range.end(), r.measured_range.begin(), r.measured_range.end());
+      all.measured_bearing.insert(all.measured_bearing.end(), r.measured_bearing.begin(), r.measured_bearing.end());
       odo.push_back(odometry_noise(d, id, rate));
+      const double lag = odometry_lag(d.robot(id));
+      lags.push_back(lag);
+      out["robots"][std::to_string(id)]["odometry_lag_s"] = lag;
       out["robots"][std::to_string(id)]["odometry"] = to_json(odo.back());
     }
     const Robust rg = robust(all.range), br = robust(all.bearing);
     print_sensor_row("all", rg, br);
     out["overall"]["range_m"] = to_json(rg);
     out["overall"]["bearing_rad"] = to_json(br);
+    const RangeScale scale = fit_range_scale(all);
+    std::printf("\nRange scale (the camera's range depends on where the barcode is in the image): fit over %ld\n"
+                "measurements, residual = r (k0 + k1 b^2): k0 %.5f, k1 %.5f; range residual std %.4f m before,\n"
+                "%.4f m after dividing each range by 1 + k0 + k1 b^2 (dataset.range_scale)\n",
+                scale.used, scale.k0, scale.k1, scale.std_before, scale.std_after);
+    double lag_mean = 0.0;
+    for (double l : lags) lag_mean += l / static_cast<double>(lags.size());
+    std::printf("\nOdometry lag (commands lead the motion): the command in force at t - d fits Vicon's turn rate at t\n"
+                "best for d =");
+    for (double l : lags) std::printf(" %.2f", l);
+    std::printf(" s (robots in order); mean %.3f s (dataset.odometry_delay_s)\n", lag_mean);
+    out["odometry_lag_s"] = lag_mean;
+    if (!config_path.empty()) {
+      // The frames as the robots get them: observations against the Vicon pose at the
+      // frame time and the landmarks' positions.
+      mrclam::Options fo = mrclam::load_options(config_path);
+      fo.robots = ids;
+      fo.with_robot_barcodes = false;
+      const mrclam::FrameSource src(d, fo);
+      Residuals fr;
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        for (int k = 0; k < src.num_frames(); ++k) {
+          std::vector<sensor_frame_t> sensors;
+          src.frame(k, nullptr, &sensors);
+          const Pose2& T = src.true_pose(static_cast<int>(i), k);
+          const sensor_frame_t& f = sensors[i];
+          for (int o = 0; o < f.num_obs; ++o) {
+            const auto lm = std::find_if(d.landmarks().begin(), d.landmarks().end(),
+                                         [&](const mrclam::LandmarkTruth& l) { return l.subject == f.obs[o].landmark_id; });
+            if (lm == d.landmarks().end()) continue;
+            const double dx = lm->x - T.x, dy = lm->y - T.y;
+            fr.range.push_back(f.obs[o].range - std::hypot(dx, dy));
+            fr.bearing.push_back(wrap_angle(f.obs[o].bearing - (std::atan2(dy, dx) - T.theta)));
+          }
+        }
+      }
+      const Robust frg = robust(fr.range), fbr = robust(fr.bearing);
+      std::printf("\nResiduals of the frames as imported with %s (against Vicon at the frame time):\n", config_path.c_str());
+      print_sensor_row("frames", frg, fbr);
+      out["frame_residuals"] = {{"config", config_path}, {"range_m", to_json(frg)}, {"bearing_rad", to_json(fbr)}};
+    }
+    out["range_scale"] = {{"k0", scale.k0}, {"k1", scale.k1}, {"used", scale.used},
+                          {"std_before", scale.std_before}, {"std_after", scale.std_after}};
 
     std::printf("\nOdometry (each robot over its own window, frames at %.3g Hz; windows of >= 1 m driven)\n", rate);
     std::printf("%-6s %8s %9s %9s %6s %7s | %9s %9s %9s | %9s %9s | %9s %9s %9s | %9s %9s\n", "robot", "time_s",

@@ -23,6 +23,9 @@ int main(int argc, char** argv) {
   app.add_option("--speed", speed, "landmark speed [m/s]")->check(CLI::Range(0.0, 100.0));
   app.add_option("--seed", seed, "master seed")->check(CLI::Range(0LL, 2147483647LL));
   app.add_option("--out", out_dir, "directory for metrics.json, frames.csv, trajectories/");
+  bool oracle = false;
+  app.add_flag("--oracle", oracle,
+               "evaluation bound: observations of truly moving landmarks are removed before the robots see them");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -42,6 +45,7 @@ int main(int argc, char** argv) {
   if (speed >= 0.0) ov.landmark_speed_mps = speed;
   if (seed >= 0) ov.seed = static_cast<int>(seed);
   cfg = apply_overrides(cfg, ov);
+  cfg.oracle = oracle;
 
   const auto t0 = std::chrono::steady_clock::now();
   const RunResult r = run_team(cfg);

@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
   std::string config_path = "config/paper.yaml", out_dir, modes_text = "ekf,gated,ela,consensus";
   std::string dyn_text = "5,20,35,50,65,80", speed_text = "0.1,0.3,0.5,0.7,0.9";
   int runs = 10, seed_base = 1, jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  bool no_plots = false;
+  bool no_plots = false, oracle = false;
   CLI::App app{"elaslam sweep: the paper's experiment grid, in parallel"};
   app.add_option("--config", config_path, "YAML config")->check(CLI::ExistingFile);
   app.add_option("--modes", modes_text, "comma-separated modes");
@@ -117,6 +117,8 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", jobs, "threads (default: all cores)")->check(CLI::Range(1, 1024));
   app.add_option("--out", out_dir, "output directory")->required();
   app.add_flag("--no-plots", no_plots, "do not call tools/plot_sweep.py");
+  app.add_flag("--oracle", oracle,
+               "evaluation bound: observations of truly moving landmarks are removed before the robots see them");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -130,6 +132,8 @@ int main(int argc, char** argv) {
     grid.speed = parse_list(speed_text, "--speed", 0.0, 100.0);
     grid.runs = runs;
     base = load_team_config(config_path);
+    base.oracle = oracle;
+    grid.oracle = oracle;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sweep: %s\n", e.what());
     return 2;

@@ -211,6 +211,9 @@ void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<S
   out << "# Sweep results\n\nEntries: mean ± sample standard deviation over " << g.runs
       << " runs (seeds seed_base .. seed_base + runs - 1, the same for every mode and cell). "
          "Errors in metres (DESIGN.md section 8: landmark error = eq 18, robot error = mean position error).\n\n";
+  if (g.oracle)
+    out << "**Oracle runs** (`--oracle`): every observation of a truly moving landmark was removed before the "
+           "robots saw it, so these figures are the bound a perfect detector would reach.\n\n";
   std::vector<std::pair<std::string, Metric>> won;
   table(out, "Table 1: landmark error of the global map [m]", g, jobs, res,
         [](const SweepResult& r) { return r.landmark_error; }, 3);

@@ -16,6 +16,7 @@ struct SweepGrid {
   std::vector<double> speed;     // [m/s]
   int runs = 10;
   std::vector<int> robot_ids;
+  bool oracle = false;  // runs with the moving landmarks' observations removed
 };
 
 struct SweepJob {

@@ -177,6 +177,10 @@ void parse(config::Reader& r, Options* o) {
   r.read("odom_var_trans_per_m", &o->odom_var_trans_per_m, 0.0, 100.0);
   r.read("odom_var_rot_per_rad", &o->odom_var_rot_per_rad, 0.0, 100.0);
   r.read("odom_var_rot_per_m", &o->odom_var_rot_per_m, 0.0, 100.0);
+  r.read_optional("motion_compensation", &o->motion_compensation);
+  r.read_optional("odometry_delay_s", &o->odometry_delay_s, 0.0, 5.0);
+  r.read_optional("range_scale_k0", &o->range_scale_k0, -0.5, 0.5);
+  r.read_optional("range_scale_k1", &o->range_scale_k1, -2.0, 2.0);
 }
 
 Options load_options(const std::string& yaml_path, std::string* effective_yaml) {
@@ -380,7 +384,14 @@ void FrameSource::compute_robot(const Dataset& d, const RobotSeries& s, PerRobot
   out->odometer.resize(n);
   std::size_t hint = 0;
   for (std::size_t k = 0; k < n; ++k) interpolate(s.ground_truth, frame_utimes_[k], &out->truth[k], &hint);
-  OdometryIntegrator odo(s.odometry, frame_utimes_[0], out->truth[0]);
+  std::vector<Command> delayed;
+  const std::int64_t delay_us = std::llround(options_.odometry_delay_s * 1e6);
+  if (delay_us > 0) {
+    delayed = s.odometry;
+    for (Command& c : delayed) c.utime += delay_us;
+  }
+  const std::vector<Command>& commands = delay_us > 0 ? delayed : s.odometry;
+  OdometryIntegrator odo(commands, frame_utimes_[0], out->truth[0]);
   for (std::size_t k = 0; k < n; ++k) out->odometer[k] = odo.advance_to(frame_utimes_[k]);
 
   // 2. Odometry gaps overlapping [t_0, t_last].
@@ -403,11 +414,17 @@ void FrameSource::compute_robot(const Dataset& d, const RobotSeries& s, PerRobot
   const auto& ms = s.measurements;
   const std::int64_t lower = frame_utimes_[0] - period_us;
   while (m < ms.size() && ms[m].utime <= lower) ++m;
+  // Relative motion for the compensation: dead reckoning from `lower` (the start
+  // pose does not matter, only motion between two times).
+  OdometryIntegrator rel(commands, lower, Pose2{});
+  std::vector<Pose2> taken_at;  // pose at each kept measurement of the frame
   for (std::size_t k = 0; k < n; ++k) {
     const auto begin = static_cast<int>(out->obs.size());
     out->obs_begin[k] = begin;
+    taken_at.clear();
     for (; m < ms.size() && ms[m].utime <= frame_utimes_[k]; ++m) {
       const Measurement& z = ms[m];
+      const Pose2 pose_m = options_.motion_compensation ? rel.advance_to(z.utime) : Pose2{};
       ++st->measurements;
       const int subject = d.subject_of_barcode(z.barcode);
       if (subject == 0 || z.barcode == own_barcode || !(z.range > 0.0)) {
@@ -420,11 +437,26 @@ void FrameSource::compute_robot(const Dataset& d, const RobotSeries& s, PerRobot
       }
       for (auto it = out->obs.begin() + begin; it != out->obs.end(); ++it)
         if (it->subject == subject) {
+          taken_at.erase(taken_at.begin() + (it - (out->obs.begin() + begin)));
           out->obs.erase(it);
           ++st->duplicates;
           break;
         }
-      out->obs.push_back({subject, z.range, wrap_if_needed(z.bearing)});
+      const double bearing = wrap_if_needed(z.bearing);
+      const double scale = 1.0 + options_.range_scale_k0 + options_.range_scale_k1 * bearing * bearing;
+      out->obs.push_back({subject, scale > 0.1 ? z.range / scale : z.range, bearing});
+      taken_at.push_back(pose_m);
+    }
+    if (options_.motion_compensation) {
+      const Pose2 pose_k = rel.advance_to(frame_utimes_[k]);
+      for (std::size_t j = 0; j < taken_at.size(); ++j) {
+        Obs& o = out->obs[static_cast<std::size_t>(begin) + j];
+        const Eigen::Vector2d p_m(o.range * std::cos(o.bearing), o.range * std::sin(o.bearing));
+        const Eigen::Vector2d p_k = transform_from(between(pose_k, taken_at[j]), p_m);
+        if (!(p_k.norm() > 1e-6)) continue;  // at the sensor: keep the reading as taken
+        o.range = p_k.norm();
+        o.bearing = wrap_angle(std::atan2(p_k.y(), p_k.x()));
+      }
     }
     // Distinct subjects per frame <= number of subjects (20) < 64: never truncated.
     const int count = static_cast<int>(out->obs.size()) - begin;

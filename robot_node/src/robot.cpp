@@ -171,6 +171,10 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
       continue;
     }
     ++s->num_rejected;
+    // A landmark tested alone (no other mapped landmark in view to compare with)
+    // cannot tell its own motion from the robot's pose error: unless configured
+    // otherwise, it is only skipped.
+    if (!options_.lone_verdicts && gates_[k].kind == GateKind::kInnovation) continue;
     if (++outs >= options_.moving_after)
       mark_moving(id, &in.obs[static_cast<std::size_t>(view_obs_[k])], s);
   }
@@ -278,7 +282,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
       gates_.push_back({id, GateKind::kCandidate, r.d2, candidate_threshold_, inside});
       if (inside) {
         out_count_[static_cast<std::size_t>(id)] = 0;
-        if (++e.consistent_sightings >= (e.was_moving ? options_.return_frames : options_.confirm_frames)) {
+        if (++e.consistent_sightings >= sightings_to_confirm(e)) {
           confirm(id, o.z, s);
         } else if (options_.candidate_updates && ekf_.update_landmark_only(id, o.z).status != EkfStatus::kOk) {
           ++s->filter_faults;
@@ -288,6 +292,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
       ekf_.remove_landmark(id);
       if (++out_count_[static_cast<std::size_t>(id)] >= options_.moving_after && !e.reported_moving) {
         e.was_moving = e.reported_moving = true;
+        ++e.times_moving;
         emit_at(EventKind::kMoving, id, e.position, e.cov);
         ++s->num_moving;
       }
@@ -297,6 +302,16 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     e.consistent_sightings = 1;
     if (ekf_.add_landmark(id, o.z) != EkfStatus::kOk) ++s->filter_faults;  // kFull: candidate outside the filter
   }
+}
+
+// Sightings a candidate needs: confirm_frames when new; return_frames after it
+// has moved, doubled for every further time it was found moving when
+// return_backoff is on (a landmark that stops and goes again and again, such as a
+// robot, earns less trust each time).
+int Robot::sightings_to_confirm(const LMapEntry& e) const {
+  if (!e.was_moving) return options_.confirm_frames;
+  if (!options_.return_backoff) return options_.return_frames;
+  return options_.return_frames << std::min(std::max(e.times_moving - 1, 0), 10);
 }
 
 // A candidate consistent for long enough becomes STATIC: it corrects the filter
@@ -316,13 +331,14 @@ void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   ++s->num_added;
 }
 
-// Candidates in the filter that were not seen this frame lose their streak: they
-// leave the filter (they never corrected it) and start over when seen again.
+// Candidates in the filter that have not been seen for `candidate_gap_frames`
+// frames lose their streak: they leave the filter (they never corrected the
+// robot) and start over when seen again.
 void Robot::drop_unseen_candidates() {
   for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
     const int id = ekf_.id_at(slot);
     LMapEntry& e = lmap_[id];
-    if (e.status == LandmarkStatus::kStatic || e.last_seen_frame == last_frame_) continue;
+    if (e.status == LandmarkStatus::kStatic || last_frame_ - e.last_seen_frame < options_.candidate_gap_frames) continue;
     ekf_.remove_landmark(id);
     e.consistent_sightings = 0;
   }
@@ -369,6 +385,7 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
   }
   LMapEntry& e = lmap_[id];
   e.was_moving = e.reported_moving = true;
+  ++e.times_moving;
   e.missing_frames = 0;
   out_count_[static_cast<std::size_t>(id)] = 0;
   handled_[static_cast<std::size_t>(id)] = last_frame_;
@@ -401,6 +418,7 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   if (!lmap_.valid_id(landmark_id)) return false;
   LMapEntry& e = lmap_[landmark_id];
   e.was_moving = e.reported_moving = true;  // coming back needs return_frames consistent sightings
+  ++e.times_moving;
   if (!ekf_.has_landmark(landmark_id)) return false;
   const bool held = e.status == LandmarkStatus::kStatic;
   if (ekf_.remove_landmark(landmark_id) != EkfStatus::kOk) return false;

@@ -45,8 +45,11 @@ void parse(config::Reader& r, RobotOptions* o) {
     e.read("gate_probability", &o->ela_gate_probability, 0.5, 1.0 - 1e-9);
     e.read("confirm_frames", &o->confirm_frames, 1, 1000);
     e.read("return_frames", &o->return_frames, 1, 1000);
+    e.read_optional("return_backoff", &o->return_backoff);
     e.read_optional("candidate_updates", &o->candidate_updates);
+    e.read_optional("candidate_gap_frames", &o->candidate_gap_frames, 1, 1000);
     e.read("moving_after", &o->moving_after, 1, 1000);
+    e.read_optional("lone_verdicts", &o->lone_verdicts);
     e.read("missing_frames", &o->missing_frames, 0, 1000);
     e.read("sensor_range_m", &o->sensor_range, 0.01, 1000.0);
     e.read("fov_margin_m", &o->fov_margin, 0.0, 1000.0);

@@ -59,6 +59,17 @@ void fill_map(const global_map_t& g, FrameData* f) {
   for (int i = 0; i < g.num_moving; ++i) f->map_moving.push_back(g.moving_ids[i]);
 }
 
+// The oracle: observations of truly moving landmarks never reach the robots.
+void remove_moving(const FrameData& f, sensor_frame_t* s) {
+  int kept = 0;
+  for (int o = 0; o < s->num_obs; ++o) {
+    const auto id = static_cast<std::size_t>(s->obs[o].landmark_id);
+    if (id < f.truly_moving.size() && f.truly_moving[id]) continue;
+    s->obs[kept++] = s->obs[o];
+  }
+  s->num_obs = static_cast<std::int16_t>(kept);
+}
+
 }  // namespace
 
 TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
@@ -78,26 +89,61 @@ TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
   return c;
 }
 
+namespace {
+
+// The simulator as a frame source: the world steps once per frame.
+class SimulatorFrames : public FrameProvider {
+ public:
+  explicit SimulatorFrames(const sim::ScenarioOptions& o) : options_(o), world_(o) {}
+  int num_frames() const override { return options_.frames; }
+  int num_robots() const override { return world_.num_robots(); }
+  int robot_id(int i) const override { return options_.robots[static_cast<std::size_t>(i)].id; }
+  void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
+    if (k > 0) world_.step();
+    const std::int64_t t0 = 1'000'000'000'000'000;  // a fixed epoch: runs are reproducible
+    const std::int64_t utime = t0 + static_cast<std::int64_t>(std::llround(k * options_.dt_s() * 1e6));
+    *gt = sim::to_message(world_, utime);
+    sensors->resize(static_cast<std::size_t>(world_.num_robots()));
+    for (int i = 0; i < world_.num_robots(); ++i)
+      (*sensors)[static_cast<std::size_t>(i)] = sim::to_message(world_.sensor_frame(i), utime);
+  }
+
+ private:
+  sim::ScenarioOptions options_;
+  sim::World world_;
+};
+
+}  // namespace
+
 RunResult run_team(const TeamConfig& config) {
-  sim::World world(config.scenario);
-  const int R = world.num_robots();
+  SimulatorFrames frames(config.scenario);
+  return run_team(config.robot, config.main, frames, config.oracle);
+}
+
+RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& main_options, FrameProvider& frames,
+                   bool oracle) {
+  const int R = frames.num_robots();
   std::vector<RobotNode> robots;
   robots.reserve(static_cast<std::size_t>(R));
-  for (int i = 0; i < R; ++i) robots.emplace_back(config.robot, config.scenario.robots[static_cast<std::size_t>(i)].id);
-  MainNode main(config.main);
+  for (int i = 0; i < R; ++i) robots.emplace_back(robot_options, frames.robot_id(i));
+  MainNode main(main_options);
   Bus bus;
   MetricsAccumulator acc;
   RunResult out;
   out.estimated.resize(static_cast<std::size_t>(R));
   out.truth.resize(static_cast<std::size_t>(R));
+  out.corrections_by_landmark.assign(static_cast<std::size_t>(robot_options.ekf.max_landmark_id), 0);
 
-  const std::int64_t t0 = 1'000'000'000'000'000;  // a fixed epoch: runs are reproducible
   FrameData f;
-  for (int k = 0; k < config.scenario.frames; ++k) {
-    if (k > 0) world.step();
-    const double t = k * config.scenario.dt_s();
-    const std::int64_t utime = t0 + static_cast<std::int64_t>(std::llround(t * 1e6));
-    const ground_truth_t gt = bus.carry(sim::to_message(world, utime));
+  ground_truth_t gt_in;
+  std::vector<sensor_frame_t> sensors;
+  std::int64_t first_utime = 0;
+  for (int k = 0; k < frames.num_frames(); ++k) {
+    frames.frame(k, &gt_in, &sensors);
+    const ground_truth_t gt = bus.carry(gt_in);
+    const std::int64_t utime = gt.utime;
+    if (k == 0) first_utime = utime;
+    const double t = static_cast<double>(utime - first_utime) * 1e-6;
     fill_truth(gt, &f);
     f.frame = k;
     f.time_s = t;
@@ -108,17 +154,23 @@ RunResult run_team(const TeamConfig& config) {
     f.observed.clear();
     // Sensors of frame k -> robots -> main_robot.
     for (int i = 0; i < R; ++i) {
-      const sensor_frame_t s = bus.carry(sim::to_message(world.sensor_frame(i), utime));
+      sensor_frame_t s = bus.carry(sensors[static_cast<std::size_t>(i)]);
+      if (oracle) remove_moving(f, &s);
       for (int o = 0; o < s.num_obs; ++o) f.observed.push_back(s.obs[o].landmark_id);
       RobotNode& node = robots[static_cast<std::size_t>(i)];
       if (node.on_sensor(s, utime) != RobotNode::Verdict::kProcessed) continue;
+      for (const GateRecord& g : node.robot().gate_records())
+        if (g.inside && g.kind != GateKind::kCandidate && g.landmark_id >= 0 &&
+            g.landmark_id < static_cast<int>(out.corrections_by_landmark.size()))
+          ++out.corrections_by_landmark[static_cast<std::size_t>(g.landmark_id)];
       const pose_estimate_t p = bus.carry(node.pose_msg());
       f.has_pose[static_cast<std::size_t>(i)] = 1;
       f.est_poses[static_cast<std::size_t>(i)] = {p.x, p.y, p.theta};
       f.mean_diag_p[static_cast<std::size_t>(i)] = p.mean_diag_p;
       f.processing_us[static_cast<std::size_t>(i)] = p.processing_us;
       out.estimated[static_cast<std::size_t>(i)].push_back({t, {p.x, p.y, p.theta}});
-      out.truth[static_cast<std::size_t>(i)].push_back({t, world.robot_pose(i)});
+      if (i < gt.num_robots)
+        out.truth[static_cast<std::size_t>(i)].push_back({t, {gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta}});
       for (const auto& ev : node.event_msgs()) main.on_event(bus.carry(ev));
       if (node.snapshot_ready()) main.on_snapshot(bus.carry(node.snapshot_msg()));
       main.on_robot_frame(p.robot_id, p.frame);  // as main_robot does on each POSE

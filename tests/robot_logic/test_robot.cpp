@@ -91,6 +91,92 @@ TEST_F(RobotPaths, CandidateUnseenForAFrameLeavesTheFilterAndStartsOver) {
   EXPECT_TRUE(r.filter().has_landmark(1));
 }
 
+TEST_F(RobotPaths, CandidateKeepsItsStreakThroughGapsUpToCandidateGapFrames) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.candidate_gap_frames = 3;  // a sensor that reports a landmark only every few frames
+  Robot r(o, 1);
+  step(r, {0, 1});
+  step(r, {0});
+  step(r, {0});  // landmark 1 unseen for 2 frames: still a candidate
+  EXPECT_TRUE(r.filter().has_landmark(1));
+  step(r, {0, 1});
+  EXPECT_EQ(r.lmap()[1].consistent_sightings, 2);
+  for (int k = 0; k < 3; ++k) step(r, {0});  // unseen for 3 frames: starts over
+  EXPECT_FALSE(r.filter().has_landmark(1));
+  step(r, {0, 1});
+  EXPECT_EQ(r.lmap()[1].consistent_sightings, 1);
+}
+
+TEST_F(RobotPaths, CandidateSightingsRefineTheCandidateButNotThePose) {
+  for (const bool updates : {true, false}) {
+    SCOPED_TRACE(updates ? "candidate_updates" : "inert candidates");
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.candidate_updates = updates;
+    o.confirm_frames = 10;
+    Robot r(o, 1);
+    std::mt19937_64 rng(5);
+    step(r, {0}, &rng);
+    const double first = r.filter().landmark_cov(0).trace();
+    const Pose2 pose = r.filter().pose();
+    for (int k = 0; k < 5; ++k) step(r, {0}, &rng);
+    EXPECT_EQ(r.lmap()[0].status, LandmarkStatus::kCandidate);
+    EXPECT_EQ(r.filter().pose().x, pose.x);
+    EXPECT_EQ(r.filter().pose().theta, pose.theta);
+    if (updates) {
+      // Six sightings: the candidate's variance falls towards 1/6 of one sighting's.
+      EXPECT_LT(r.filter().landmark_cov(0).trace(), 0.3 * first);
+      EXPECT_LT((r.filter().landmark(0) - lms_[0]).norm(), 0.05);
+    } else {
+      EXPECT_NEAR(r.filter().landmark_cov(0).trace(), first, 1e-12);
+    }
+  }
+}
+
+TEST_F(RobotPaths, LoneLandmarkThatFailsIsOnlySkippedWithoutLoneVerdicts) {
+  for (const bool lone : {true, false}) {
+    SCOPED_TRACE(lone ? "lone_verdicts on" : "lone_verdicts off");
+    frame_ = 0;
+    lms_ = test::ring(6, 3.0);
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.lone_verdicts = lone;
+    o.missing_frames = 0;
+    Robot r(o, 1);
+    for (int k = 0; k < 3; ++k) step(r, {0});
+    ASSERT_EQ(r.lmap()[0].status, LandmarkStatus::kStatic);
+    // The only landmark in view jumps: it cannot be told from a pose error.
+    lms_[0] += Eigen::Vector2d(0.0, 0.8);
+    FrameSummary s = step(r, {0});
+    EXPECT_EQ(s.num_rejected, 1);
+    s = step(r, {0});
+    EXPECT_EQ(s.num_rejected, 1);
+    EXPECT_EQ(s.num_moving, lone ? 1 : 0);
+    EXPECT_EQ(r.lmap()[0].status == LandmarkStatus::kStatic, !lone);
+  }
+}
+
+TEST_F(RobotPaths, ReturnBackoffDoublesTheProbationOfARepeatMover) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.return_backoff = true;
+  Robot r(o, 1);
+  confirm_all(r);
+  auto move_and_return = [&]() {
+    lms_[2] += Eigen::Vector2d(0.0, 0.8);
+    step(r, test::all_ids(6));
+    lms_[2] += Eigen::Vector2d(0.0, 0.1);
+    step(r, test::all_ids(6));
+    EXPECT_EQ(count_events(r, EventKind::kMoving, 2), 1);
+    for (int k = 0; k < 40; ++k) {
+      step(r, test::all_ids(6));
+      if (count_events(r, EventKind::kReturn, 2) == 1) return k;
+    }
+    return -1;
+  };
+  EXPECT_EQ(move_and_return(), 4);   // return_frames = 6 sightings (1 at the MOVING frame)
+  EXPECT_EQ(r.lmap()[2].times_moving, 1);
+  EXPECT_EQ(move_and_return(), 10);  // the second time: 12
+  EXPECT_EQ(move_and_return(), 22);  // the third time: 24
+}
+
 TEST_F(RobotPaths, StaticToMovingToCandidateAndBackAfterItStops) {
   for (Mode mode : {Mode::kEla, Mode::kConsensus}) {
     SCOPED_TRACE(to_string(mode));

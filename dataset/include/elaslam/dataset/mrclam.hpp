@@ -80,6 +80,19 @@ struct Options {
   double odom_var_trans_per_m = 0.0085;  // [m^2/m]
   double odom_var_rot_per_rad = 0.0094;  // [rad^2/rad]
   double odom_var_rot_per_m = 0.0079;    // [rad^2/m]
+  // Motion compensation: a measurement taken at t_m < t_k is re-expressed in the
+  // robot frame at the frame's time t_k through the odometry motion between the two
+  // (the frame's odometer reading is at t_k; without this the robot's turn during
+  // up to one frame period shows up as bearing error).
+  bool motion_compensation = false;
+  // The velocity commands lead the robot's motion (the data README: ~0.2 s): each
+  // command is applied this much after its time stamp. [s], >= 0.
+  double odometry_delay_s = 0.0;
+  // Range calibration: the camera's range depends on where the barcode is in the
+  // image; measured range = true range * (1 + k0 + k1 bearing^2), so each range is
+  // divided by that factor (mrclam_stats fits k0, k1 against Vicon). 0, 0: off.
+  double range_scale_k0 = 0.0;
+  double range_scale_k1 = 0.0;
 };
 
 /// Read the `dataset:` section; problems are collected by the reader (ConfigError at

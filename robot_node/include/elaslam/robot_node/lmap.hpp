@@ -30,6 +30,7 @@ struct LMapEntry {
   int reported_frame = -1000000; // frame of the last ADD / UPDATE / RETURN sent for it
   bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
   bool reported_moving = false;  // a MOVING event went out and no ADD / RETURN since
+  int times_moving = 0;          // how often it has been found (or told) moving
 };
 
 class LMap {

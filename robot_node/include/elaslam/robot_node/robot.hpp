@@ -95,6 +95,7 @@ class Robot {
   void gate_view_consensus();
   void handle_candidates(const FrameInput& in, FrameSummary* s);
   void check_missing(FrameSummary* s);
+  int sightings_to_confirm(const LMapEntry& e) const;
   void confirm(int id, const RangeBearing& z, FrameSummary* s);
   void drop_unseen_candidates();
   void record_sighting(int id, const RangeBearing& z);

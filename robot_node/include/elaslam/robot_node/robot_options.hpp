@@ -23,10 +23,18 @@ struct RobotOptions {
   double ela_gate_probability = 0.99;   // chi-square probability of the ELA / consensus tests
   int confirm_frames = 3;               // consistent sightings before a candidate becomes STATIC
   int return_frames = 6;                // the same for a landmark that has been MOVING
+  /// return_frames doubles with every further time a landmark is found moving.
+  bool return_backoff = false;
   /// Consistent candidate sightings refine the candidate's own estimate (a
   /// landmark-only "consider" update) while the robot's pose stays untouched.
   bool candidate_updates = true;
+  /// A candidate unseen for this many frames starts over (1: it must be seen in
+  /// every frame; a sensor that reports a landmark only every few frames needs more).
+  int candidate_gap_frames = 1;
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
+  /// Whether a mapped landmark that fails its test while it is the only one in view
+  /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.
+  bool lone_verdicts = true;
   int missing_frames = 3;               // expected-but-unseen frames before MOVING (0: rule off)
   double sensor_range = 4.0;            // [m] radius of the field of view (D / 2)
   double fov_margin = 0.5;              // [m] "well inside the field of view": range < sensor_range - margin

@@ -15,6 +15,9 @@ struct TeamConfig {
   sim::ScenarioOptions scenario;
   RobotOptions robot;
   GlobalMapOptions main;
+  /// Evaluation only: remove every observation of a truly moving landmark before
+  /// the robots see it (a perfect detector; the bound any detector can reach).
+  bool oracle = false;
   std::string effective_yaml;  // the effective configuration, as read
   std::string source;          // file it came from
 };

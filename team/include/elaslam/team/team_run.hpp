@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "elaslam/ground_truth_t.hpp"
+#include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/team/metrics.hpp"
 #include "elaslam/team/team_config.hpp"
 
@@ -47,9 +49,26 @@ struct RunResult {
   std::vector<Eigen::Vector2d> final_truth;  // true landmark positions at the last frame
   std::vector<std::uint8_t> truly_moving;
   long long bus_messages = 0;  // messages carried by the in-process bus
+  // Observations that corrected a robot's pose (all robots), by landmark id.
+  std::vector<long> corrections_by_landmark;
 };
 
-/// Run the configured scenario end to end.
+/// Where the frames come from: the simulator or a recorded dataset. Frames are
+/// asked for in order, k = 0, 1, 2, ...; robot i of the sensor list is robot_id(i).
+class FrameProvider {
+ public:
+  virtual ~FrameProvider() = default;
+  virtual int num_frames() const = 0;
+  virtual int num_robots() const = 0;
+  virtual int robot_id(int i) const = 0;
+  virtual void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) = 0;
+};
+
+/// Run the configured scenario (the simulator) end to end.
 RunResult run_team(const TeamConfig& config);
+
+/// Run the team on any frame source. `oracle`: see TeamConfig::oracle.
+RunResult run_team(const RobotOptions& robot, const GlobalMapOptions& main, FrameProvider& frames,
+                   bool oracle = false);
 
 }  // namespace elaslam

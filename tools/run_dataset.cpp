@@ -1,0 +1,249 @@
+// run_dataset: the team on a recorded UTIAS MRCLAM dataset instead of the
+// simulator (in-process, like run_scenario), its metrics against Vicon ground
+// truth and its output files.
+//   run_dataset --dataset DIR [--config FILE] [--mode M] [--with-robot-barcodes]
+//               [--robots 1,2,3] [--rate F] [--start S] [--duration T] --out DIR
+//   run_dataset --dataset DIR --report [--modes ekf,gated,ela,consensus] --out DIR
+// --report runs dead reckoning and every mode without and with the robots'
+// barcodes (in parallel) and writes DIR/report.md, DIR/report.json and each run's
+// files under DIR/<mode>/ and DIR/<mode>_barcodes/.
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include <CLI/CLI.hpp>
+
+#include "elaslam/team/dataset_run.hpp"
+#include "elaslam/team/report.hpp"
+
+namespace {
+
+using namespace elaslam;
+
+constexpr int kFirstRobotSubject = 1, kLastRobotSubject = 5;
+
+struct DatasetRun {
+  std::string mode;
+  bool barcodes = false;
+  RunResult result;
+  long robot_corrections = 0;  // observations of robot subjects that corrected a pose
+};
+
+long robot_corrections(const RunResult& r) {
+  long n = 0;
+  for (int id = kFirstRobotSubject; id <= kLastRobotSubject; ++id)
+    if (id < static_cast<int>(r.corrections_by_landmark.size())) n += r.corrections_by_landmark[static_cast<std::size_t>(id)];
+  return n;
+}
+
+nlohmann::json dataset_json(const mrclam::FrameSource& src, const mrclam::Options& o, const std::string& dir,
+                            const std::vector<DeadReckoning>& dr) {
+  nlohmann::json j;
+  j["dir"] = dir;
+  j["rate_hz"] = o.rate_hz;
+  j["with_robot_barcodes"] = o.with_robot_barcodes;
+  j["frames"] = src.num_frames();
+  j["start_utime"] = src.frame_utime(0);
+  nlohmann::json robots = nlohmann::json::array();
+  for (std::size_t i = 0; i < src.stats().robots.size(); ++i) {
+    const auto& s = src.stats().robots[i];
+    robots.push_back({{"id", s.id},
+                      {"measurements", s.measurements},
+                      {"used", s.used},
+                      {"misreads", s.misreads},
+                      {"robot_barcodes", s.robot_barcodes},
+                      {"duplicates", s.duplicates},
+                      {"odometry_gaps", s.odometry_gaps},
+                      {"dead_reckoning_error_mean", dr[i].error_mean},
+                      {"dead_reckoning_error_rms", dr[i].error_rms}});
+  }
+  j["robots"] = robots;
+  return j;
+}
+
+std::string f3(double v) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(3) << v;
+  return s.str();
+}
+
+// report.md: per robot RMS and mean position error of dead reckoning and of every
+// (mode, barcodes) run, the five-robot means, the global map error, and how many
+// robot-barcode observations each run let correct a pose.
+void write_report(const std::string& path, const mrclam::FrameSource& src, const std::vector<DeadReckoning>& dr,
+                  const std::vector<DatasetRun>& runs, const std::string& command) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << "# MRCLAM run report\n\nCommand: `" << command << "`\n\n" << src.num_frames() << " frames at "
+      << 1.0 / src.dt_s() << " Hz (" << f3(src.num_frames() * src.dt_s()) << " s), robots";
+  for (int id : src.robot_ids()) out << ' ' << id;
+  out << ".\n\nPosition error against Vicon per robot, RMS / mean over the frames [m]; the last column is the mean over "
+         "robots of each robot's RMS (the reference figures' statistic).\n\n| run |";
+  for (int id : src.robot_ids()) out << " robot " << id << " |";
+  out << " mean of RMS | global map error [m] | robot-barcode corrections |\n|---|";
+  for (std::size_t i = 0; i < src.robot_ids().size() + 3; ++i) out << "---|";
+  out << '\n';
+  double dr_mean = 0.0;
+  out << "| dead reckoning |";
+  for (const auto& d : dr) {
+    out << ' ' << f3(d.error_rms) << " / " << f3(d.error_mean) << " |";
+    dr_mean += d.error_rms / static_cast<double>(dr.size());
+  }
+  out << ' ' << f3(dr_mean) << " | - | - |\n";
+  for (const auto& run : runs) {
+    const RunMetrics& m = run.result.metrics;
+    double mean = 0.0;
+    out << "| " << run.mode << (run.barcodes ? ", robot barcodes kept" : "") << " |";
+    for (const auto& rm : m.robots) {
+      out << ' ' << f3(rm.error_rms) << " / " << f3(rm.error_mean) << " |";
+      mean += rm.error_rms / static_cast<double>(m.robots.size());
+    }
+    out << " **" << f3(mean) << "** | " << f3(m.landmark_error_mean) << " | "
+        << (run.barcodes ? std::to_string(run.robot_corrections) : std::string("-")) << " |\n";
+  }
+  out << "\nRobot-barcode corrections: observations of another robot's barcode that corrected a robot's pose "
+         "(summed over robots; candidates' landmark-only updates not counted). Sightings available: ";
+  long avail = 0;
+  for (const auto& s : src.stats().robots) avail += s.robot_barcodes;
+  out << avail << ".\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string root = std::filesystem::weakly_canonical(std::filesystem::path(argv[0])).parent_path().string() + "/../..";
+  std::string dataset_dir, config_path = root + "/config/mrclam.yaml", mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
+  bool barcodes = false, report = false;
+  double rate = -1.0, start = -1.0, duration = -1.0;
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  CLI::App app{"elaslam run_dataset: the team on a recorded MRCLAM dataset, against Vicon ground truth"};
+  app.add_option("--dataset", dataset_dir, "MRCLAM dataset directory (e.g. ../shared/data/mrclam/dataset6)")
+      ->required()->check(CLI::ExistingDirectory);
+  app.add_option("--config", config_path, "YAML config (dataset, robot, main sections)")->check(CLI::ExistingFile);
+  app.add_option("--mode", mode, "ekf, gated, ela or consensus (default: robot.mode)")
+      ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
+  app.add_flag("--with-robot-barcodes", barcodes, "keep other robots' barcodes (moving landmarks)");
+  app.add_option("--robots", robots_text, "robots to use, e.g. 1,2,3,4,5 (default: dataset.robots)");
+  app.add_option("--rate", rate, "frames per second")->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--start", start, "first frame this many seconds after the common start")->check(CLI::Range(0.0, 1e6));
+  app.add_option("--duration", duration, "seconds to run (0: to the end)")->check(CLI::Range(0.0, 1e6));
+  app.add_flag("--report", report, "every mode without and with robot barcodes, and report.md");
+  app.add_option("--modes", modes_text, "modes for --report");
+  app.add_option("--jobs", jobs, "parallel runs for --report")->check(CLI::Range(1, 256));
+  app.add_option("--out", out_dir, "output directory")->required();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  DatasetConfig cfg;
+  try {
+    cfg = load_dataset_config(config_path);
+  } catch (const config::ConfigError& e) {
+    std::fprintf(stderr, "run_dataset: %s\n", e.what());
+    return 2;
+  }
+  mrclam::Options& o = cfg.dataset;
+  if (!robots_text.empty()) {
+    std::string why;
+    if (!mrclam::parse_robot_list(robots_text, &o.robots, &why)) {
+      std::fprintf(stderr, "run_dataset: --robots: %s\n", why.c_str());
+      return 2;
+    }
+  }
+  if (rate > 0.0) o.rate_hz = rate;
+  if (start >= 0.0) o.start_s = start;
+  if (duration >= 0.0) o.duration_s = duration;
+  std::vector<std::string> modes;
+  if (report) {
+    std::stringstream ss(modes_text);
+    for (std::string m; std::getline(ss, m, ',');) {
+      Mode parsed;
+      if (!parse_mode(m, &parsed)) {
+        std::fprintf(stderr, "run_dataset: --modes: unknown mode '%s' (ekf, gated, ela, consensus)\n", m.c_str());
+        return 2;
+      }
+      modes.push_back(m);
+    }
+  } else {
+    modes.push_back(mode.empty() ? to_string(cfg.robot.mode) : mode);
+  }
+
+  // Load once; one frame source per barcode setting.
+  std::unique_ptr<mrclam::Dataset> data;
+  std::unique_ptr<mrclam::FrameSource> without, with;
+  try {
+    data = std::make_unique<mrclam::Dataset>(mrclam::Dataset::load(dataset_dir, o.robots));
+    mrclam::Options a = o, b = o;
+    a.with_robot_barcodes = false;
+    b.with_robot_barcodes = true;
+    if (report || !barcodes) without = std::make_unique<mrclam::FrameSource>(*data, a);
+    if (report || barcodes) with = std::make_unique<mrclam::FrameSource>(*data, b);
+  } catch (const mrclam::DatasetError& e) {
+    std::fprintf(stderr, "run_dataset: %s\n", e.what());
+    return 1;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "run_dataset: %s\n", e.what());
+    return 2;
+  }
+  const mrclam::FrameSource& any = without ? *without : *with;
+  const std::vector<DeadReckoning> dr = dead_reckoning(any);
+
+  std::vector<DatasetRun> runs;
+  for (const auto& m : modes) {
+    if (report || !barcodes) runs.push_back({m, false, {}, 0});
+    if (report || barcodes) runs.push_back({m, true, {}, 0});
+  }
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i; (i = next++) < runs.size();) {
+      DatasetRun& run = runs[i];
+      RobotOptions ro = cfg.robot;
+      parse_mode(run.mode, &ro.mode);
+      DatasetFrames frames(run.barcodes ? *with : *without);
+      run.result = run_team(ro, cfg.main, frames);
+      run.robot_corrections = robot_corrections(run.result);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::min<int>(jobs, static_cast<int>(runs.size())); ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  std::string command;
+  for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(i == 0 ? "build/bin/run_dataset" : argv[i]);
+  try {
+    nlohmann::json all = nlohmann::json::array();
+    for (const auto& run : runs) {
+      const mrclam::FrameSource& src = run.barcodes ? *with : *without;
+      mrclam::Options so = o;
+      so.with_robot_barcodes = run.barcodes;
+      RunInfo info{run.mode, 0.0, 0.0, 0, config_path, cfg.effective_yaml};
+      nlohmann::json j = metrics_json(info, run.result);
+      j["dataset"] = dataset_json(src, so, dataset_dir, dr);
+      j["robot_barcode_corrections"] = run.robot_corrections;
+      const std::string dir = report ? out_dir + "/" + run.mode + (run.barcodes ? "_barcodes" : "") : out_dir;
+      write_outputs(dir, j, run.result);
+      all.push_back(j);
+      std::cout << "== " << run.mode << (run.barcodes ? ", robot barcodes kept" : ", robot barcodes removed") << '\n';
+      print_summary(std::cout, info, run.result);
+      std::cout << "  dead reckoning RMS:";
+      for (const auto& d : dr) std::cout << " robot " << d.id << ' ' << f3(d.error_rms);
+      std::cout << "\n  robot-barcode observations that corrected a pose: " << run.robot_corrections << "\n";
+    }
+    if (report) {
+      write_report(out_dir + "/report.md", any, dr, runs, command);
+      std::ofstream(out_dir + "/report.json") << all.dump(1) << '\n';
+      std::cout << "wrote " << out_dir << "/report.md\n";
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "run_dataset: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
