@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -119,7 +120,7 @@ void write_report(const std::string& path, const mrclam::FrameSource& src, const
 int main(int argc, char** argv) {
   const std::string root = std::filesystem::weakly_canonical(std::filesystem::path(argv[0])).parent_path().string() + "/../..";
   std::string dataset_dir, config_path = root + "/config/mrclam.yaml", mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
-  bool barcodes = false, report = false;
+  bool barcodes = false, report = false, no_plots = false;
   double rate = -1.0, start = -1.0, duration = -1.0;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   CLI::App app{"elaslam run_dataset: the team on a recorded MRCLAM dataset, against Vicon ground truth"};
@@ -137,6 +138,7 @@ int main(int argc, char** argv) {
   app.add_option("--modes", modes_text, "modes for --report");
   app.add_option("--jobs", jobs, "parallel runs for --report")->check(CLI::Range(1, 256));
   app.add_option("--out", out_dir, "output directory")->required();
+  app.add_flag("--no-plots", no_plots, "do not call tools/plot_dataset.py (paths.png per run)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -217,6 +219,7 @@ int main(int argc, char** argv) {
 
   std::string command;
   for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(i == 0 ? "build/bin/run_dataset" : argv[i]);
+  std::vector<std::string> plot_dirs;
   try {
     nlohmann::json all = nlohmann::json::array();
     for (const auto& run : runs) {
@@ -229,6 +232,7 @@ int main(int argc, char** argv) {
       j["robot_barcode_corrections"] = run.robot_corrections;
       const std::string dir = report ? out_dir + "/" + run.mode + (run.barcodes ? "_barcodes" : "") : out_dir;
       write_outputs(dir, j, run.result);
+      plot_dirs.push_back(dir);
       all.push_back(j);
       std::cout << "== " << run.mode << (run.barcodes ? ", robot barcodes kept" : ", robot barcodes removed") << '\n';
       print_summary(std::cout, info, run.result);
@@ -244,6 +248,21 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
     return 1;
+  }
+  // A plot per run: every robot's true and estimated path with the landmarks.
+  const std::string py = root + "/.venv/bin/python", script = root + "/tools/plot_dataset.py";
+  if (!no_plots) {
+    std::fflush(stdout);
+    if (std::filesystem::exists(py) && std::filesystem::exists(script)) {
+      for (const auto& dir : plot_dirs) {
+        const std::string cmd = "'" + py + "' '" + script + "' '" + dir + "' > /dev/null";
+        if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "run_dataset: plotting failed (%s)\n", cmd.c_str());
+      }
+      std::printf("plots: <run dir>/paths.png\n");
+    } else {
+      std::fprintf(stderr, "run_dataset: no .venv (tools/setup.sh makes it): plot with .venv/bin/python "
+                           "tools/plot_dataset.py RUN_DIR\n");
+    }
   }
   return 0;
 }

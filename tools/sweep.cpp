@@ -172,6 +172,7 @@ int main(int argc, char** argv) {
               static_cast<double>(job_list.size()) / wall, out_dir.c_str());
   const std::string root = std::filesystem::path(argv[0]).parent_path().string() + "/../..";
   const std::string py = root + "/.venv/bin/python", script = root + "/tools/plot_sweep.py";
+  std::fflush(stdout);
   if (!no_plots) {
     if (std::filesystem::exists(py) && std::filesystem::exists(script)) {
       const std::string cmd = "'" + py + "' '" + script + "' '" + out_dir + "'";

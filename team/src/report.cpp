@@ -139,6 +139,7 @@ void write_outputs(const std::string& dir, const nlohmann::json& metrics, const 
     }
     for (std::size_t id = 0; id < r.final_truth.size(); ++id) {
       if (status[id]) continue;
+      if (!r.truth_present.empty() && !r.truth_present[id]) continue;  // no such landmark
       const bool flagged = std::find(r.final_moving.begin(), r.final_moving.end(), static_cast<int>(id)) != r.final_moving.end();
       out << id << ',' << r.final_truth[id].x() << ',' << r.final_truth[id].y() << ',' << int(r.truly_moving[id]) << ','
           << (flagged ? "moving" : "absent") << ",,,,,\n";

@@ -193,6 +193,11 @@ RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& ma
   }
   out.final_truth = f.true_landmarks;
   out.truly_moving = f.truly_moving;
+  out.truth_present.assign(f.true_landmarks.size(), 0);
+  for (int i = 0; i < gt_in.num_landmarks; ++i) {
+    const int id = gt_in.landmarks[i].id;
+    if (id >= 0 && id < static_cast<int>(out.truth_present.size())) out.truth_present[static_cast<std::size_t>(id)] = 1;
+  }
   out.bus_messages = bus.messages();
   return out;
 }

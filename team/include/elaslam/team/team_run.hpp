@@ -48,6 +48,7 @@ struct RunResult {
   std::vector<int> final_moving;
   std::vector<Eigen::Vector2d> final_truth;  // true landmark positions at the last frame
   std::vector<std::uint8_t> truly_moving;
+  std::vector<std::uint8_t> truth_present;  // ids with ground truth (empty: all of final_truth)
   long long bus_messages = 0;  // messages carried by the in-process bus
   // Observations that corrected a robot's pose (all robots), by landmark id.
   std::vector<long> corrections_by_landmark;
