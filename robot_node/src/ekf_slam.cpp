@@ -196,6 +196,7 @@ UpdateReport EkfSlam::check(int id, const RangeBearing& z) const {
   if (report.status != EkfStatus::kOk) return report;
   report.d2 = inn.d2;
   report.innovation = inn.nu;
+  report.whitened = inn.w;
   return report;
 }
 
@@ -211,6 +212,7 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
   if (report.status != EkfStatus::kOk) return report;
   report.d2 = inn.d2;
   report.innovation = inn.nu;
+  report.whitened = inn.w;
   if (gate && inn.d2 > gate_threshold_) {
     report.status = EkfStatus::kGated;
     return report;
@@ -236,6 +238,7 @@ UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   if (report.status != EkfStatus::kOk) return report;
   report.d2 = inn.d2;
   report.innovation = inn.nu;
+  report.whitened = inn.w;
   // P H^T (n x 2) from the robot columns (complete) and the landmark's columns.
   lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
   lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);

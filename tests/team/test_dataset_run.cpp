@@ -76,11 +76,12 @@ TEST_F(RealSlice, RobotBarcodesHurtEkfAndElaKeepsMostOfThemOut) {
   const RunResult ekf_without = run(Mode::kEkf, false);
   const RunResult ekf_with = run(Mode::kEkf, true);
   const RunResult ela_with = run(Mode::kEla, true);
-  // Measured: ekf 0.323 -> 0.685 m with the other robots kept in; ela 0.485 m.
+  const RunResult ela_without = run(Mode::kEla, false);
+  // Measured: ekf 0.323 -> 0.685 m with the other robots kept in; ela 0.315 -> 0.307 m.
   EXPECT_GT(mean_of_rms(ekf_with), 1.5 * mean_of_rms(ekf_without));
-  EXPECT_LT(mean_of_rms(ela_with), 0.85 * mean_of_rms(ekf_with));
-  // ekf lets every sighting of a robot correct a pose (632); ela fewer (458).
-  EXPECT_LT(robot_corrections(ela_with), robot_corrections(ekf_with));
+  EXPECT_LT(mean_of_rms(ela_with), 1.1 * mean_of_rms(ela_without));
+  // ekf lets every sighting of a robot correct a pose (632); ela 270.
+  EXPECT_LT(robot_corrections(ela_with), robot_corrections(ekf_with) / 2);
   EXPECT_GT(ela_with.metrics.flagged, 0);
 }
 

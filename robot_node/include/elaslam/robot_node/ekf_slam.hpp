@@ -56,6 +56,7 @@ struct UpdateReport {
   double d2 = 0.0;         // innovation Mahalanobis distance squared, z^T Z^-1 z
   double threshold = 0.0;  // chi-square quantile used (0 when no gate was applied)
   Eigen::Vector2d innovation = Eigen::Vector2d::Zero();  // z = y - h(X), bearing wrapped
+  Eigen::Vector2d whitened = Eigen::Vector2d::Zero();    // L^-1 z with Z = L L^T: d2 = |whitened|^2
 };
 
 class EkfSlam {

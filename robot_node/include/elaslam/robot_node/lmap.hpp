@@ -31,6 +31,13 @@ struct LMapEntry {
   bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
   bool reported_moving = false;  // a MOVING event went out and no ADD / RETURN since
   int times_moving = 0;          // how often it has been found (or told) moving
+  // A candidate's whitened innovations summed over its consistent sightings: white
+  // for a static landmark (|sum|^2 / n is chi-square, 2 dof), drifting for a slow
+  // mover that each single test would let through.
+  Eigen::Vector2d innovation_sum = Eigen::Vector2d::Zero();
+  int innovations = 0;
+  // A STATIC landmark's whitened innovations, exponentially weighted (drift test).
+  Eigen::Vector2d drift = Eigen::Vector2d::Zero();
 };
 
 class LMap {

@@ -95,6 +95,7 @@ class Robot {
   void gate_view_consensus();
   void handle_candidates(const FrameInput& in, FrameSummary* s);
   void check_missing(FrameSummary* s);
+  void drift_test();
   int sightings_to_confirm(const LMapEntry& e) const;
   void confirm(int id, const RangeBearing& z, FrameSummary* s);
   void drop_unseen_candidates();
@@ -110,6 +111,7 @@ class Robot {
   ConsensusSolver solver_;
   double ela_threshold_;      // chi2(ela_gate_probability, 2 dof)
   double candidate_threshold_;
+  double drift_threshold_ = 0.0;
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;

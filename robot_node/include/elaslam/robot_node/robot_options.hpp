@@ -28,6 +28,14 @@ struct RobotOptions {
   /// Consistent candidate sightings refine the candidate's own estimate (a
   /// landmark-only "consider" update) while the robot's pose stays untouched.
   bool candidate_updates = true;
+  /// Also test the running sum of a candidate's whitened innovations (a slow mover
+  /// drifts consistently; a static landmark's innovations average out).
+  bool candidate_drift_test = false;
+  /// Drift test of STATIC landmarks: their whitened innovations summed with this
+  /// forgetting factor (0: off); the sum's chi-square test failing counts as an
+  /// out-of-ELA verdict.
+  double drift_memory = 0.0;
+  double drift_gate_probability = 0.9999;  // the sum is tested every frame: a stricter gate
   /// A candidate unseen for this many frames starts over (1: it must be seen in
   /// every frame; a sensor that reports a landmark only every few frames needs more).
   int candidate_gap_frames = 1;
