@@ -4,6 +4,7 @@
 #
 #   tools/run_team.sh [--config FILE] [--mode M] [--rate F] [--dynamism P] [--speed V]
 #                     [--seed S] [--frames N] [--out DIR] [--hosts] [--port P] [--in-process]
+#                     [--build-dir DIR]
 #
 # - Does the set-up if needed (tools/setup.sh) and builds.
 # - Starts lcm-logger (DIR/run.lcmlog), main_robot, one robot_node per robot of the
@@ -17,9 +18,11 @@
 # - A process that dies is reported with its exit status; the script then exits
 #   non-zero. Nothing is left behind (processes, namespaces), also on Ctrl-C.
 # - --in-process runs the same scenario in one process, in lockstep (run_scenario).
+# - --build-dir DIR (or ELASLAM_BUILD_DIR) takes the programs from DIR/bin (default:
+#   build/); tests pass their own build dir.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="$ROOT/build/bin"
+BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
 OUT=""
 MODE=""
@@ -30,7 +33,7 @@ INSIDE=0
 SIM_ARGS=()
 EVAL_ARGS=()
 
-usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --config) CONFIG="$2"; shift 2 ;;
@@ -39,6 +42,7 @@ while [ $# -gt 0 ]; do
     --dynamism|--speed|--seed) SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
     --rate|--frames) SIM_ARGS+=("$1" "$2"); shift 2 ;;
     --port) PORT="$2"; shift 2 ;;
+    --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --hosts) HOSTS=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
     --inside) INSIDE=1; shift ;;  # internal: already inside the namespace
@@ -49,16 +53,24 @@ done
 case "$MODE" in ""|ekf|gated|ela|consensus) ;; *) echo "run_team.sh: --mode must be ekf, gated, ela or consensus" >&2; exit 2 ;; esac
 [ -f "$CONFIG" ] || { echo "run_team.sh: no such config file: $CONFIG" >&2; exit 2; }
 CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
+[ -d "$BUILD_DIR" ] || { echo "run_team.sh: no such build directory: $BUILD_DIR" >&2; exit 2; }
+BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
+BIN="$BUILD_DIR/bin"
 [ -n "$OUT" ] || OUT="$ROOT/runs/team_$(date +%Y%m%d_%H%M%S)"
 mkdir -p "$OUT/logs"
 OUT="$(cd "$OUT" && pwd)"
 
 if [ "$INSIDE" -eq 0 ]; then
   "$ROOT/tools/setup.sh" >/dev/null
-  cmake --build "$ROOT/build" --target simulator robot_node main_robot run_scenario $([ -f "$ROOT/tools/evaluate.cpp" ] && echo evaluate) -j "$(nproc)" >/dev/null
+  cmake --build "$BUILD_DIR" --target simulator robot_node main_robot run_scenario $([ -f "$ROOT/tools/evaluate.cpp" ] && echo evaluate) -j "$(nproc)" >/dev/null
 fi
 if [ "$IN_PROCESS" -eq 1 ]; then
-  exec "$BIN/run_scenario" --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} "${SIM_ARGS[@]}"
+  # run_scenario takes no --rate / --frames (the config's scenario.rate_hz / frames).
+  if [ "${#SIM_ARGS[@]}" -ne "${#EVAL_ARGS[@]}" ]; then
+    echo "run_team.sh: --in-process runs the config's frames and rate; --rate and --frames are for the live team" >&2
+    exit 2
+  fi
+  exec "$BIN/run_scenario" --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} "${EVAL_ARGS[@]}"
 fi
 
 ROBOTS=($("$BIN/simulator" --config "$CONFIG" --list-robots))
@@ -164,7 +176,7 @@ own_host() { echo ip netns exec "${HOST_NS[$1]}" env "LCM_DEFAULT_URL=$URL"; }
 if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; then
   # The whole team in a private namespace: run this script again inside it.
   rc=0
-  "$ROOT/tools/netns_run.sh" --port "$PORT" -- "$0" --inside --config "$CONFIG" --out "$OUT" \
+  "$ROOT/tools/netns_run.sh" --port "$PORT" -- "$0" --inside --build-dir "$BUILD_DIR" --config "$CONFIG" --out "$OUT" \
     ${MODE:+--mode "$MODE"} "${SIM_ARGS[@]}" || rc=$?
   exit $rc
 fi

@@ -68,14 +68,18 @@ void GlobalMap::fuse(GlobalEntry& g) const {
   g.fused = g.fused_cov * eta;
 }
 
-void GlobalMap::set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices) {
+void GlobalMap::set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed) {
   GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
-  if (g.status == GlobalStatus::kMoving) return;  // already known: idempotent, no second notice
+  if (g.status == GlobalStatus::kMoving) {  // already known: idempotent, no second notice
+    if (!unconfirmed && g.moving_unconfirmed) g.moving_unconfirmed = false;
+    return;
+  }
   g.status = GlobalStatus::kMoving;
   g.status_frame = frame;
   g.moving_by = robot_id;
+  g.moving_unconfirmed = unconfirmed;
   for (auto& e : g.by_robot) e.valid = false;  // deleted from the map
-  if (notices) notices->push_back({id, robot_id, frame});
+  if (notices && !unconfirmed) notices->push_back({id, robot_id, frame});
   ++version_;
 }
 
@@ -100,10 +104,13 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
   } else {
     RobotEstimate& est = g.by_robot[static_cast<std::size_t>(e.robot_id - 1)];
     est = {true, e.position, e.cov, e.frame};
-    // While MOVING, estimates are kept but the landmark stays out until a RETURN.
-    if (g.status == GlobalStatus::kAbsent || e.kind == landmark_event_t::RETURN) {
+    if (g.status == GlobalStatus::kAbsent) g.history_unknown = s.gap_pending;
+    // While MOVING, estimates are kept but the landmark stays out until a RETURN
+    // (or, for an unconfirmed moving status, any robot's estimate: see GlobalEntry).
+    if (g.status == GlobalStatus::kAbsent || e.kind == landmark_event_t::RETURN || g.moving_unconfirmed) {
       if (g.status != GlobalStatus::kStatic) g.status_frame = e.frame;
       g.status = GlobalStatus::kStatic;
+      g.moving_unconfirmed = false;
     }
     if (g.status == GlobalStatus::kStatic) fuse(g);
     ++version_;
@@ -116,20 +123,45 @@ void GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame,
                                const std::vector<int>& moving_ids, std::vector<Notice>* notices) {
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
   const std::size_t r = static_cast<std::size_t>(robot_id - 1);
+  // Events of r this map has not seen: a gap on r's event stream, or a snapshot
+  // ahead of r's last applied event (a restarted main_robot: empty, or resumed from
+  // a state file up to state_save_interval_s old). Those events may have been
+  // MOVING or RETURN: the snapshot's lists stand in for them.
+  const bool missed = s.gap_pending || seq > s.last_seq;
   // Moving ids first: a MOVING event lost in a gap is recovered here.
-  if (s.gap_pending)
-    for (int id : moving_ids)
-      if (entries_[static_cast<std::size_t>(id)].status == GlobalStatus::kStatic &&
-          entries_[static_cast<std::size_t>(id)].status_frame <= frame)
+  if (missed) {
+    for (int id : moving_ids) {
+      const GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
+      if (g.status == GlobalStatus::kMoving || g.status_frame > frame) continue;
+      if (g.by_robot[r].valid || (g.status == GlobalStatus::kStatic && !g.history_unknown && g.moving_by == 0)) {
+        // r held it here and now lists it as moving, or it has never moved as far as
+        // this map knows (events or the state file): r's MOVING event was lost.
         set_moving(id, robot_id, frame, notices);
+      } else if (g.contributors() == 0) {
+        // r's opinion of unknown age, about a landmark no robot holds here (also one
+        // this map has not seen: its ADD was lost too, as after a restart).
+        set_moving(id, robot_id, frame, notices, /*unconfirmed=*/true);
+      }
+      // Else another robot holds it static: r's listing may be stale (a robot lists
+      // a landmark as moving until it sees it again, after others took it back).
+    }
+  }
   for (auto& g : entries_) g.by_robot[r].valid = false;
   for (const auto& [id, est] : lms) {
     GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
     g.by_robot[r] = est;
     g.by_robot[r].valid = true;
-    if (g.status == GlobalStatus::kAbsent) {
+    // r holds as static a landmark this map has as moving: r took it back after it
+    // moved (a robot drops a landmark it learns is moving, by its own test or a
+    // notice, before its next frame) and its RETURN was lost; or the moving status
+    // is an unconfirmed one (above), which any robot's static holding overrides.
+    const bool returned = missed && g.status == GlobalStatus::kMoving && g.status_frame < frame;
+    const bool overridden = g.status == GlobalStatus::kMoving && g.moving_unconfirmed && g.status_frame <= frame;
+    if (g.status == GlobalStatus::kAbsent) g.history_unknown = missed;
+    if (g.status == GlobalStatus::kAbsent || returned || overridden) {
       g.status = GlobalStatus::kStatic;
       g.status_frame = frame;
+      g.moving_unconfirmed = false;
     }
   }
   for (auto& g : entries_)

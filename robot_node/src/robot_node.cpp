@@ -12,6 +12,7 @@ namespace {
 constexpr double kMaxRange = 1e4;       // [m] anything beyond is a corrupt message
 constexpr double kMaxOdomVar = 1e3;     // [m^2/m], [rad^2/rad]: sanity bound on the noise model
 constexpr double kBearingSlack = 1e-9;  // [rad] tolerance on [-pi, pi]
+constexpr std::size_t kMaxHeldNotices = 256;  // notices held for frames not processed yet
 
 bool finite(double v) { return std::isfinite(v); }
 
@@ -32,6 +33,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
     : options_(options), robot_id_(robot_id), robot_(options, robot_id) {
   events_.reserve(static_cast<std::size_t>(2 * kMaxObservations + options.ekf.capacity + 8));
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
+  held_.reserve(kMaxHeldNotices);
 }
 
 std::string RobotNode::validate(const sensor_frame_t& m) const {
@@ -106,6 +108,17 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count();
   processing_.add(us);
   fill_pose(msg, now_utime, s, us);
+  // Notices held for this frame or an earlier one take effect now, after
+  // this frame's outputs, in arrival order (as in the in-process run).
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < held_.size(); ++i) {
+    if (held_[i].frame <= last_frame_) {
+      apply_notice(held_[i]);
+    } else {
+      held_[kept++] = held_[i];
+    }
+  }
+  held_.resize(kept);
   return Verdict::kProcessed;
 }
 
@@ -188,9 +201,21 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
     if (why) *why = problem;
     return false;
   }
+  // Ahead of this robot's frames: hold it (a fresh node, one far behind or a full
+  // buffer applies it at once; a notice is never lost).
+  if (last_frame_ >= 0 && msg.frame > last_frame_ && msg.frame <= last_frame_ + options_.max_frame_gap &&
+      held_.size() < held_.capacity()) {
+    held_.push_back(msg);
+    ++counters_.notices_deferred;
+    return true;
+  }
+  apply_notice(msg);
+  return true;
+}
+
+void RobotNode::apply_notice(const dynamic_notice_t& msg) {
   const bool removed = msg.detected_by != robot_id_ && robot_.apply_notice(msg.landmark_id, msg.frame);
   ++(removed ? counters_.notices_applied : counters_.notices_ignored);
-  return true;
 }
 
 node_status_t RobotNode::status_msg(std::int64_t now_utime) const {

@@ -121,6 +121,65 @@ TEST(GlobalMap, GapIsNotedAndRepairedBySnapshot) {
   EXPECT_EQ(m.apply(ev(1, 4, landmark_event_t::ADD, 6, 9, 9), &notices), EventResult::kStale);
 }
 
+RobotEstimate held(double x, double y, int frame) {
+  return RobotEstimate{true, {x, y}, Eigen::Matrix2d::Identity() * 0.01, frame};
+}
+
+// A restarted main_robot (empty, no state file) rebuilds from the robots' first
+// snapshots: a moving id that no robot holds here is an opinion of unknown age,
+// set moving without a notice, and any robot's static holding takes it back.
+TEST(GlobalMap, RestartWithoutStateTakesSnapshotMovingListsAsUnconfirmed) {
+  GlobalMap m(options());
+  std::vector<Notice> notices;
+  // Robot 1's first snapshot (seq 40: ahead of anything seen) lists 5 as moving.
+  m.apply_snapshot(1, 40, 60, {{2, held(1, 1, 60)}}, {5}, &notices);
+  EXPECT_EQ(m.entry(5).status, GlobalStatus::kMoving);
+  EXPECT_TRUE(m.entry(5).moving_unconfirmed);
+  EXPECT_TRUE(notices.empty());  // no notice for an opinion of unknown age
+  EXPECT_EQ(m.entry(2).status, GlobalStatus::kStatic);
+  // Robot 2 holds 5 static in its snapshot of a later frame: it is static again.
+  m.apply_snapshot(2, 30, 61, {{5, held(5, 5, 61)}}, {}, &notices);
+  EXPECT_EQ(m.entry(5).status, GlobalStatus::kStatic);
+  EXPECT_FALSE(m.entry(5).moving_unconfirmed);
+  EXPECT_TRUE(notices.empty());
+}
+
+// After a gap: robot r's MOVING was lost when r held the landmark here, or when the
+// landmark never moved as far as this map knows (notice either way); r's listing is
+// left alone when the landmark moved before and another robot holds it static
+// again (r lists it as moving until it sees it again: possibly stale); and a
+// landmark moving here that r holds static was taken back by r (RETURN lost).
+TEST(GlobalMap, FirstSnapshotAfterAGapRecoversLostMovingAndReturn) {
+  GlobalMap m(options());
+  std::vector<Notice> notices;
+  m.apply(ev(1, 1, landmark_event_t::ADD, 3, 3, 3, 0.01, 1), &notices);
+  m.apply(ev(2, 1, landmark_event_t::ADD, 4, 4, 4, 0.01, 1), &notices);
+  m.apply(ev(1, 2, landmark_event_t::ADD, 6, 6, 6, 0.01, 1), &notices);
+  m.apply(ev(2, 2, landmark_event_t::ADD, 7, 7, 7, 0.01, 1), &notices);
+  m.apply(ev(2, 3, landmark_event_t::MOVING, 4, 0, 0, 0, 3), &notices);     // 4 moved ...
+  m.apply(ev(2, 4, landmark_event_t::RETURN, 4, 4, 5, 0.01, 8), &notices);  // ... and came back
+  m.apply(ev(2, 5, landmark_event_t::MOVING, 6, 0, 0, 0, 5), &notices);     // 6 moving since frame 5
+  ASSERT_EQ(notices.size(), 2u);
+  notices.clear();
+  // Robot 1's events 3..9 are lost (main_robot down); its snapshot of frame 20
+  // lists 3 (it held it), 4 (moved before, robot 2 holds it again) and 7 (never
+  // moved, robot 2 holds it) as moving, and holds 6.
+  m.apply_snapshot(1, 9, 20, {{6, held(6.1, 6, 20)}}, {3, 4, 7}, &notices);
+  EXPECT_EQ(m.entry(3).status, GlobalStatus::kMoving);
+  EXPECT_EQ(m.entry(7).status, GlobalStatus::kMoving);
+  ASSERT_EQ(notices.size(), 2u);
+  EXPECT_EQ(notices[0].detected_by, 1);
+  EXPECT_EQ(m.entry(4).status, GlobalStatus::kStatic);  // possibly stale listing: left alone
+  EXPECT_EQ(m.entry(6).status, GlobalStatus::kStatic);  // robot 1 took it back: RETURN was lost
+  EXPECT_EQ(m.entry(6).status_frame, 20);
+  // Without a gap a snapshot's moving list changes nothing.
+  notices.clear();
+  m.apply(ev(1, 10, landmark_event_t::UPDATE, 6, 6.1, 6, 0.01, 21), &notices);
+  m.apply_snapshot(1, 10, 21, {{6, held(6.1, 6, 21)}}, {4}, &notices);
+  EXPECT_EQ(m.entry(4).status, GlobalStatus::kStatic);
+  EXPECT_TRUE(notices.empty());
+}
+
 TEST(GlobalMap, SnapshotReplacesThatRobotsContributionWholesale) {
   GlobalMap m(options());
   m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), nullptr);

@@ -149,5 +149,37 @@ TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {
   EXPECT_EQ(node_.counters().rejected_inputs, 2);
 }
 
+// A notice about frame f that arrives before this robot's own SENSOR frame f (the
+// detecting robot and main_robot were faster) takes effect after frame f, exactly
+// as in the in-process run: the landmark still corrects frame f here.
+TEST_F(RobotNodeInput, ANoticeAheadOfThisRobotsFrameWaitsForIt) {
+  run(0, 4);  // frames 0..3 processed: landmark 3 mapped
+  dynamic_notice_t n{};
+  n.seq = 1;
+  n.landmark_id = 3;
+  n.detected_by = 1;
+  n.frame = 4;  // another robot's detection in frame 4, before our frame 4
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_EQ(node_.counters().notices_deferred, 1);
+  EXPECT_TRUE(node_.robot().filter().has_landmark(3));  // held
+  run(4, 5);
+  // Frame 4 used landmark 3 (its pose went out with 6 landmarks); then the notice
+  // took effect.
+  EXPECT_EQ(node_.pose_msg().num_landmarks, 6);
+  EXPECT_FALSE(node_.robot().filter().has_landmark(3));
+  EXPECT_EQ(node_.counters().notices_applied, 1);
+  // A notice for a frame already processed applies at once.
+  n.landmark_id = 4;
+  n.frame = 2;
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_FALSE(node_.robot().filter().has_landmark(4));
+  EXPECT_EQ(node_.counters().notices_deferred, 1);
+  // One further ahead than node.max_frame_gap is not held: applied at once.
+  n.landmark_id = 5;
+  n.frame = 4 + 1000;
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_FALSE(node_.robot().filter().has_landmark(5));
+}
+
 }  // namespace
 }  // namespace elaslam

@@ -3,18 +3,30 @@
 # namespace, recorded by lcm-logger) runs end to end, every robot publishes a pose
 # for every frame, and its metrics agree with the in-process run of the same
 # scenario and seed. Exit 77 (skip) when namespaces are not available.
-#   tests/system/team_live.sh BUILD_DIR
+# With --hosts (test system_hosts): run_team.sh --hosts, one network namespace per
+# process (simulator, main_robot + logger, each robot) joined by a bridge, LCM with
+# TTL 1 across it, as separate onboard computers would be.
+#   tests/system/team_live.sh BUILD_DIR [--hosts]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BUILD="${1:?usage: team_live.sh BUILD_DIR}"
+BUILD="$(cd "${1:?usage: team_live.sh BUILD_DIR [--hosts]}" && pwd)"
+HOSTS="${2:-}"
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
 [ "$(id -u)" -eq 0 ] || { echo "team_live: skipped (needs root for network namespaces)"; exit 77; }
 ip netns list >/dev/null 2>&1 || { echo "team_live: skipped (no ip netns)"; exit 77; }
 ARGS=(--dynamism 50 --speed 0.5 --seed 3)
 # The default rate (10 Hz, 15 s): the rate is part of the scenario (motion per frame).
-"$ROOT/tools/netns_run.sh" --port 7693 -- "$ROOT/tools/run_team.sh" --inside --out "$OUT/live" "${ARGS[@]}" \
-  > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
+if [ "$HOSTS" = --hosts ]; then
+  # --inside: no set-up or build (the test's build dir is used as it is); --hosts
+  # makes the namespaces itself.
+  "$ROOT/tools/run_team.sh" --inside --hosts --port 7699 --build-dir "$BUILD" --out "$OUT/live" "${ARGS[@]}" \
+    > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
+  grep "hosts on a bridge" "$OUT/live.txt"
+else
+  "$ROOT/tools/netns_run.sh" --port 7693 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT/live" \
+    "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
+fi
 "$BUILD/bin/run_scenario" --config "$ROOT/config/paper.yaml" --out "$OUT/inproc" "${ARGS[@]}" > /dev/null
 python3 - "$OUT/live/metrics.json" "$OUT/inproc/metrics.json" <<'PY'
 import json, sys

@@ -43,6 +43,16 @@ struct GlobalEntry {
   GlobalStatus status = GlobalStatus::kAbsent;
   int status_frame = -1;   // frame of the last status change
   int moving_by = 0;       // robot whose MOVING event made it moving
+  // Moving only by the moving list of a snapshot taken after a gap, from a robot that
+  // held no estimate of it here: an opinion of unknown age (a robot keeps listing a
+  // landmark as moving until it sees it again, also after another robot's RETURN).
+  // No notice went out for it; a robot holding it static in a snapshot of the same
+  // or a later frame takes it back. Not persisted.
+  bool moving_unconfirmed = false;
+  // First known from a robot whose stream had a gap (a snapshot after a gap, or an
+  // event before the snapshot that repairs the gap, e.g. right after a restart), so
+  // whether it moved before is unknown here. Not persisted.
+  bool history_unknown = false;
   std::array<RobotEstimate, kMaxTeamRobots> by_robot{};
   Eigen::Vector2d fused = Eigen::Vector2d::Zero();
   Eigen::Matrix2d fused_cov = Eigen::Matrix2d::Zero();
@@ -105,7 +115,7 @@ class GlobalMap {
 
  private:
   void fuse(GlobalEntry& g) const;
-  void set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices);
+  void set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed = false);
 
   GlobalMapOptions options_;
   std::vector<GlobalEntry> entries_;

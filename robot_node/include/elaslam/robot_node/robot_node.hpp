@@ -31,6 +31,7 @@ struct RobotNodeCounters {
   std::int64_t events_sent = 0;
   std::int64_t notices_applied = 0;   // dynamic notices that removed a landmark here
   std::int64_t notices_ignored = 0;   // notices about landmarks this robot did not hold / its own
+  std::int64_t notices_deferred = 0;  // notices for a frame this robot had not processed yet: held until it has
 };
 
 class RobotNode {
@@ -44,6 +45,11 @@ class RobotNode {
   Verdict on_sensor(const sensor_frame_t& msg, std::int64_t now_utime, std::string* why = nullptr);
 
   /// A dynamic notice from main_robot. Returns false when it was invalid.
+  /// A notice about frame f takes effect after this robot has processed its own
+  /// frame f, whatever the order of arrival (another robot's detection in frame f
+  /// may reach this robot before its own SENSOR frame f does): it is held until
+  /// then, so the live team does what the in-process run does (notices of frame k
+  /// between frames k and k + 1). Held at most node.max_frame_gap frames ahead.
   bool on_notice(const dynamic_notice_t& msg, std::string* why = nullptr);
 
   void count_decode_error() { ++counters_.decode_errors; }
@@ -71,6 +77,7 @@ class RobotNode {
  private:
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
+  void apply_notice(const dynamic_notice_t& msg);
 
   RobotOptions options_;
   int robot_id_;
@@ -85,6 +92,7 @@ class RobotNode {
   lmap_snapshot_t snapshot_{};
   bool snapshot_ready_ = false;
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
+  std::vector<dynamic_notice_t> held_;  // notices for frames not processed yet (fixed capacity)
 };
 
 }  // namespace elaslam

@@ -1,0 +1,242 @@
+#!/usr/bin/env python3
+"""Helpers of the system tests (tests/system/*.sh): wait on live LCM traffic and
+compare recorded LCM logs. Needs the PyPI `lcm` (the project's .venv) and the
+generated Python types (BUILD/lcmgen/python).
+
+  lcm_check.py --build-dir B wait-nodes N [--timeout S]
+      wait until N distinct nodes published STATUS_* (robots + main) on LCM_DEFAULT_URL
+  lcm_check.py --build-dir B wait-frame CHANNEL FRAME [--timeout S]
+      wait until a pose_estimate_t on CHANNEL reaches FRAME
+  lcm_check.py --build-dir B compare-poses LOG_A LOG_B --robots 1 2 3 --frames N [--tol T]
+      POSE_<r> of both logs, by (robot, frame): every frame present once in both,
+      max |dx|, |dy|, |dtheta| and covariance below T while the robot's input
+      (SENSOR frames and the notices in effect before each) is the same;
+      exit 0: all equal, 3: differences only after a robot's input differed
+      (a late notice), 1: a difference with the same input or a missing pose
+  lcm_check.py --build-dir B compare-maps LOG_A LOG_B [--tol T]
+      the last GLOBAL_MAP of each log: same static ids, positions within T,
+      same moving ids
+"""
+import argparse
+import math
+import os
+import re
+import sys
+import time
+
+
+def load_types(build_dir):
+    sys.path.insert(0, os.path.join(build_dir, "lcmgen", "python"))
+    import elaslam  # noqa: F401
+    return elaslam
+
+
+def read_log(path):
+    import lcm
+    for ev in lcm.EventLog(path, "r"):
+        yield ev
+
+
+def cmd_wait_nodes(args, T):
+    import lcm
+    lc = lcm.LCM()
+    seen = set()
+
+    def on_status(_ch, data):
+        m = T.node_status_t.decode(data)
+        seen.add((m.node_kind, m.node_id))
+
+    lc.subscribe("STATUS_.*", on_status)
+    end = time.monotonic() + args.timeout
+    while len(seen) < args.n and time.monotonic() < end:
+        lc.handle_timeout(50)
+    if len(seen) < args.n:
+        print(f"wait-nodes: only {len(seen)} of {args.n} nodes announced themselves: {sorted(seen)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_wait_frame(args, T):
+    import lcm
+    lc = lcm.LCM()
+    best = [-1]
+
+    def on_pose(_ch, data):
+        best[0] = max(best[0], T.pose_estimate_t.decode(data).frame)
+
+    lc.subscribe(args.channel, on_pose).set_queue_capacity(10000)
+    end = time.monotonic() + args.timeout
+    while best[0] < args.frame and time.monotonic() < end:
+        lc.handle_timeout(20)
+    if best[0] < args.frame:
+        print(f"wait-frame: {args.channel} reached frame {best[0]} only, wanted {args.frame}", file=sys.stderr)
+        return 1
+    print(best[0])
+    return 0
+
+
+def read_poses_and_inputs(path, T, robots):
+    """POSE_<r> by (robot, frame), duplicates, notices, and each robot's input stream.
+
+    On one host every socket of a multicast group gets the datagrams in the order
+    they were sent, and a node handles its socket in that order; the logger's order
+    is that order. Robot r's input is its SENSOR_r frames and the DYNAMIC_NOTICE
+    messages of other robots' detections (r ignores its own). robot_node holds a
+    notice of frame f until it has processed its own frame f (RobotNode::on_notice),
+    so a notice takes effect after frame max(f, the last frame r had processed when
+    it arrived): after frame f, as in the in-process run, unless it arrives after
+    SENSOR_r of frame f + 1 (a late notice, the only timing-dependent input).
+    inputs[r][k] = sorted notices that took effect between r's frames k - 1 and k."""
+    poses, dup, notices = {}, [], []
+    inputs = {r: {} for r in robots}
+    last = {r: -1 for r in robots}
+    for ev in read_log(path):
+        if re.fullmatch(r"POSE_\d+", ev.channel):
+            m = T.pose_estimate_t.decode(ev.data)
+            key = (m.robot_id, m.frame)
+            if key in poses:
+                dup.append(key)
+            poses[key] = m
+        elif ev.channel == "DYNAMIC_NOTICE":
+            n = T.dynamic_notice_t.decode(ev.data)
+            notices.append(n)
+            for r in robots:
+                if n.detected_by != r:
+                    effect = max(n.frame, last[r]) if last[r] >= 0 else -1
+                    inputs[r].setdefault(effect + 1, []).append((n.frame, n.landmark_id, n.detected_by))
+        elif re.fullmatch(r"SENSOR_\d+", ev.channel):
+            m = T.sensor_frame_t.decode(ev.data)
+            if m.robot_id in inputs:
+                last[m.robot_id] = max(last[m.robot_id], m.frame)
+    for r in robots:
+        for k in inputs[r]:
+            inputs[r][k].sort()
+    return poses, dup, notices, inputs
+
+
+def cmd_compare_poses(args, T):
+    a, dup_a, not_a, in_a = read_poses_and_inputs(args.log_a, T, args.robots)
+    b, dup_b, not_b, in_b = read_poses_and_inputs(args.log_b, T, args.robots)
+    fails, notes = [], []
+    if dup_a or dup_b:
+        fails.append(f"duplicate POSE frames: {dup_a[:5]} / {dup_b[:5]}")
+    # The same notices (their order within a frame follows which robot's MOVING
+    # event reached main_robot first, a race without effect).
+    na = sorted((n.frame, n.landmark_id, n.detected_by) for n in not_a)
+    nb = sorted((n.frame, n.landmark_id, n.detected_by) for n in not_b)
+    print(f"notices: {len(na)} / {len(nb)}" + ("" if na == nb else
+          f"; only first {sorted(set(na) - set(nb))}, only second {sorted(set(nb) - set(na))}"))
+    worst = 0.0
+    for r in args.robots:
+        missing_a = [k for k in range(args.frames) if (r, k) not in a]
+        missing_b = [k for k in range(args.frames) if (r, k) not in b]
+        if missing_a or missing_b:
+            fails.append(f"robot {r}: frames without a pose: first log {missing_a[:10]}, second log {missing_b[:10]}")
+        # First frame whose input differs: a late notice in one of the two runs.
+        same_input = args.frames
+        for k in range(args.frames):
+            if in_a[r].get(k) != in_b[r].get(k):
+                same_input = k
+                break
+        late = sum(1 for k in range(args.frames) for (f, _, _) in in_a[r].get(k, []) if f < k - 1)
+        first_diff, rmax = None, 0.0
+        for k in range(args.frames):
+            if (r, k) not in a or (r, k) not in b:
+                continue
+            pa, pb = a[(r, k)], b[(r, k)]
+            d = max(abs(pa.x - pb.x), abs(pa.y - pb.y),
+                    abs(math.remainder(pa.theta - pb.theta, 2 * math.pi)),
+                    max(abs(pa.cov[i][j] - pb.cov[i][j]) for i in range(3) for j in range(3)))
+            rmax = max(rmax, d)
+            if d >= args.tol and first_diff is None:
+                first_diff = k
+        worst = max(worst, rmax)
+        line = (f"robot {r}: {sum(1 for k in range(args.frames) if (r, k) in a and (r, k) in b)} frames compared, "
+                f"max |diff| {rmax:.3g}; late notices (first log): {late}; ")
+        if same_input < args.frames:
+            ka, kb = in_a[r].get(same_input), in_b[r].get(same_input)
+            line += f"input differs from frame {same_input} (notices before it: {ka} vs {kb})"
+        else:
+            line += "same input in every frame"
+        print(line)
+        if first_diff is not None:
+            msg = f"robot {r}: poses differ from frame {first_diff} on (max {rmax:.3g})"
+            if first_diff < same_input:
+                fails.append(msg + " with the same input: a fault")
+            else:
+                notes.append(msg + f", after its input differed (frame {same_input}): notice timing, not a fault")
+    print(f"poses: {len(a)} / {len(b)} messages, worst difference {worst:.3g} (tolerance {args.tol:g})")
+    if notes:
+        print("\n".join(notes))
+    if fails:
+        print("\n".join(fails))
+        return 1
+    return 3 if notes and worst >= args.tol else 0
+
+
+def last_map(path, T):
+    last = None
+    for ev in read_log(path):
+        if ev.channel == "GLOBAL_MAP":
+            last = T.global_map_t.decode(ev.data)  # the last one published: the final map
+    return last
+
+
+def cmd_compare_maps(args, T):
+    a, b = last_map(args.log_a, T), last_map(args.log_b, T)
+    if a is None or b is None:
+        print("compare-maps: a log has no GLOBAL_MAP")
+        return 1
+    la = {l.id: l for l in a.landmarks[:a.num_landmarks]}
+    lb = {l.id: l for l in b.landmarks[:b.num_landmarks]}
+    ma, mb = sorted(a.moving_ids[:a.num_moving]), sorted(b.moving_ids[:b.num_moving])
+    fails = []
+    if sorted(la) != sorted(lb):
+        fails.append(f"static ids differ: only first {sorted(set(la) - set(lb))}, only second {sorted(set(lb) - set(la))}")
+    if ma != mb:
+        fails.append(f"moving ids differ: only first {sorted(set(ma) - set(mb))}, only second {sorted(set(mb) - set(ma))}")
+    dmax, worst_id = 0.0, None
+    for i in set(la) & set(lb):
+        d = math.hypot(la[i].x - lb[i].x, la[i].y - lb[i].y)
+        if d > dmax:
+            dmax, worst_id = d, i
+    print(f"maps: frame {a.frame} / {b.frame}, {len(la)} / {len(lb)} static, {len(ma)} / {len(mb)} moving, "
+          f"max position difference {dmax:.3g} m (landmark {worst_id}, tolerance {args.tol:g})")
+    if dmax > args.tol:
+        fails.append(f"landmark {worst_id} is {dmax:.3g} m apart")
+    if fails:
+        print("\n".join(fails))
+        return 1
+    return 0
+
+
+def main():
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--build-dir", default=os.path.join(root, "build"))
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    w = sub.add_parser("wait-nodes")
+    w.add_argument("n", type=int)
+    w.add_argument("--timeout", type=float, default=20.0)
+    f = sub.add_parser("wait-frame")
+    f.add_argument("channel")
+    f.add_argument("frame", type=int)
+    f.add_argument("--timeout", type=float, default=60.0)
+    c = sub.add_parser("compare-poses")
+    c.add_argument("log_a")
+    c.add_argument("log_b")
+    c.add_argument("--robots", type=int, nargs="+", required=True)
+    c.add_argument("--frames", type=int, required=True)
+    c.add_argument("--tol", type=float, default=1e-9)
+    m = sub.add_parser("compare-maps")
+    m.add_argument("log_a")
+    m.add_argument("log_b")
+    m.add_argument("--tol", type=float, default=0.05)
+    args = ap.parse_args()
+    T = load_types(args.build_dir)
+    return {"wait-nodes": cmd_wait_nodes, "wait-frame": cmd_wait_frame, "compare-poses": cmd_compare_poses,
+            "compare-maps": cmd_compare_maps}[args.cmd](args, T)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
