@@ -4,7 +4,9 @@
 //   evaluate --log FILE [--out DIR] [--mode NAME] [--quiet]
 //
 // Latency: POSE_<r> receive time in the log (lcm-logger's timestamp) minus its
-// source_utime (the SENSOR frame's publish time); global-map latency: receive time
+// source_utime (the SENSOR frame's publish time), `latency_us`; the robot's own
+// publish time of the POSE (its utime) minus source_utime, `pose_publish_latency_us`
+// (sensor publish to pose publish: no logger hop); global-map latency: receive time
 // of the first GLOBAL_MAP whose frame is >= k minus the latest SENSOR utime of
 // frame k. Both clocks are the same machine's wall clock.
 #include <algorithm>
@@ -199,8 +201,8 @@ int main(int argc, char** argv) {
   RunResult r;
   r.estimated.resize(R);
   r.truth.resize(R);
-  std::vector<std::vector<std::int64_t>> latency(R);
-  std::vector<std::int64_t> all_latency, map_latency;
+  std::vector<std::vector<std::int64_t>> latency(R), publish_latency(R);
+  std::vector<std::int64_t> all_latency, all_publish_latency, map_latency;
   std::vector<long> missing(R, 0);
   const double t0 = d.truth.begin()->second.time_s;
   const MapRecord* map = nullptr;
@@ -227,6 +229,8 @@ int main(int argc, char** argv) {
       f.processing_us[i] = p->msg.processing_us;
       latency[i].push_back(p->received_us - p->msg.source_utime);
       all_latency.push_back(latency[i].back());
+      publish_latency[i].push_back(p->msg.utime - p->msg.source_utime);
+      all_publish_latency.push_back(publish_latency[i].back());
       r.estimated[i].push_back({f.time_s, f.est_poses[i]});
       r.truth[i].push_back({f.time_s, f.true_poses[i]});
     }
@@ -262,13 +266,15 @@ int main(int argc, char** argv) {
   long dropped = 0;
   for (std::size_t i = 0; i < R; ++i) {
     j["robots"][i]["latency_us"] = to_json(quantiles(latency[i]));
+    j["robots"][i]["pose_publish_latency_us"] = to_json(quantiles(publish_latency[i]));
     j["robots"][i]["frames_dropped"] = missing[i];
     const auto nd = d.node_dropped.find(robot_ids[i]);
     j["robots"][i]["frames_dropped_reported_by_node"] = nd != d.node_dropped.end() ? nd->second : 0;
     dropped += missing[i];
   }
-  const Quantiles lq = quantiles(all_latency), mq = quantiles(map_latency);
+  const Quantiles lq = quantiles(all_latency), mq = quantiles(map_latency), pq = quantiles(all_publish_latency);
   j["latency_us"] = to_json(lq);
+  j["pose_publish_latency_us"] = to_json(pq);
   j["global_map_latency_us"] = to_json(mq);
   j["frames_dropped"] = dropped;
   j["log_events"] = d.events;
@@ -277,6 +283,8 @@ int main(int argc, char** argv) {
     print_summary(std::cout, info, r);
     std::cout << "  latency_us (sensor -> pose): p50 " << lq.p50 << " p99 " << lq.p99 << " max " << lq.max << " ("
               << lq.count << " poses)\n"
+              << "  pose publish latency_us (sensor publish -> pose publish): p50 " << pq.p50 << " p99 " << pq.p99
+              << " max " << pq.max << "\n"
               << "  global map latency_us (sensor -> map including the frame): p50 " << mq.p50 << " p99 " << mq.p99
               << " max " << mq.max << "\n"
               << "  frames dropped: " << dropped << "\n";

@@ -4,7 +4,7 @@
 #
 #   tools/run_team.sh [--config FILE] [--mode M] [--rate F] [--dynamism P] [--speed V]
 #                     [--seed S] [--frames N] [--out DIR] [--hosts] [--port P] [--in-process]
-#                     [--build-dir DIR]
+#                     [--build-dir DIR] [--realtime]
 #
 # - Does the set-up if needed (tools/setup.sh) and builds.
 # - Starts lcm-logger (DIR/run.lcmlog), main_robot, one robot_node per robot of the
@@ -20,6 +20,13 @@
 # - --in-process runs the same scenario in one process, in lockstep (run_scenario).
 # - --build-dir DIR (or ELASLAM_BUILD_DIR) takes the programs from DIR/bin (default:
 #   build/); tests pass their own build dir.
+# - --realtime (root): real-time scheduling (SCHED_FIFO, chrt) as an onboard
+#   computer would give its control loop: the simulator at priority 60 (it publishes
+#   a frame's SENSOR messages in one burst, not preempted by the robots it wakes),
+#   every robot_node and lcm-logger at 50 (the logger at the robots' level, or its
+#   LCM queue overflows while the robots hold both CPUs), main_robot normal. On this
+#   2-vCPU machine it brings sensor-to-pose p99 at 100 Hz under 1 ms
+#   (docs/benchmarks.md).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
@@ -30,6 +37,7 @@ PORT=7667
 HOSTS=0
 IN_PROCESS=0
 INSIDE=0
+REALTIME=0
 SIM_ARGS=()
 EVAL_ARGS=()
 
@@ -45,6 +53,7 @@ while [ $# -gt 0 ]; do
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --hosts) HOSTS=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
+    --realtime) REALTIME=1; shift ;;
     --inside) INSIDE=1; shift ;;  # internal: already inside the namespace
     -h|--help) usage 0 ;;
     *) echo "run_team.sh: unknown argument '$1'" >&2; usage 2 ;;
@@ -60,6 +69,10 @@ BIN="$BUILD_DIR/bin"
 mkdir -p "$OUT/logs"
 OUT="$(cd "$OUT" && pwd)"
 
+if [ "$REALTIME" -eq 1 ] && { [ "$(id -u)" -ne 0 ] || ! command -v chrt >/dev/null; }; then
+  echo "run_team.sh: --realtime needs root and chrt (util-linux); running with normal scheduling" >&2
+  REALTIME=0
+fi
 if [ "$INSIDE" -eq 0 ]; then
   "$ROOT/tools/setup.sh" >/dev/null
   cmake --build "$BUILD_DIR" --target simulator robot_node main_robot run_scenario $([ -f "$ROOT/tools/evaluate.cpp" ] && echo evaluate) -j "$(nproc)" >/dev/null
@@ -118,14 +131,17 @@ make_host() {
   ip -n "$ns" route add 224.0.0.0/4 dev eth0
 }
 
+# Real-time priority prefix for a role (--realtime), empty otherwise.
+rt() { [ "$REALTIME" -eq 1 ] && echo chrt -f "$1"; return 0; }
+
 launch() {  # $1: how to run each role (a function printing the prefix)
   local where="$1"
-  start logger $($where main) -- lcm-logger -f -q "$OUT/run.lcmlog"
+  start logger $($where main) $(rt 50) -- lcm-logger -f -q "$OUT/run.lcmlog"
   start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json"
   for r in "${ROBOTS[@]}"; do
-    start "robot_node_$r" $($where "robot$r") -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}"
+    start "robot_node_$r" $($where "robot$r") $(rt 50) -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}"
   done
-  start simulator $($where sim) -- "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) "${SIM_ARGS[@]}"
+  start simulator $($where sim) $(rt 60) -- "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) "${SIM_ARGS[@]}"
 }
 
 # Wait for the simulator to finish; any other process that exits first is a failure.
@@ -177,7 +193,7 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
   # The whole team in a private namespace: run this script again inside it.
   rc=0
   "$ROOT/tools/netns_run.sh" --port "$PORT" -- "$0" --inside --build-dir "$BUILD_DIR" --config "$CONFIG" --out "$OUT" \
-    ${MODE:+--mode "$MODE"} "${SIM_ARGS[@]}" || rc=$?
+    ${MODE:+--mode "$MODE"} $([ "$REALTIME" -eq 1 ] && echo --realtime) "${SIM_ARGS[@]}" || rc=$?
   exit $rc
 fi
 
