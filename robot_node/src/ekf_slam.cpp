@@ -76,6 +76,20 @@ EkfStatus innovate(const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off
   return EkfStatus::kOk;
 }
 
+// The innovation of a located landmark into `inn`, and its numbers into `r`; false
+// (with r->status set) when the landmark was not located or Z is not positive definite.
+bool innovation_report(EkfStatus located, const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off,
+                       const Eigen::Matrix2d& W, const RangeBearing& z, Innovation* inn, UpdateReport* r) {
+  r->status = located;
+  if (located != EkfStatus::kOk) return false;
+  r->status = innovate(P, x, off, W, z, inn);
+  if (r->status != EkfStatus::kOk) return false;
+  r->d2 = inn->d2;
+  r->innovation = inn->nu;
+  r->whitened = inn->w;
+  return true;
+}
+
 }  // namespace
 
 const char* to_string(EkfStatus s) {
@@ -189,14 +203,9 @@ UpdateReport EkfSlam::check(int id, const RangeBearing& z) const {
   UpdateReport report;
   report.threshold = gate_threshold_;
   int slot = -1;
-  report.status = locate(id, z, &slot);
-  if (report.status != EkfStatus::kOk) return report;
+  const EkfStatus located = locate(id, z, &slot);
   Innovation inn;
-  report.status = innovate(P_, x_, Layout::landmark_offset(slot), W_, z, &inn);
-  if (report.status != EkfStatus::kOk) return report;
-  report.d2 = inn.d2;
-  report.innovation = inn.nu;
-  report.whitened = inn.w;
+  innovation_report(located, P_, x_, Layout::landmark_offset(std::max(slot, 0)), W_, z, &inn, &report);
   return report;
 }
 
@@ -204,15 +213,10 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
   UpdateReport report;
   report.threshold = gate ? gate_threshold_ : 0.0;
   int slot = -1;
-  report.status = locate(id, z, &slot);
-  if (report.status != EkfStatus::kOk) return report;
-  const Index off = Layout::landmark_offset(slot);
+  const EkfStatus located = locate(id, z, &slot);
+  const Index off = Layout::landmark_offset(std::max(slot, 0));
   Innovation inn;
-  report.status = innovate(P_, x_, off, W_, z, &inn);
-  if (report.status != EkfStatus::kOk) return report;
-  report.d2 = inn.d2;
-  report.innovation = inn.nu;
-  report.whitened = inn.w;
+  if (!innovation_report(located, P_, x_, off, W_, z, &inn, &report)) return report;
   if (gate && inn.d2 > gate_threshold_) {
     report.status = EkfStatus::kGated;
     return report;
@@ -229,21 +233,13 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
 UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   UpdateReport report;
   int slot = -1;
-  report.status = locate(id, z, &slot);
-  if (report.status != EkfStatus::kOk) return report;
-  const Index off = Layout::landmark_offset(slot);
+  const EkfStatus located = locate(id, z, &slot);
+  const Index off = Layout::landmark_offset(std::max(slot, 0));
   const Index n = state_dim();
   Innovation inn;
-  report.status = innovate(P_, x_, off, W_, z, &inn);
-  if (report.status != EkfStatus::kOk) return report;
-  report.d2 = inn.d2;
-  report.innovation = inn.nu;
-  report.whitened = inn.w;
+  if (!innovation_report(located, P_, x_, off, W_, z, &inn, &report)) return report;
   // P H^T (n x 2) from the robot columns (complete) and the landmark's columns.
-  lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
-  lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);
-  lm_cols_(off, 1) = P_(off + 1, off);
-  lm_cols_.block(off + 1, 1, n - off - 1, 1) = P_.col(off + 1).segment(off + 1, n - off - 1);
+  load_landmark_columns(off);
   auto PHt = PHt_.topRows(n);
   PHt.noalias() = P_.leftCols<3>().topRows(n) * inn.H.leftCols<3>().transpose();
   PHt.noalias() += lm_cols_.topRows(n) * inn.H.rightCols<2>().transpose();
@@ -269,6 +265,16 @@ UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   return report;
 }
 
+// The landmark's two columns of P into lm_cols_: above the landmark block they are
+// read along its rows (lower storage), from the block down along the columns.
+void EkfSlam::load_landmark_columns(Index off) {
+  const Index n = state_dim();
+  lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
+  lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);
+  lm_cols_(off, 1) = P_(off + 1, off);
+  lm_cols_.block(off + 1, 1, n - off - 1, 1) = P_.col(off + 1).segment(off + 1, n - off - 1);
+}
+
 // P H^T from the five non-zero columns of H (O(n)), then the gain factors:
 //   Joseph:   K = P H^T Z^-1 (eq 10) in K_, and B = P H^T - K Z / 2 in PHt_, so that
 //             (I-KH)P(I-KH)^T + K W K^T = P - K PHt^T - PHt K^T + K Z K^T
@@ -278,12 +284,7 @@ UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
 // E Z E^T for an error E in K, so it stays positive semi-definite for any gain.
 void EkfSlam::compute_gain(Index off, const Matrix25& H, const Eigen::Matrix2d& L) {
   const Index n = state_dim();
-  // The landmark's two columns of P: above the landmark block they are read along
-  // its rows (lower storage), from the block down along the columns.
-  lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
-  lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);
-  lm_cols_(off, 1) = P_(off + 1, off);
-  lm_cols_.block(off + 1, 1, n - off - 1, 1) = P_.col(off + 1).segment(off + 1, n - off - 1);
+  load_landmark_columns(off);
 
   const GainCoefficients c = gain_coefficients(H, L);
   // Robot columns 0..2 of P are complete (the robot block is kept full).

@@ -45,16 +45,24 @@ class DenseEkf {
     X_.head<3>() << next.x, next.y, next.theta;
     P_ = (F * P_ * F.transpose() + G * U * G.transpose()).eval();
   }
-  void update(int id, const RangeBearing& y) {
-    const Eigen::Index n = X_.size(), off = offset(id);
+  // The dense H (2 x n), innovation and its covariance of an observation of `id`.
+  void linearise(int id, const RangeBearing& y, Eigen::MatrixXd* H, Vec2* nu, Eigen::Matrix2d* Z) const {
+    const Eigen::Index off = offset(id);
     Eigen::Matrix<double, 2, 3> H_x;
     Eigen::Matrix2d H_l;
     const RangeBearing h = observe(pose(), X_.segment<2>(off), &H_x, &H_l);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
-    H.leftCols<3>() = H_x;
-    H.middleCols<2>(off) = H_l;
-    const Vec2 nu(y.range - h.range, wrap_angle(y.bearing - h.bearing));
-    const Eigen::Matrix2d Z = H * P_ * H.transpose() + W_;
+    *H = Eigen::MatrixXd::Zero(2, X_.size());
+    H->leftCols<3>() = H_x;
+    H->middleCols<2>(off) = H_l;
+    *nu = Vec2(y.range - h.range, wrap_angle(y.bearing - h.bearing));
+    *Z = *H * P_ * H->transpose() + W_;
+  }
+  void update(int id, const RangeBearing& y) {
+    const Eigen::Index n = X_.size();
+    Eigen::MatrixXd H;
+    Vec2 nu;
+    Eigen::Matrix2d Z;
+    linearise(id, y, &H, &nu, &Z);
     const Eigen::MatrixXd K = P_ * H.transpose() * Z.inverse();
     X_ += K * nu;
     X_(2) = wrap_angle(X_(2));
@@ -69,14 +77,10 @@ class DenseEkf {
   // every row but the landmark's zeroed, and the Joseph form (valid for any gain).
   void update_landmark_only(int id, const RangeBearing& y) {
     const Eigen::Index n = X_.size(), off = offset(id);
-    Eigen::Matrix<double, 2, 3> H_x;
-    Eigen::Matrix2d H_l;
-    const RangeBearing h = observe(pose(), X_.segment<2>(off), &H_x, &H_l);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
-    H.leftCols<3>() = H_x;
-    H.middleCols<2>(off) = H_l;
-    const Vec2 nu(y.range - h.range, wrap_angle(y.bearing - h.bearing));
-    const Eigen::Matrix2d Z = H * P_ * H.transpose() + W_;
+    Eigen::MatrixXd H;
+    Vec2 nu;
+    Eigen::Matrix2d Z;
+    linearise(id, y, &H, &nu, &Z);
     Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, 2);
     K.middleRows<2>(off) = (P_ * H.transpose() * Z.inverse()).middleRows<2>(off);
     X_ += K * nu;

@@ -139,6 +139,8 @@ class EkfSlam {
   bool valid_id(int id) const { return id >= 0 && id < options_.max_landmark_id; }
   /// Input checks shared by check() and update(): kBadInput / kUnknownLandmark.
   EkfStatus locate(int id, const RangeBearing& z, int* slot) const;
+  /// The two columns of P of the landmark at offset `off`, into lm_cols_ (O(n)).
+  void load_landmark_columns(Eigen::Index off);
   /// P H^T and the gain factors of one correction, into PHt_ and K_ (O(n)).
   void compute_gain(Eigen::Index off, const Eigen::Matrix<double, 2, 5>& H,
                     const Eigen::Matrix2d& L);
