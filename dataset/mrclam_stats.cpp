@@ -124,6 +124,56 @@ double odometry_lag(const mrclam::RobotSeries& s) {
   return best_lag;
 }
 
+/// How reliably the camera reports a landmark that is in view: over the frames at
+/// `rate` Hz, every static landmark inside `range` m and +-`half_angle` rad of a
+/// robot's Vicon pose is either reported in the frame or missed; returns the
+/// reported fraction and the lengths of the runs of consecutive misses.
+struct Detection {
+  long in_view = 0, reported = 0;
+  std::vector<double> miss_streaks;  // [frames]
+};
+Detection detection(const mrclam::Dataset& d, const std::vector<int>& ids, double rate, double range,
+                    double half_angle) {
+  mrclam::Options o;
+  o.robots = ids;
+  o.rate_hz = rate;
+  const mrclam::FrameSource src(d, o);
+  Detection out;
+  std::vector<sensor_frame_t> sensors;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    std::vector<int> streak(d.landmarks().size(), 0);
+    for (int k = 0; k < src.num_frames(); ++k) {
+      src.frame(k, nullptr, &sensors);
+      const Pose2& T = src.true_pose(static_cast<int>(i), k);
+      const sensor_frame_t& f = sensors[i];
+      for (std::size_t l = 0; l < d.landmarks().size(); ++l) {
+        const auto& lm = d.landmarks()[l];
+        const double dx = lm.x - T.x, dy = lm.y - T.y;
+        const bool inside = std::hypot(dx, dy) < range && std::fabs(wrap_angle(std::atan2(dy, dx) - T.theta)) < half_angle;
+        bool seen = false;
+        for (int o2 = 0; o2 < f.num_obs; ++o2) seen = seen || f.obs[o2].landmark_id == lm.subject;
+        if (inside && !seen) {
+          ++streak[l];
+        } else if (streak[l] > 0) {
+          out.miss_streaks.push_back(streak[l]);
+          streak[l] = 0;
+        }
+        if (inside) {
+          ++out.in_view;
+          out.reported += seen ? 1 : 0;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(std::min<double>(v.size() - 1, std::floor(q * static_cast<double>(v.size()))))];
+}
+
 struct RangeScale {
   double k0 = 0.0, k1 = 0.0, std_before = 0.0, std_after = 0.0;
   long used = 0;
@@ -303,6 +353,11 @@ int main(int argc, char** argv) {
   app.add_option("--robots", robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
   app.add_option("--rate", rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
   app.add_option("--json", json_path, "also write the numbers as JSON");
+  double detect_range = 3.5, detect_half_deg = 17.0;
+  app.add_option("--detect-range", detect_range, "detection statistics: in view within this range [m]")
+      ->capture_default_str()->check(CLI::Range(0.1, 100.0));
+  app.add_option("--detect-half-angle", detect_half_deg, "... and this half-angle of the heading [deg]")
+      ->capture_default_str()->check(CLI::Range(1.0, 180.0));
   app.add_option("--config", config_path,
                  "also measure the residuals of the frames as the filter receives them, imported with this "
                  "config's dataset section (calibration, motion compensation, odometry delay)")
@@ -390,6 +445,23 @@ int main(int argc, char** argv) {
       print_sensor_row("frames", frg, fbr);
       out["frame_residuals"] = {{"config", config_path}, {"range_m", to_json(frg)}, {"bearing_rad", to_json(fbr)}};
     }
+    const Detection det = detection(d, ids, rate, detect_range, deg2rad(detect_half_deg));
+    const double p_frame = det.in_view > 0 ? static_cast<double>(det.reported) / static_cast<double>(det.in_view) : 0.0;
+    const double p99 = percentile(det.miss_streaks, 0.99), p999 = percentile(det.miss_streaks, 0.999);
+    // The rule sees thousands of miss runs in a run: it should wait longer than all
+    // but 0.1 % of them. The per-frame detection probability for which the rule
+    // (waiting until (1 - p)^n <= 0.01) waits p99.9 frames: (1 - p)^p999 = 0.01.
+    const double p_eff = p999 > 0 ? 1.0 - std::pow(0.01, 1.0 / p999) : 1.0;
+    std::printf("\nDetection (static landmarks within %.1f m and +-%.0f deg of the Vicon pose, %.3g Hz frames):\n"
+                "reported in %.3f of %ld landmark-frames; %zu runs of misses: p50 %.0f, p90 %.0f, p99 %.0f,\n"
+                "p99.9 %.0f, max %.0f frames. Misses come in bursts; the missing rule waits p99.9 frames with a\n"
+                "per-frame detection probability of %.3f (robot.ela.detection_probability)\n",
+                detect_range, detect_half_deg, rate, p_frame, det.in_view, det.miss_streaks.size(),
+                percentile(det.miss_streaks, 0.5), percentile(det.miss_streaks, 0.9), p99, p999,
+                det.miss_streaks.empty() ? 0.0 : *std::max_element(det.miss_streaks.begin(), det.miss_streaks.end()), p_eff);
+    out["detection"] = {{"range_m", detect_range}, {"half_angle_deg", detect_half_deg}, {"reported_fraction", p_frame},
+                        {"landmark_frames", det.in_view}, {"miss_run_p99_frames", p99}, {"miss_run_p999_frames", p999},
+                        {"detection_probability_for_missing_rule", p_eff}};
     out["range_scale"] = {{"k0", scale.k0}, {"k1", scale.k1}, {"used", scale.used},
                           {"std_before", scale.std_before}, {"std_after", scale.std_after}};
 

@@ -1,5 +1,8 @@
 #include "elaslam/robot_node/robot.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <Eigen/LU>
 
 #include "elaslam/common/stats.hpp"
@@ -34,6 +37,12 @@ Robot::Robot(const RobotOptions& options, int robot_id)
       ela_threshold_(chi2_quantile(options.ela_gate_probability, 2)),
       candidate_threshold_(chi2_quantile(options.ela_gate_probability, 2)),
       drift_threshold_(chi2_quantile(options.drift_gate_probability, 2)) {
+  missing_needed_ = options.missing_frames;
+  if (options.detection_probability < 1.0 && options.missing_frames > 0) {
+    // (1 - p_d)^n <= 1 - gate probability.
+    const double n = std::log(1.0 - options.ela_gate_probability) / std::log(1.0 - options.detection_probability);
+    missing_needed_ = std::max(missing_needed_, static_cast<int>(std::ceil(n)));
+  }
   view_.reserve(kMaxObservations);
   view_obs_.reserve(kMaxObservations);
   inside_.reserve(kMaxObservations);
@@ -396,11 +405,16 @@ void Robot::record_sighting(int id, const RangeBearing& z) {
 }
 
 // Step 4: a STATIC landmark well inside the field of view that has not been seen
-// for `missing_frames` frames has left.
+// for missing_needed_ frames has left: `missing_frames`, or more for a sensor that
+// misses landmarks (detection_probability < 1), so that a present landmark goes
+// unreported that long only with the ELA gate's false-alarm probability. The field
+// of view is the disc of sensor_range_m, or the cone of +-fov_half_angle_deg in it,
+// shrunk by fov_margin_m at its edges.
 void Robot::check_missing(FrameSummary* s) {
   if (options_.missing_frames <= 0) return;
   const Pose2 pose = ekf_.pose();
   const double expect_range = options_.sensor_range - options_.fov_margin;
+  const bool cone = options_.fov_half_angle < kPi;
   for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
     const int id = ekf_.id_at(slot);
     LMapEntry& e = lmap_[id];
@@ -409,11 +423,18 @@ void Robot::check_missing(FrameSummary* s) {
       e.missing_frames = 0;
       continue;
     }
-    if ((ekf_.landmark(id) - pose.translation()).norm() >= expect_range) {
+    const Eigen::Vector2d d = ekf_.landmark(id) - pose.translation();
+    const double range = d.norm();
+    bool expected = range < expect_range;
+    if (expected && cone) {
+      const double bearing = wrap_angle(std::atan2(d.y(), d.x()) - pose.theta);
+      expected = std::fabs(bearing) < options_.fov_half_angle - options_.fov_margin / std::max(range, 1e-3);
+    }
+    if (!expected) {
       e.missing_frames = 0;
       continue;
     }
-    if (++e.missing_frames >= options_.missing_frames) mark_moving(id, nullptr, s);
+    if (++e.missing_frames >= missing_needed_) mark_moving(id, nullptr, s);
   }
 }
 

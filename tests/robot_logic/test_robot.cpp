@@ -316,6 +316,26 @@ TEST_F(RobotPaths, MissingRuleIgnoresLandmarksOutsideTheExpectedView) {
   EXPECT_TRUE(r.filter().has_landmark(4));
 }
 
+// A camera: the expected-but-missing rule looks only inside its cone, and with a
+// detection probability below 1 waits until a miss run that long is as unlikely as
+// a gate false alarm: (1 - 0.5)^n <= 0.01 -> n = 7 frames.
+TEST_F(RobotPaths, MissingRuleWithAConeAndADetectionProbability) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.fov_half_angle = deg2rad(60.0);
+  o.detection_probability = 0.5;
+  Robot r(o, 1);
+  confirm_all(r);  // the ring's landmarks at 0.1 + k * 60 deg: 0 (5.7 deg) ahead, 3 behind
+  std::vector<int> without_0_and_3 = {1, 2, 4, 5};
+  int moving_at = -1;
+  for (int k = 0; k < 12 && moving_at < 0; ++k) {
+    step(r, without_0_and_3);
+    if (count_events(r, EventKind::kMoving, 0) == 1) moving_at = k;
+  }
+  EXPECT_EQ(moving_at, 6);  // the 7th frame without it
+  EXPECT_TRUE(r.filter().has_landmark(3));  // behind the camera: never expected
+  EXPECT_EQ(r.lmap()[3].status, LandmarkStatus::kStatic);
+}
+
 TEST_F(RobotPaths, DynamicNoticeRemovesWithoutEventAndReturnNeedsReturnFrames) {
   Robot r(test::robot_options(Mode::kEla), 1);
   confirm_all(r);

@@ -65,11 +65,13 @@ TEST_F(RealSlice, ElaLocalisesEveryRobotWellBelowDeadReckoning) {
     // drifting in every mode (ekf and gated: 0.83; its dead reckoning: 0.75).
     EXPECT_LT(rm.error_rms, 1.0) << "robot " << rm.id;
   }
-  // Measured: 0.315 m against dead reckoning's 0.570 m.
+  // Measured: 0.317 m against dead reckoning's 0.570 m.
   EXPECT_LT(mean_of_rms(r), 0.40);
   EXPECT_LT(mean_of_rms(r), 0.7 * dead_reckoning_mean());
   EXPECT_LT(r.metrics.landmark_error_mean, 0.35);
-  EXPECT_EQ(r.final_map.size(), 15u);  // every landmark of the dataset mapped, static
+  // The dataset's 15 landmarks mapped; at 120 s the expected-but-missing rule has
+  // 2 of them on probation (a camera misses landmarks in bursts: docs/mrclam.md).
+  EXPECT_GE(r.final_map.size(), 13u);
 }
 
 TEST_F(RealSlice, RobotBarcodesHurtEkfAndElaKeepsMostOfThemOut) {
@@ -77,7 +79,7 @@ TEST_F(RealSlice, RobotBarcodesHurtEkfAndElaKeepsMostOfThemOut) {
   const RunResult ekf_with = run(Mode::kEkf, true);
   const RunResult ela_with = run(Mode::kEla, true);
   const RunResult ela_without = run(Mode::kEla, false);
-  // Measured: ekf 0.323 -> 0.685 m with the other robots kept in; ela 0.315 -> 0.307 m.
+  // Measured: ekf 0.323 -> 0.685 m with the other robots kept in; ela 0.317 -> 0.309 m.
   EXPECT_GT(mean_of_rms(ekf_with), 1.5 * mean_of_rms(ekf_without));
   EXPECT_LT(mean_of_rms(ela_with), 1.1 * mean_of_rms(ela_without));
   // ekf lets every sighting of a robot correct a pose (632); ela 270.

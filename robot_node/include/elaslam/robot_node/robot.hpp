@@ -112,6 +112,7 @@ class Robot {
   double ela_threshold_;      // chi2(ela_gate_probability, 2 dof)
   double candidate_threshold_;
   double drift_threshold_ = 0.0;
+  int missing_needed_ = 0;  // expected-but-unseen frames before MOVING (check_missing)
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;
