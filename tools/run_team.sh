@@ -226,5 +226,11 @@ supervise || status=1
 stop_all || status=1
 [ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
 echo "run_team.sh: recorded $OUT/run.lcmlog"
+# The run's facts for the summary: what was given, else the config's scenario values.
+scenario_value() { awk -v k="$1:" '/^scenario:/ {s = 1; next} /^[^ #]/ {s = 0} s && $1 == k {print $2; exit}' "$CONFIG"; }
+for kv in "--seed seed" "--dynamism dynamism_percent" "--speed landmark_speed_mps"; do
+  set -- $kv
+  case " ${EVAL_ARGS[*]} " in *" $1 "*) ;; *) v="$(scenario_value "$2")"; [ -n "$v" ] && EVAL_ARGS+=("$1" "$v") ;; esac
+done
 "$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --mode "${MODE_NAME:-unknown}" "${EVAL_ARGS[@]}"
 echo "run_team.sh: results in $OUT (metrics.json, frames.csv, trajectories/, logs/)"
