@@ -75,8 +75,7 @@ int main(int argc, char** argv) {
 
   mrclam::Options o;
   try {
-    std::string effective;
-    o = mrclam::load_options(config_path, &effective);
+    o = mrclam::load_options(config_path);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "mrclam_import: %s\n", e.what());
     return 2;

@@ -27,8 +27,6 @@ namespace {
 
 using namespace elaslam;
 
-constexpr int kFirstRobotSubject = 1, kLastRobotSubject = 5;
-
 struct DatasetRun {
   std::string mode;
   bool barcodes = false;
@@ -38,7 +36,7 @@ struct DatasetRun {
 
 long robot_corrections(const RunResult& r) {
   long n = 0;
-  for (int id = kFirstRobotSubject; id <= kLastRobotSubject; ++id)
+  for (int id = 1; id <= mrclam::kMaxRobotSubject; ++id)
     if (id < static_cast<int>(r.corrections_by_landmark.size())) n += r.corrections_by_landmark[static_cast<std::size_t>(id)];
   return n;
 }

@@ -46,6 +46,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   view_.reserve(kMaxObservations);
   view_obs_.reserve(kMaxObservations);
   inside_.reserve(kMaxObservations);
+  prior_.reserve(kMaxObservations);
   d2_.reserve(kMaxObservations);
   updated_.reserve(kMaxObservations);
   out_count_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
@@ -193,9 +194,19 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   handle_candidates(in, s);
 }
 
+// d2 of view_[i]'s innovation against the prior; infinite when it has none.
+double Robot::prior_d2(int i) const {
+  const UpdateReport& r = prior_[static_cast<std::size_t>(i)];
+  return r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
+}
+
 void Robot::gate_view(FrameSummary* /*s*/) {
   const int n = static_cast<int>(view_.size());
   inside_.assign(view_.size(), 1);
+  // Every landmark's innovation against the prior, once: the single tests, the
+  // consensus ranking and the drift test all read it.
+  prior_.clear();
+  for (const InView& v : view_) prior_.push_back(ekf_.check(v.id, v.z));
   if (n == 0) return;
   if (options_.mode == Mode::kConsensus && n >= 2) {
     gate_view_consensus();
@@ -225,9 +236,8 @@ void Robot::gate_view(FrameSummary* /*s*/) {
                  ela_threshold_, inside_[static_cast<std::size_t>(i)] != 0};
     if (active < 2 && g.inside) {
       // A single landmark in view (or left): its ELA is the EKF's predicted observation.
-      const UpdateReport r = ekf_.check(g.landmark_id, view_[static_cast<std::size_t>(i)].z);
       g.kind = GateKind::kInnovation;
-      g.d2 = r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
+      g.d2 = prior_d2(i);
       g.inside = g.d2 <= g.threshold;
       inside_[static_cast<std::size_t>(i)] = g.inside;
     }
@@ -250,10 +260,9 @@ void Robot::drift_test() {
   const double scale = 1.0 - lambda * lambda;
   for (std::size_t k = 0; k < view_.size(); ++k) {
     if (!inside_[k]) continue;
+    if (prior_[k].status != EkfStatus::kOk) continue;
     LMapEntry& e = lmap_[view_[k].id];
-    const UpdateReport r = ekf_.check(view_[k].id, view_[k].z);
-    if (r.status != EkfStatus::kOk) continue;
-    e.drift = lambda * e.drift + r.whitened;
+    e.drift = lambda * e.drift + prior_[k].whitened;
     if (e.drift.squaredNorm() * scale > drift_threshold_) {
       inside_[k] = 0;
       gates_[k].inside = false;
@@ -268,8 +277,8 @@ void Robot::gate_view_consensus() {
   solver_.reset(n);
   for (int i = 0; i < n; ++i) {
     const InView& vi = view_[static_cast<std::size_t>(i)];
-    const UpdateReport r = ekf_.check(vi.id, vi.z);
-    solver_.set_prior_d2(i, r.status == EkfStatus::kOk ? r.d2 : 1e12);
+    const double d2 = prior_d2(i);
+    solver_.set_prior_d2(i, std::isfinite(d2) ? d2 : 1e12);
     for (int j = i + 1; j < n; ++j)
       if (pair_d2(ekf_, vi, view_[static_cast<std::size_t>(j)]) <= ela_threshold_) solver_.add_edge(i, j);
   }
@@ -285,9 +294,8 @@ void Robot::gate_view_consensus() {
     const InView& vi = view_[static_cast<std::size_t>(i)];
     GateRecord g{vi.id, GateKind::kConsensus, 0.0, ela_threshold_, true};
     if (fallback) {  // fewer than two agree: each landmark's single test
-      const UpdateReport r = ekf_.check(vi.id, vi.z);
       g.kind = GateKind::kInnovation;
-      g.d2 = r.status == EkfStatus::kOk ? r.d2 : std::numeric_limits<double>::infinity();
+      g.d2 = prior_d2(i);
       g.inside = g.d2 <= g.threshold;
     } else if (!inside_[static_cast<std::size_t>(i)]) {
       g.d2 = ela_multi_d2(ekf_, view_.data(), n, i, inside_.data());
@@ -345,9 +353,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     }
     // New, seen again after moving or after a gap, or inconsistent: (re)anchor here.
     lmap_.set_status(id, LandmarkStatus::kCandidate, in.frame);
-    e.consistent_sightings = 1;
-    e.innovation_sum.setZero();
-    e.innovations = 0;
+    e.restart_streak(1);
     if (ekf_.add_landmark(id, o.z) != EkfStatus::kOk) ++s->filter_faults;  // kFull: candidate outside the filter
   }
 }
@@ -389,9 +395,7 @@ void Robot::drop_unseen_candidates() {
     LMapEntry& e = lmap_[id];
     if (e.status == LandmarkStatus::kStatic || last_frame_ - e.last_seen_frame < options_.candidate_gap_frames) continue;
     ekf_.remove_landmark(id);
-    e.consistent_sightings = 0;
-    e.innovation_sum.setZero();
-    e.innovations = 0;
+    e.restart_streak(0);
   }
 }
 
@@ -455,9 +459,7 @@ void Robot::mark_moving(int id, const Observation* seen, FrameSummary* s) {
   if (seen) {  // re-anchored as a candidate where it is now
     record_sighting(id, seen->z);
     lmap_.set_status(id, LandmarkStatus::kCandidate, last_frame_);
-    e.consistent_sightings = 1;
-    e.innovation_sum.setZero();
-    e.innovations = 0;
+    e.restart_streak(1);
     if (ekf_.add_landmark(id, seen->z) != EkfStatus::kOk) ++s->filter_faults;
   } else {
     lmap_.set_status(id, LandmarkStatus::kMoving, last_frame_);
@@ -488,7 +490,7 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   const bool held = e.status == LandmarkStatus::kStatic;
   if (ekf_.remove_landmark(landmark_id) != EkfStatus::kOk) return false;
   lmap_.set_status(landmark_id, LandmarkStatus::kMoving, frame);
-  e.consistent_sightings = 0;
+  e.restart_streak(0);
   e.missing_frames = 0;
   out_count_[static_cast<std::size_t>(landmark_id)] = 0;
   return held;

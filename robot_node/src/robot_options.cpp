@@ -56,9 +56,9 @@ void parse(config::Reader& r, RobotOptions* o) {
     e.read("missing_frames", &o->missing_frames, 0, 1000);
     e.read("sensor_range_m", &o->sensor_range, 0.01, 1000.0);
     e.read("fov_margin_m", &o->fov_margin, 0.0, 1000.0);
-    double half_deg = rad2deg(o->fov_half_angle);
+    double half_deg = 180.0;  // all around unless the key says otherwise
     e.read_optional("fov_half_angle_deg", &half_deg, 1.0, 180.0);
-    o->fov_half_angle = deg2rad(half_deg);
+    o->fov_half_angle = half_deg >= 180.0 ? kPi : deg2rad(half_deg);
     e.read_optional("detection_probability", &o->detection_probability, 0.01, 1.0);
     if (o->fov_margin >= o->sensor_range)
       e.fail("fov_margin_m", "must be smaller than sensor_range_m, or no landmark is ever expected in view");

@@ -169,8 +169,8 @@ RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& ma
       f.mean_diag_p[static_cast<std::size_t>(i)] = p.mean_diag_p;
       f.processing_us[static_cast<std::size_t>(i)] = p.processing_us;
       out.estimated[static_cast<std::size_t>(i)].push_back({t, {p.x, p.y, p.theta}});
-      if (i < gt.num_robots)
-        out.truth[static_cast<std::size_t>(i)].push_back({t, {gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta}});
+      if (static_cast<std::size_t>(i) < f.true_poses.size())
+        out.truth[static_cast<std::size_t>(i)].push_back({t, f.true_poses[static_cast<std::size_t>(i)]});
       for (const auto& ev : node.event_msgs()) main.on_event(bus.carry(ev));
       if (node.snapshot_ready()) main.on_snapshot(bus.carry(node.snapshot_msg()));
       main.on_robot_frame(p.robot_id, p.frame);  // as main_robot does on each POSE

@@ -23,7 +23,7 @@ double mean_of_rms(const RunResult& r) {
 
 long robot_corrections(const RunResult& r) {
   long n = 0;
-  for (int id = 1; id <= 5; ++id) n += r.corrections_by_landmark[static_cast<std::size_t>(id)];
+  for (int id = 1; id <= mrclam::kMaxRobotSubject; ++id) n += r.corrections_by_landmark[static_cast<std::size_t>(id)];
   return n;
 }
 

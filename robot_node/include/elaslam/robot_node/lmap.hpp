@@ -38,6 +38,13 @@ struct LMapEntry {
   int innovations = 0;
   // A STATIC landmark's whitened innovations, exponentially weighted (drift test).
   Eigen::Vector2d drift = Eigen::Vector2d::Zero();
+
+  /// A candidate's streak starts over with `sightings` consistent sightings.
+  void restart_streak(int sightings) {
+    consistent_sightings = sightings;
+    innovation_sum.setZero();
+    innovations = 0;
+  }
 };
 
 class LMap {

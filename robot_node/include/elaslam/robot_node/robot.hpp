@@ -96,6 +96,7 @@ class Robot {
   void handle_candidates(const FrameInput& in, FrameSummary* s);
   void check_missing(FrameSummary* s);
   void drift_test();
+  double prior_d2(int i) const;
   int sightings_to_confirm(const LMapEntry& e) const;
   void confirm(int id, const RangeBearing& z, FrameSummary* s);
   void drop_unseen_candidates();
@@ -121,6 +122,7 @@ class Robot {
   std::vector<InView> view_;
   std::vector<int> view_obs_;        // index into FrameInput::obs of view_[k]
   std::vector<std::uint8_t> inside_; // verdict per view_ entry
+  std::vector<UpdateReport> prior_;   // innovation per view_ entry against this frame's prior
   std::vector<double> d2_;           // ELA d2 per view_ entry
   std::vector<int> out_count_;       // per id: consecutive out-of-ELA sightings
   std::vector<int> updated_;         // ids corrected this frame

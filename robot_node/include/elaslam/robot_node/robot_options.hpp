@@ -46,7 +46,7 @@ struct RobotOptions {
   int missing_frames = 3;               // expected-but-unseen frames before MOVING (0: rule off)
   double sensor_range = 4.0;            // [m] radius of the field of view (D / 2)
   double fov_margin = 0.5;              // [m] "well inside the field of view": range < sensor_range - margin
-  double fov_half_angle = 3.14159265358979323846;  // [rad] a cone sensor's half-angle (pi: all around)
+  double fov_half_angle = kPi;          // [rad] a cone sensor's half-angle (pi: all around)
   /// Probability that a landmark in view is reported in a frame; below 1 the
   /// expected-but-missing rule waits until a miss streak that long is as unlikely
   /// as a false alarm of the ELA gate.
