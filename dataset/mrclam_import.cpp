@@ -3,16 +3,20 @@
 //   mrclam_import --dataset DIR [--config FILE] [--rate F] [--robots 1,2,3,4,5]
 //                 [--with-robot-barcodes] [--start S] [--duration T] --out FILE.lcmlog
 // Exit codes: 0 done, 1 bad data or an output error, 2 bad arguments or config.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <yaml-cpp/yaml.h>
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/cli.hpp"
 #include "elaslam/dataset/mrclam.hpp"
+#include "elaslam/run_info_t.hpp"
 
 namespace {
 
@@ -46,19 +50,54 @@ bool write(lcm::LogFile* log, const std::string& channel, std::int64_t utime, co
   return log->writeEvent(&ev) == 0;
 }
 
+/// RUN_INFO of an imported recording: no seed, dynamism or speed (real data); the
+/// effective dataset section with the command line's overrides.
+run_info_t run_info(const mrclam::FrameSource& src, const mrclam::Options& o, const std::string& dataset_dir,
+                    const std::string& effective_yaml) {
+  run_info_t m{};
+  m.frame = -1;
+  m.schema_version = run_info_t::SCHEMA_VERSION;
+  m.source = "mrclam_import";
+  m.version = cli::version_line("mrclam_import");
+  m.scenario = dataset_dir;
+  m.seed = -1;
+  m.dynamism_percent = -1.0;
+  m.landmark_speed_mps = -1.0;
+  m.rate_hz = o.rate_hz;
+  m.frames = src.num_frames();
+  m.num_robots = static_cast<std::int16_t>(std::min<std::size_t>(src.robot_ids().size(), 8));
+  for (int i = 0; i < m.num_robots; ++i) m.robot_ids[i] = static_cast<std::int16_t>(src.robot_ids()[static_cast<std::size_t>(i)]);
+  YAML::Node root;
+  try {
+    root = YAML::Load(effective_yaml);
+  } catch (const YAML::Exception&) {
+  }
+  if (!root.IsMap()) root = YAML::Node(YAML::NodeType::Map);
+  root["dataset"]["rate_hz"] = o.rate_hz;
+  root["dataset"]["start_s"] = o.start_s;
+  root["dataset"]["duration_s"] = o.duration_s;
+  root["dataset"]["with_robot_barcodes"] = o.with_robot_barcodes;
+  std::string robots;
+  for (int id : o.robots) robots += (robots.empty() ? "" : ",") + std::to_string(id);
+  root["dataset"]["robots"] = robots;
+  YAML::Emitter out;
+  out << root;
+  m.config_yaml = out.c_str();
+  return m;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string root = std::filesystem::path(argv[0]).parent_path().string() + "/../..";
-  std::string dataset_dir, config_path = root + "/config/mrclam.yaml", robots, out_path;
+  std::string dataset_dir, config_path, robots, out_path;
   double rate = -1.0, start = -1.0, duration = -1.0;
   bool with_robot_barcodes = false;
   CLI::App app{"elaslam mrclam_import: a UTIAS MRCLAM recording as an LCM log (SENSOR_<id>, GROUND_TRUTH)"};
   app.add_option("--dataset", dataset_dir, "dataset directory (RobotN_*.dat, Barcodes.dat, ...)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  app.add_option("--config", config_path, "YAML config with a dataset: section (default <repo>/config/mrclam.yaml)")
-      ->check(CLI::ExistingFile);
+  cli::add_version_flag(app, "mrclam_import");
+  app.add_option("--config", config_path, "YAML config with a dataset: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
   app.add_option("--rate", rate, "frames per second (default dataset.rate_hz)")->check(CLI::Range(0.1, 1000.0));
   app.add_option("--robots", robots, "robots to import, e.g. 1,2,3,4,5 (default dataset.robots)");
   app.add_flag("--with-robot-barcodes", with_robot_barcodes, "keep other robots' barcodes as moving landmarks");
@@ -74,8 +113,10 @@ int main(int argc, char** argv) {
   }
 
   mrclam::Options o;
+  std::string effective_yaml;
   try {
-    o = mrclam::load_options(config_path);
+    config_path = cli::find_config(config_path, "mrclam.yaml").path;
+    o = mrclam::load_options(config_path, &effective_yaml);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "mrclam_import: %s\n", e.what());
     return 2;
@@ -104,9 +145,17 @@ int main(int argc, char** argv) {
     const std::string gt_channel = channels::ground_truth();
     std::vector<std::string> sensor_channels;
     for (int id : src.robot_ids()) sensor_channels.push_back(channels::sensor(id));
+    run_info_t info = run_info(src, o, dataset_dir, effective_yaml);
+    const int info_period = std::max(1, static_cast<int>(o.rate_hz));  // about once a second of log time
     for (int k = 0; k < src.num_frames(); ++k) {
       src.frame(k, &gt, &sensors);
-      bool ok = write(&log, gt_channel, gt.utime, gt, &buf);
+      bool ok = true;
+      if (k % info_period == 0) {  // before the frame's messages, as the simulator does
+        info.utime = gt.utime;
+        info.frame = k - 1;
+        ok = write(&log, channels::run_info(), info.utime, info, &buf);
+      }
+      ok = ok && write(&log, gt_channel, gt.utime, gt, &buf);
       for (std::size_t i = 0; i < sensors.size(); ++i)
         ok = ok && write(&log, sensor_channels[i], sensors[i].utime, sensors[i], &buf);
       if (!ok) {

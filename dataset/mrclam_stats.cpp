@@ -26,6 +26,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "elaslam/common/cli.hpp"
 #include "elaslam/dataset/mrclam.hpp"
 
 namespace {
@@ -349,6 +350,7 @@ int main(int argc, char** argv) {
   std::string dataset_dir, robots = "1,2,3,4,5", json_path, config_path;
   double rate = 10.0;
   CLI::App app{"elaslam mrclam_stats: sensor and odometry noise of an MRCLAM recording against Vicon"};
+  cli::add_version_flag(app, "mrclam_stats");
   app.add_option("--dataset", dataset_dir, "dataset directory")->required()->check(CLI::ExistingDirectory);
   app.add_option("--robots", robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
   app.add_option("--rate", rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));

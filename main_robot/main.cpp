@@ -1,5 +1,7 @@
 // main_robot: the team's global map, as its own process on LCM.
-//   main_robot --config FILE [--state PATH] [--lcm-url URL]
+//   main_robot [--config FILE] [--state PATH] [--lcm-url URL]
+// The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
+// the installed default (common/cli.hpp).
 // Subscribes LMAP_EVENT, LMAP_SNAPSHOT; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
 // STATUS_MAIN. The map is saved to --state atomically (write, then rename) on change
 // at a bounded rate and at shutdown, and reloaded at start.
@@ -13,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/cli.hpp"
 #include "elaslam/common/lcm_util.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -120,8 +123,10 @@ class Shell {
 
 int run(const Args& a) {
   GlobalMapOptions o;
+  cli::ConfigChoice cfg;
   try {
-    o = load_options(a.config);
+    cfg = cli::find_config(a.config);
+    o = load_options(cfg.path);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "main_robot: %s\n", e.what());
     return 2;
@@ -152,7 +157,8 @@ int run(const Args& a) {
     std::fprintf(stderr, "main_robot: cannot subscribe\n");
     return 1;
   }
-  std::fprintf(stderr, "main_robot: lcm=%s\n", describe_lcm_url(a.lcm_url).c_str());
+  std::fprintf(stderr, "main_robot: %s, config %s (%s), lcm=%s\n", cli::version_line("main_robot").c_str(),
+               cfg.path.c_str(), cfg.origin.c_str(), describe_lcm_url(a.lcm_url).c_str());
   install_stop_handlers();
   const auto map_period = std::chrono::microseconds(static_cast<std::int64_t>(1e6 / o.publish_rate_hz));
   const auto save_period = std::chrono::milliseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1000));
@@ -192,7 +198,10 @@ int run(const Args& a) {
 int main(int argc, char** argv) {
   elaslam::Args a;
   CLI::App app{"elaslam main_robot: the team's global map, on LCM"};
-  app.add_option("--config", a.config, "YAML config file (its main: section)")->required()->check(CLI::ExistingFile);
+  elaslam::cli::add_version_flag(app, "main_robot");
+  app.add_option("--config", a.config,
+                 "YAML config file, its main: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
+                 "else the installed paper.yaml)");
   app.add_option("--state", a.state, "file to persist the global map in (reloaded at start)");
   app.add_option("--lcm-url", a.lcm_url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
   app.add_option("--channel-suffix", a.suffix, "suffix appended to every channel name");

@@ -1,5 +1,7 @@
 // robot_node: one robot's EKF-SLAM with the ELA gate, as its own process on LCM.
-//   robot_node --config FILE --robot R [--mode M] [--lcm-url URL]
+//   robot_node [--config FILE] --robot R [--mode M] [--lcm-url URL]
+// The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
+// the installed default (common/cli.hpp).
 // Subscribes SENSOR_<R>, DYNAMIC_NOTICE; publishes POSE_<R>, LMAP_EVENT,
 // LMAP_SNAPSHOT, STATUS_ROBOT_<R>. A thin shell around RobotNode (no logic here).
 #include <cstdio>
@@ -10,6 +12,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/cli.hpp"
 #include "elaslam/common/lcm_util.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 
@@ -115,8 +118,10 @@ class Shell {
 int run(const Args& a) {
   std::string effective;
   RobotOptions o;
+  cli::ConfigChoice cfg;
   try {
-    o = load_robot_options(a.config, &effective);
+    cfg = cli::find_config(a.config);
+    o = load_robot_options(cfg.path, &effective);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "robot_node: %s\n", e.what());
     return 2;
@@ -136,7 +141,9 @@ int run(const Args& a) {
     std::fprintf(stderr, "robot_node %d: cannot subscribe\n", a.robot);
     return 1;
   }
-  std::fprintf(stderr, "robot_node %d: mode=%s lcm=%s\n", a.robot, to_string(o.mode), describe_lcm_url(a.lcm_url).c_str());
+  std::fprintf(stderr, "robot_node %d: %s, config %s (%s), mode=%s lcm=%s\n", a.robot,
+               cli::version_line("robot_node").c_str(), cfg.path.c_str(), cfg.origin.c_str(), to_string(o.mode),
+               describe_lcm_url(a.lcm_url).c_str());
   if (a.verbose) std::fprintf(stderr, "%s\n", effective.c_str());
   install_stop_handlers();
   auto next_status = std::chrono::steady_clock::now();
@@ -162,7 +169,10 @@ int run(const Args& a) {
 int main(int argc, char** argv) {
   elaslam::Args a;
   CLI::App app{"elaslam robot_node: one robot's EKF-SLAM with the ELA gate, on LCM"};
-  app.add_option("--config", a.config, "YAML config file (its robot: section)")->required()->check(CLI::ExistingFile);
+  elaslam::cli::add_version_flag(app, "robot_node");
+  app.add_option("--config", a.config,
+                 "YAML config file, its robot: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
+                 "else the installed paper.yaml)");
   app.add_option("--robot", a.robot, "this robot's id (1-8)")->required()->check(CLI::Range(1, 8));
   app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");
   app.add_option("--lcm-url", a.lcm_url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");

@@ -1,7 +1,9 @@
 // simulator: the world of the paper's experiment as an LCM node (DESIGN.md sections
 // 1 and 7). Publishes SENSOR_<r> for every robot and GROUND_TRUTH at F frames/s on
-// absolute deadlines, STATUS_SIM about once a second; with --lockstep it waits after
-// each frame for every robot's POSE_<r> of that frame (bounded by a timeout).
+// absolute deadlines, STATUS_SIM and RUN_INFO (what the run is: scenario, seed,
+// dynamism, speed, rate, effective config) before the first frame and about once a
+// second; with --lockstep it waits after each frame for every robot's POSE_<r> of
+// that frame (bounded by a timeout).
 //
 // Exit codes: 0 done (also after SIGINT/SIGTERM), 1 runtime failure (LCM),
 // 2 bad command line or configuration.
@@ -24,6 +26,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/cli.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -81,7 +84,10 @@ bool sleep_until(std::int64_t deadline_ns) {
 }
 
 struct Args {
-  std::string config;
+  std::string config;       // as given (--config), "" when not
+  std::string config_path;  // the file used (cli::find_config)
+  std::string config_origin;
+  std::string team_mode;    // recorded in RUN_INFO only
   double rate_hz = 0.0;
   int frames = 0;
   double dynamism_percent = 0.0;
@@ -94,13 +100,19 @@ struct Args {
   int wait_for_nodes = 0;
   int wait_timeout_ms = 10000;
   bool list_robots = false;
+  bool check = false;
   bool has_rate = false, has_frames = false, has_dynamism = false, has_speed = false, has_seed = false;
 };
 
 /// Returns -1 to go on, or the exit code.
 int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam simulator: publishes SENSOR_<r> and GROUND_TRUTH for the configured scenario"};
-  app.add_option("--config", a->config, "scenario YAML file (config/paper.yaml)")->required();
+  elaslam::cli::add_version_flag(app, "simulator");
+  app.add_option("--config", a->config,
+                 "YAML config with a scenario: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
+                 "else the installed paper.yaml)");
+  app.add_option("--team-mode", a->team_mode, "the robots' mode, recorded in RUN_INFO (the simulator has none)")
+      ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   auto* rate = app.add_option("--rate", a->rate_hz, "override scenario.rate_hz [frames/s]")
                    ->check(CLI::Range(1e-3, 100000.0));
   auto* frames = app.add_option("--frames", a->frames, "override scenario.frames")->check(CLI::Range(1, 100000000));
@@ -119,6 +131,7 @@ int parse_args(int argc, char** argv, Args* a) {
       ->check(CLI::Range(0, 64));
   app.add_option("--wait-timeout-ms", a->wait_timeout_ms, "bound of --wait-for-nodes [ms]")->check(CLI::Range(1, 600000));
   app.add_flag("--list-robots", a->list_robots, "print the scenario's robot ids (one line) and exit");
+  app.add_flag("--check", a->check, "check the configuration with the overrides, print the scenario and exit (0: valid)");
   app.add_option("--start-delay-ms", a->start_delay_ms, "wait before frame 0 so subscribers can join [ms]")
       ->capture_default_str()
       ->check(CLI::Range(0, 3600000));
@@ -128,6 +141,14 @@ int parse_args(int argc, char** argv, Args* a) {
     const int rc = app.exit(e);  // prints help (rc 0) or the error
     return rc == 0 ? 0 : 2;
   }
+  try {
+    const auto choice = elaslam::cli::find_config(a->config);
+    a->config_path = choice.path;
+    a->config_origin = choice.origin;
+  } catch (const elaslam::config::ConfigError& e) {
+    std::cerr << "simulator: " << e.what() << "\n";
+    return 2;
+  }
   a->has_rate = rate->count() > 0;
   a->has_frames = frames->count() > 0;
   a->has_dynamism = dyn->count() > 0;
@@ -136,10 +157,10 @@ int parse_args(int argc, char** argv, Args* a) {
   return -1;
 }
 
-/// Load the scenario and apply the command-line overrides; nullopt-like false on error.
-bool load(const Args& a, ScenarioOptions* o) {
+/// Load the scenario and apply the command-line overrides; false on error.
+bool load(const Args& a, ScenarioOptions* o, std::string* effective_yaml) {
   try {
-    *o = elaslam::sim::load_scenario(a.config);
+    *o = elaslam::sim::load_scenario(a.config_path, effective_yaml);
   } catch (const elaslam::config::ConfigError& e) {
     std::cerr << "simulator: " << e.what() << "\n";
     return false;
@@ -151,7 +172,7 @@ bool load(const Args& a, ScenarioOptions* o) {
   if (a.has_seed) o->seed = a.seed;
   const auto problems = elaslam::sim::check_scenario(*o);
   for (const auto& p : problems)
-    std::cerr << "simulator: " << a.config << " with command-line overrides: scenario." << p.key << ": " << p.what
+    std::cerr << "simulator: " << a.config_path << " with command-line overrides: scenario." << p.key << ": " << p.what
               << "\n";
   return problems.empty();
 }
@@ -357,7 +378,7 @@ bool wait_for_nodes(lcm::LCM* lc, int n, int timeout_ms) {
   return false;
 }
 
-int run(const Args& a, const ScenarioOptions& o) {
+int run(const Args& a, const ScenarioOptions& o, const std::string& effective_yaml) {
   const char* env_url = std::getenv("LCM_DEFAULT_URL");
   const std::string url = !a.lcm_url.empty() ? a.lcm_url : (env_url ? env_url : "");
   lcm::LCM lc(url);
@@ -366,11 +387,21 @@ int run(const Args& a, const ScenarioOptions& o) {
               << "': for udpm, the network needs a multicast route (e.g. run inside tools/netns_run.sh)\n";
     return 1;
   }
-  std::cerr << elaslam::sim::describe(o) << "simulator: lcm " << (url.empty() ? "(LCM default)" : url)
+  std::cerr << elaslam::cli::version_line("simulator") << ", config " << a.config_path << " (" << a.config_origin
+            << ")\n"
+            << elaslam::sim::describe(o) << "simulator: lcm " << (url.empty() ? "(LCM default)" : url)
             << (a.lockstep ? ", lockstep (timeout " + std::to_string(a.lockstep_timeout_ms) + " ms)" : ", free running")
             << ", start delay " << a.start_delay_ms << " ms\n";
+  elaslam::run_info_t info = elaslam::sim::to_run_info(o, a.config_path, effective_yaml, a.team_mode, realtime_us());
+  auto publish_info = [&](int frame) {
+    info.utime = realtime_us();
+    info.frame = frame;
+    lc.publish(elaslam::channels::run_info(), &info);
+  };
+  publish_info(-1);  // a recorder that is already listening knows the run before the team starts
 
   if (a.wait_for_nodes > 0 && !wait_for_nodes(&lc, a.wait_for_nodes, a.wait_timeout_ms)) return 1;
+  publish_info(-1);
   World world(o);
   std::unique_ptr<PoseWaiter> waiter;
   if (a.lockstep) waiter = std::make_unique<PoseWaiter>(&lc, o);
@@ -393,6 +424,7 @@ int run(const Args& a, const ScenarioOptions& o) {
     }
     if (mono_ns() >= next_status) {
       publish_status(&lc, stats, k, waiter.get());
+      publish_info(k);
       next_status += 1000 * kNsPerMs;  // ~1 Hz; after a stall, restart the phase instead of bursting
       if (next_status <= mono_ns()) next_status = mono_ns() + 1000 * kNsPerMs;
     }
@@ -410,12 +442,18 @@ int main(int argc, char** argv) {
   const int rc = parse_args(argc, argv, &args);
   if (rc >= 0) return rc;
   ScenarioOptions options;
-  if (!load(args, &options)) return 2;
+  std::string effective_yaml;
+  if (!load(args, &options, &effective_yaml)) return 2;
+  if (args.check) {
+    std::cout << "simulator: " << args.config_path << " (" << args.config_origin << "): valid\n"
+              << elaslam::sim::describe(options);
+    return 0;
+  }
   if (args.list_robots) {
     for (std::size_t i = 0; i < options.robots.size(); ++i) std::printf("%s%d", i ? " " : "", options.robots[i].id);
     std::printf("\n");
     return 0;
   }
   install_signal_handlers();
-  return run(args, options);
+  return run(args, options, effective_yaml);
 }

@@ -15,6 +15,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/cli.hpp"
+
 #include "elaslam/common/config.hpp"
 #include "elaslam/simulator/scenario.hpp"
 #include "elaslam/simulator/world.hpp"
@@ -48,7 +50,8 @@ int main(int argc, char** argv) {
   std::string config, out;
   double dynamism = 0.0, speed = 0.0;
   int seed = 0;
-  app.add_option("--config", config, "scenario YAML file")->required();
+  elaslam::cli::add_version_flag(app, "scenario_dump");
+  app.add_option("--config", config, "YAML config with a scenario: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
   auto* o_dyn = app.add_option("--dynamism", dynamism, "override scenario.dynamism_percent [%]");
   auto* o_speed = app.add_option("--speed", speed, "override scenario.landmark_speed_mps [m/s]");
   auto* o_seed = app.add_option("--seed", seed, "override scenario.seed");
@@ -60,7 +63,7 @@ int main(int argc, char** argv) {
   }
   elaslam::sim::ScenarioOptions o;
   try {
-    o = elaslam::sim::load_scenario(config);
+    o = elaslam::sim::load_scenario(elaslam::cli::find_config(config).path);
   } catch (const elaslam::config::ConfigError& e) {
     std::cerr << "scenario_dump: " << e.what() << "\n";
     return 2;

@@ -1,36 +1,103 @@
 #!/usr/bin/env python3
 """Decode an elaslam LCM log with the Python bindings (PyPI `lcm`) and the
-generated types (build/lcmgen/python): per-channel counts and the last POSE and
-GLOBAL_MAP in brief. Exit 1 if any event on one of our channels fails to decode.
+generated message types: per-channel counts, the run (RUN_INFO) and the last POSE
+and GLOBAL_MAP in brief. Exit 1 if any event on one of our channels fails to
+decode, 2 on a bad command line, a missing log or a missing module.
 
-    .venv/bin/python tools/decode_log.py LOG [--build-dir build]
+    tools/decode_log.py LOG [--build-dir DIR]
+
+The generated Python types come from DIR/lcmgen/python with --build-dir; without
+it from $ELASLAM_BUILD_DIR/lcmgen/python, the installed
+<prefix>/share/elaslam/python, or the source tree's build/lcmgen/python.
+In a source tree the script runs itself in the project's .venv (tools/setup.sh
+makes it, with the PyPI `lcm`); an installed copy runs with the python3 that
+starts it, which needs `lcm` from PyPI (Debian has no package for it).
 """
-import argparse
-import collections
+# ---- start-up: standard library only, before any third-party import (tools/elaslam_tool.py)
 import os
-import re
 import sys
+
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+
+PROG = "decode_log"
+
+if __name__ == "__main__":
+    run_in_venv()
+# ----------------------------------------------------------------------------------
+import argparse  # noqa: E402
+import collections  # noqa: E402
+import re  # noqa: E402
+
+
+def types_dirs(build_dir):
+    """Where the generated Python package `elaslam` may be, best first."""
+    if build_dir:
+        return [os.path.join(build_dir, "lcmgen", "python")]
+    dirs = []
+    if os.environ.get("ELASLAM_BUILD_DIR"):
+        dirs.append(os.path.join(os.environ["ELASLAM_BUILD_DIR"], "lcmgen", "python"))
+    for here in dict.fromkeys([os.path.dirname(os.path.abspath(__file__)), os.path.dirname(os.path.realpath(__file__))]):
+        if here.endswith(os.path.join("share", "elaslam", "tools")):
+            dirs += [os.path.join(here, "..", "python"),                    # installed: <prefix>/share/elaslam/python
+                     os.path.join(here, "..", "..", "..", "lcmgen", "python")]  # the build tree's mirror of it
+        elif os.path.basename(here) == "bin":
+            dirs.append(os.path.join(here, "..", "share", "elaslam", "python"))  # installed as <prefix>/bin/...
+    dirs.append(os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "build", "lcmgen", "python"))
+    return [os.path.normpath(d) for d in dirs]
+
+
+def load_types(build_dir):
+    dirs = types_dirs(build_dir)
+    found = next((d for d in dirs if os.path.isfile(os.path.join(d, "elaslam", "__init__.py"))), None)
+    if found is None:
+        sys.stderr.write(f"{PROG}: no generated Python message types (elaslam/__init__.py) in "
+                         f"{', '.join(dict.fromkeys(dirs))}: build first (cmake --build BUILD) or give --build-dir\n")
+        sys.exit(2)
+    sys.path.insert(0, found)
+    import elaslam
+    return elaslam
+
+
+def fmt_known(value, unit="", none=-1):
+    return "unknown" if value == none else f"{value:g}{unit}"
+
+
+def describe_run_info(m):
+    robots = " ".join(str(r) for r in m.robot_ids[:m.num_robots])
+    seed = "none" if m.seed < 0 else str(m.seed)
+    return (f"run info: source {m.source}, scenario {m.scenario}, mode {m.mode or 'unknown'}, seed {seed}, "
+            f"dynamism {fmt_known(m.dynamism_percent, ' %')}, speed {fmt_known(m.landmark_speed_mps, ' m/s')}, "
+            f"rate {m.rate_hz:g} Hz, frames {m.frames}, robots {robots}\n"
+            f"          last at frame {m.frame}; {m.version}")
 
 
 def main() -> int:
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("log")
-    ap.add_argument("--build-dir", default=os.path.join(root, "build"))
-    args = ap.parse_args()
-    sys.path.insert(0, os.path.join(args.build_dir, "lcmgen", "python"))
-    import lcm  # noqa: E402  (the PyPI wheel, in .venv)
-    from elaslam import (dynamic_notice_t, global_map_t, ground_truth_t, landmark_event_t,  # noqa: E402
-                         lmap_snapshot_t, node_status_t, pose_estimate_t, sensor_frame_t)
-
-    types = [(r"SENSOR_\d+", sensor_frame_t), (r"POSE_\d+", pose_estimate_t), (r"GROUND_TRUTH", ground_truth_t),
-             (r"LMAP_EVENT", landmark_event_t), (r"LMAP_SNAPSHOT", lmap_snapshot_t), (r"GLOBAL_MAP", global_map_t),
-             (r"DYNAMIC_NOTICE", dynamic_notice_t), (r"STATUS_.*", node_status_t)]
-    if not os.path.exists(args.log):
-        print(f"decode_log: no such log: {args.log}", file=sys.stderr)
+    ap = argparse.ArgumentParser(prog="decode_log.py", description=__doc__.split("\n\n")[0],
+                                 epilog="\n\n".join(__doc__.split("\n\n")[2:]),
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("log", help="an LCM log (lcm-logger, tools/run_team.sh: runs/team_<time>/run.lcmlog)")
+    ap.add_argument("--build-dir", help="the build directory whose lcmgen/python has the message types")
+    args = _parse(ap)
+    if not os.path.isfile(args.log):
+        print(f"{PROG}: no such log: {args.log}", file=sys.stderr)
         return 2
+    lcm = _need("lcm")
+    T = load_types(args.build_dir)
+
+    types = [(r"SENSOR_\d+", T.sensor_frame_t), (r"POSE_\d+", T.pose_estimate_t), (r"GROUND_TRUTH", T.ground_truth_t),
+             (r"LMAP_EVENT", T.landmark_event_t), (r"LMAP_SNAPSHOT", T.lmap_snapshot_t), (r"GLOBAL_MAP", T.global_map_t),
+             (r"DYNAMIC_NOTICE", T.dynamic_notice_t), (r"STATUS_.*", T.node_status_t)]
+    if hasattr(T, "run_info_t"):
+        types.append((r"RUN_INFO.*", T.run_info_t))
     counts, errors, last = collections.Counter(), collections.Counter(), {}
-    for ev in lcm.EventLog(args.log, "r"):
+    try:
+        log = lcm.EventLog(args.log, "r")
+    except Exception as e:  # not an LCM log, unreadable
+        print(f"{PROG}: cannot read {args.log} as an LCM log: {e}", file=sys.stderr)
+        return 2
+    for ev in log:
         for pattern, cls in types:
             if re.fullmatch(pattern, ev.channel):
                 try:
@@ -39,8 +106,13 @@ def main() -> int:
                 except Exception:  # a corrupt or foreign event on our channel
                     errors[ev.channel] += 1
                 break
-    for ch in sorted(counts):
+    if not counts and not errors:
+        print(f"{PROG}: no events on elaslam channels in {args.log} (not an LCM log, or empty?)", file=sys.stderr)
+        return 1
+    for ch in sorted(set(counts) | set(errors)):
         print(f"{ch:16s} {counts[ch]:6d} decoded" + (f", {errors[ch]} failed" if errors[ch] else ""))
+    for ch in sorted(c for c in last if c.startswith("RUN_INFO")):
+        print(describe_run_info(last[ch]))
     if "POSE_1" in last:
         p = last["POSE_1"]
         print(f"last POSE_1: frame {p.frame}, x {p.x:.3f} y {p.y:.3f} theta {p.theta:.3f}, {p.num_landmarks} landmarks")

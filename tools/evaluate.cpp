@@ -1,7 +1,21 @@
 // evaluate: the metrics of a recorded run (an LCM log of the live team, made by
 // lcm-logger) against its ground truth, with the same definitions and output files
-// as run_scenario, plus latency and dropped frames.
-//   evaluate --log FILE [--out DIR] [--mode NAME] [--quiet]
+// as run_scenario, plus latency and frame accounting.
+//   evaluate --log FILE [--out DIR] [--config FILE] [--baseline MODE] [--quiet]
+//            [--mode M] [--dynamism P] [--speed V] [--seed S]
+//
+// What the run was comes from the log: RUN_INFO (the frame source's scenario, seed,
+// dynamism, speed, rate, frames, effective config) and the robots' STATUS (their
+// mode). --mode / --dynamism / --speed / --seed are fallbacks for logs without them.
+// --config FILE: the team's config file; with RUN_INFO's values over it, it becomes
+// the effective config echoed into metrics.json (without it only the frame source's
+// section is known). --baseline MODE (needs --config): the same scenario and seed in
+// process with MODE (e.g. plain ekf), side by side with the live run.
+//
+// Frames per robot (team/log_summary.hpp, account_frames): a frame is "dropped" only
+// when the robot did not process it after it had started; frames before its first
+// are "not started"; a frame it processed whose POSE is not in the log is the
+// recorder's loss ("missing from the log"), told apart by POSE.frames_processed.
 //
 // Latency: POSE_<r> receive time in the log (lcm-logger's timestamp) minus its
 // source_utime (the SENSOR frame's publish time), `latency_us`; the robot's own
@@ -13,18 +27,23 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include "elaslam/common/cli.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/team/log_summary.hpp"
 #include "elaslam/team/report.hpp"
+#include "elaslam/team/team_run.hpp"
 
 namespace elaslam {
 namespace {
@@ -48,10 +67,23 @@ struct LogData {
   std::map<int, std::vector<int>> observed;             // frame -> observed ids
   std::map<int, MapRecord> maps;                        // frame -> first GLOBAL_MAP of that frame
   std::map<int, std::int64_t> first_map_receive;        // frame -> first receive of a map with that frame
-  std::map<int, std::int64_t> node_dropped;             // robot -> last STATUS frames_dropped
+  std::map<int, std::vector<StatusCheckpoint>> status;  // robot -> STATUS_ROBOT checkpoints
+  std::map<int, std::vector<int>> sensor_frames;        // robot -> SENSOR frames seen
+  std::map<int, int> robot_mode;                        // robot -> node_status_t::MODE_* (last)
+  std::optional<run_info_t> run_info;                   // the last RUN_INFO
   std::map<std::string, long> decode_errors;
   long events = 0;
 };
+
+const char* mode_name(int m) {
+  switch (m) {
+    case node_status_t::MODE_EKF: return "ekf";
+    case node_status_t::MODE_GATED: return "gated";
+    case node_status_t::MODE_ELA: return "ela";
+    case node_status_t::MODE_CONSENSUS: return "consensus";
+    default: return "";
+  }
+}
 
 template <typename Msg>
 bool decode(const lcm::LogEvent* ev, Msg* m, LogData* d) {
@@ -127,15 +159,21 @@ bool read_log(const std::string& path, LogData* d, std::string* why) {
     } else if (robot_of(ch, "POSE_") > 0) {
       pose_estimate_t m;
       if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev->timestamp};
+    } else if (ch == "RUN_INFO") {
+      run_info_t m;
+      if (decode(ev, &m, d)) d->run_info = m;
     } else if (robot_of(ch, "SENSOR_") > 0) {
       sensor_frame_t m;
       if (!decode(ev, &m, d)) continue;
+      d->sensor_frames[m.robot_id].push_back(m.frame);
       auto& t = d->sensor_utime[m.frame];
       t = std::max(t, m.utime);
       for (int i = 0; i < m.num_obs && i < 64; ++i) d->observed[m.frame].push_back(m.obs[i].landmark_id);
     } else if (robot_of(ch, "STATUS_ROBOT_") > 0) {
       node_status_t m;
-      if (decode(ev, &m, d)) d->node_dropped[m.node_id] = m.frames_dropped;
+      if (!decode(ev, &m, d)) continue;
+      d->status[m.node_id].push_back({m.frame, m.frames, m.frames_dropped});
+      if (m.mode != node_status_t::MODE_NONE) d->robot_mode[m.node_id] = m.mode;
     }
   }
   if (d->truth.empty()) {
@@ -166,32 +204,119 @@ nlohmann::json to_json(const Quantiles& q) {
   return {{"p50", q.p50}, {"p99", q.p99}, {"max", q.max}, {"count", q.count}};
 }
 
+/// The robots' mode as they report it (STATUS_ROBOT): "" when they did not report
+/// or disagree (then `*disagree`).
+std::string reported_mode(const LogData& d, bool* disagree) {
+  std::string mode;
+  *disagree = false;
+  for (const auto& [id, m] : d.robot_mode) {
+    const std::string name = mode_name(m);
+    if (mode.empty()) mode = name;
+    if (name != mode) *disagree = true;
+  }
+  return *disagree ? "" : mode;
+}
+
+nlohmann::json run_info_json(const run_info_t& m) {
+  nlohmann::json robots = nlohmann::json::array();
+  for (int i = 0; i < m.num_robots && i < 8; ++i) robots.push_back(m.robot_ids[i]);
+  return {{"source", m.source},   {"version", m.version},
+          {"scenario", m.scenario}, {"mode", m.mode},
+          {"seed", m.seed},       {"dynamism_percent", m.dynamism_percent},
+          {"landmark_speed_mps", m.landmark_speed_mps}, {"rate_hz", m.rate_hz},
+          {"frames", m.frames},   {"robots", robots},
+          {"schema_version", m.schema_version}};
+}
+
+struct Args {
+  std::string log_path, out_dir, config, baseline, mode;
+  bool quiet = false;
+  double dynamism = -1.0, speed = -1.0;
+  long long seed = -1;
+};
+
+/// The run's facts: RUN_INFO first (what the source ran), then the robots' STATUS
+/// (mode), then the command line's fallbacks, then what the ground truth shows.
+RunInfo run_facts(const Args& a, const LogData& d, const std::string& command) {
+  RunInfo info;
+  info.source = a.log_path;
+  info.command_line = command;
+  bool disagree = false;
+  info.mode = reported_mode(d, &disagree);
+  if (disagree) std::fprintf(stderr, "evaluate: the robots report different modes in STATUS_ROBOT\n");
+  if (info.mode.empty() && d.run_info) info.mode = d.run_info->mode;
+  if (info.mode.empty()) info.mode = a.mode;
+  if (!a.mode.empty() && info.mode != a.mode)
+    std::fprintf(stderr, "evaluate: --mode %s, but the robots report %s: using theirs\n", a.mode.c_str(),
+                 info.mode.c_str());
+  if (info.mode.empty()) info.mode = "unknown";
+  const FrameData& last = d.truth.rbegin()->second;
+  int moving = 0;
+  for (auto m : last.truly_moving) moving += m;
+  const double moving_percent =
+      last.truly_moving.empty() ? 0.0 : 100.0 * moving / static_cast<double>(last.truly_moving.size());
+  const bool sim = d.run_info && d.run_info->seed >= 0;
+  info.dynamism_percent = sim ? d.run_info->dynamism_percent : a.dynamism >= 0.0 ? a.dynamism : moving_percent;
+  info.speed_mps = sim ? d.run_info->landmark_speed_mps : std::max(a.speed, 0.0);
+  info.seed = sim ? d.run_info->seed : std::max(a.seed, 0LL);
+  if (sim && ((a.dynamism >= 0.0 && a.dynamism != info.dynamism_percent) ||
+              (a.speed >= 0.0 && a.speed != info.speed_mps) || (a.seed >= 0 && a.seed != info.seed)))
+    std::fprintf(stderr, "evaluate: the command line's dynamism/speed/seed differ from the log's RUN_INFO: using the log's\n");
+  return info;
+}
+
+/// The team config that ran: --config with the log's run facts over it (mode,
+/// dynamism, speed, seed, rate, frames). Throws on a bad config.
+TeamConfig team_config_of_run(const std::string& path, const RunInfo& info, const LogData& d) {
+  TeamConfig cfg = load_team_config(path);
+  RunOverrides ov;
+  Mode m;
+  if (parse_mode(info.mode, &m)) ov.mode = m;
+  ov.dynamism_percent = info.dynamism_percent;
+  ov.landmark_speed_mps = info.speed_mps;
+  ov.seed = static_cast<int>(info.seed);
+  if (d.run_info && d.run_info->seed >= 0) {
+    ov.rate_hz = d.run_info->rate_hz;
+    ov.frames = d.run_info->frames;
+  }
+  return apply_overrides(cfg, ov);
+}
+
 }  // namespace
 }  // namespace elaslam
 
 int main(int argc, char** argv) {
   using namespace elaslam;
-  std::string log_path, out_dir, mode = "unknown";
-  bool quiet = false;
-  double dynamism = -1.0, speed = -1.0;
-  long long seed = -1;
+  Args a;
   CLI::App app{"elaslam evaluate: metrics of a recorded LCM log against its ground truth"};
-  app.add_option("--log", log_path, "LCM log (lcm-logger)")->required();
-  app.add_option("--out", out_dir, "directory for metrics.json, frames.csv, trajectories/");
-  app.add_option("--mode", mode, "mode name to record in metrics.json");
-  app.add_flag("--quiet", quiet, "no summary on stdout");
-  // The log does not carry the run's settings: the launcher passes them to record.
-  app.add_option("--dynamism", dynamism, "dynamism [%] to record (default: from the ground truth's moving flags)");
-  app.add_option("--speed", speed, "landmark speed [m/s] to record");
-  app.add_option("--seed", seed, "seed to record");
+  cli::add_version_flag(app, "evaluate");
+  app.add_option("--log", a.log_path, "LCM log (lcm-logger)")->required();
+  app.add_option("--out", a.out_dir, "directory for metrics.json, frames.csv, trajectories/");
+  app.add_option("--config", a.config, "the team's config file: its sections with the log's run facts become the "
+                                       "effective config in metrics.json")
+      ->check(CLI::ExistingFile);
+  app.add_option("--baseline", a.baseline, "also run this mode in process on the same scenario and seed and compare "
+                                           "(needs --config)")
+      ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
+  app.add_flag("--quiet", a.quiet, "no summary on stdout");
+  // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed).
+  app.add_option("--mode", a.mode, "mode to record when the robots' STATUS does not say");
+  app.add_option("--dynamism", a.dynamism, "dynamism [%] to record when the log has no RUN_INFO "
+                                           "(default: from the ground truth's moving flags)");
+  app.add_option("--speed", a.speed, "landmark speed [m/s] to record when the log has no RUN_INFO");
+  app.add_option("--seed", a.seed, "seed to record when the log has no RUN_INFO");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  if (!a.baseline.empty() && a.config.empty()) {
+    std::fprintf(stderr, "evaluate: --baseline needs --config (the team's config file)\n");
+    return 2;
+  }
   LogData d;
   std::string why;
-  if (!read_log(log_path, &d, &why)) {
+  if (!read_log(a.log_path, &d, &why)) {
     std::fprintf(stderr, "evaluate: %s\n", why.c_str());
     return 2;
   }
@@ -203,7 +328,7 @@ int main(int argc, char** argv) {
   r.truth.resize(R);
   std::vector<std::vector<std::int64_t>> latency(R), publish_latency(R);
   std::vector<std::int64_t> all_latency, all_publish_latency, map_latency;
-  std::vector<long> missing(R, 0);
+  std::vector<std::vector<PoseCheckpoint>> checkpoints(R);
   const double t0 = d.truth.begin()->second.time_s;
   const MapRecord* map = nullptr;
   for (auto& [k, f] : d.truth) {
@@ -219,10 +344,8 @@ int main(int argc, char** argv) {
         const auto it = poses->second.find(f.robot_ids[i]);
         if (it != poses->second.end()) p = &it->second;
       }
-      if (!p) {
-        ++missing[i];
-        continue;
-      }
+      if (!p) continue;
+      checkpoints[i].push_back({k, p->msg.frames_processed});
       f.has_pose[i] = 1;
       f.est_poses[i] = {p->msg.x, p->msg.y, p->msg.theta};
       f.mean_diag_p[i] = p->msg.mean_diag_p;
@@ -256,30 +379,76 @@ int main(int argc, char** argv) {
   r.final_truth = d.truth.rbegin()->second.true_landmarks;
   r.truly_moving = d.truth.rbegin()->second.truly_moving;
 
-  const FrameData& last = d.truth.rbegin()->second;
-  int moving = 0;
-  for (auto m : last.truly_moving) moving += m;
-  const double moving_percent =
-      last.truly_moving.empty() ? 0.0 : 100.0 * moving / static_cast<double>(last.truly_moving.size());
-  RunInfo info{mode, dynamism >= 0.0 ? dynamism : moving_percent, std::max(speed, 0.0), std::max(seed, 0LL), log_path, ""};
+  const std::string command = cli::command_line(argc, argv);
+  RunInfo info = run_facts(a, d, command);
+  TeamConfig team;
+  bool has_team = false;
+  if (!a.config.empty()) {
+    try {
+      team = team_config_of_run(a.config, info, d);
+      has_team = true;
+      info.effective_config = team.effective_yaml;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "evaluate: --config %s: %s\n", a.config.c_str(), e.what());
+      return 2;
+    }
+  } else if (d.run_info) {
+    info.effective_config = d.run_info->config_yaml;  // the frame source's section only
+  }
   nlohmann::json j = metrics_json(info, r);
-  long dropped = 0;
+  if (!has_team)
+    j["config_note"] = d.run_info ? "the frame source's section only (RUN_INFO); pass --config for the nodes' sections"
+                                  : "unknown: no RUN_INFO in the log and no --config";
+  j["run_info"] = d.run_info ? run_info_json(*d.run_info) : nlohmann::json(nullptr);
+
+  // Frames per robot over the run's frames.
+  const int first_frame = d.truth.begin()->first, last_frame = d.truth.rbegin()->first;
+  long dropped = 0, not_started = 0, missing_from_log = 0;
+  std::vector<RobotFrameAccount> accounts;
   for (std::size_t i = 0; i < R; ++i) {
-    j["robots"][i]["latency_us"] = to_json(quantiles(latency[i]));
-    j["robots"][i]["pose_publish_latency_us"] = to_json(quantiles(publish_latency[i]));
-    j["robots"][i]["frames_dropped"] = missing[i];
-    const auto nd = d.node_dropped.find(robot_ids[i]);
-    j["robots"][i]["frames_dropped_reported_by_node"] = nd != d.node_dropped.end() ? nd->second : 0;
-    dropped += missing[i];
+    const int id = robot_ids[i];
+    const auto st = d.status.find(id);
+    const auto se = d.sensor_frames.find(id);
+    accounts.push_back(account_frames(id, first_frame, last_frame, checkpoints[i],
+                                      st != d.status.end() ? st->second : std::vector<StatusCheckpoint>{},
+                                      se != d.sensor_frames.end() ? se->second : std::vector<int>{}));
+    const RobotFrameAccount& acct = accounts.back();
+    auto& jr = j["robots"][i];
+    jr["latency_us"] = to_json(quantiles(latency[i]));
+    jr["pose_publish_latency_us"] = to_json(quantiles(publish_latency[i]));
+    jr["frames_dropped"] = acct.dropped;
+    jr["frames_not_started"] = acct.not_started;
+    jr["poses_missing_from_log"] = acct.missing_from_log;
+    jr["restarts"] = acct.restarts;
+    jr["frames_dropped_reported_by_node"] = acct.node_reported_dropped;
+    dropped += acct.dropped;
+    not_started += acct.not_started;
+    missing_from_log += acct.missing_from_log;
   }
   const Quantiles lq = quantiles(all_latency), mq = quantiles(map_latency), pq = quantiles(all_publish_latency);
   j["latency_us"] = to_json(lq);
   j["pose_publish_latency_us"] = to_json(pq);
   j["global_map_latency_us"] = to_json(mq);
   j["frames_dropped"] = dropped;
+  j["frames_not_started"] = not_started;
+  j["poses_missing_from_log"] = missing_from_log;
   j["log_events"] = d.events;
   for (const auto& [ch, n] : d.decode_errors) j["decode_errors"][ch] = n;
-  if (!quiet) {
+
+  std::optional<RunResult> base;
+  RunInfo base_info;
+  if (!a.baseline.empty()) {
+    Mode bm = Mode::kEkf;
+    parse_mode(a.baseline, &bm);
+    RunOverrides bo;
+    bo.mode = bm;
+    const TeamConfig bc = apply_overrides(team, bo);
+    base = run_team(bc);
+    base_info = RunInfo{a.baseline, info.dynamism_percent, info.speed_mps, info.seed, a.config, bc.effective_yaml,
+                        command};
+    j["baseline"] = baseline_json(base_info, *base, "in process, same scenario and seed");
+  }
+  if (!a.quiet) {
     print_summary(std::cout, info, r);
     std::cout << "  latency_us (sensor -> pose): p50 " << lq.p50 << " p99 " << lq.p99 << " max " << lq.max << " ("
               << lq.count << " poses)\n"
@@ -287,12 +456,29 @@ int main(int argc, char** argv) {
               << " max " << pq.max << "\n"
               << "  global map latency_us (sensor -> map including the frame): p50 " << mq.p50 << " p99 " << mq.p99
               << " max " << mq.max << "\n"
-              << "  frames dropped: " << dropped << "\n";
+              << "  frames dropped: " << dropped << " (frames a robot did not process after it started)\n";
+    for (const auto& acct : accounts) {
+      if (acct.not_started > 0)
+        std::cout << "  robot " << acct.robot_id << ": not yet started for its first " << acct.not_started
+                  << " frames\n";
+      if (acct.dropped > 0 || acct.missing_from_log > 0 || acct.restarts > 0) {
+        std::cout << "  robot " << acct.robot_id << ":";
+        if (acct.dropped > 0) std::cout << " " << acct.dropped << " frames dropped;";
+        if (acct.restarts > 0) std::cout << " " << acct.restarts << (acct.restarts == 1 ? " restart;" : " restarts;");
+        if (acct.missing_from_log > 0)
+          std::cout << " " << acct.missing_from_log << " frames processed but their POSE missing from the log;";
+        std::cout << " no POSE in the log for frames " << format_ranges(acct.missing_pose_ranges) << "\n";
+      }
+    }
+    if (missing_from_log > 0)
+      std::cout << "  (POSEs missing from the log are the recorder's loss: lcm-logger drops messages when more "
+                   "than 30 wait in its queue, as in the burst of landmark events a few frames into a run)\n";
     for (const auto& [ch, n] : d.decode_errors) std::cout << "  undecodable events on " << ch << ": " << n << "\n";
+    if (base) print_comparison(std::cout, info, r, base_info, *base, "in process");
   }
-  if (!out_dir.empty()) {
+  if (!a.out_dir.empty()) {
     try {
-      write_outputs(out_dir, j, r);
+      write_outputs(a.out_dir, j, r);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "evaluate: %s\n", e.what());
       return 1;

@@ -3,10 +3,14 @@
 # processes over LCM, recorded by lcm-logger) at each rate and prints, from the
 # evaluated log, sensor-to-pose latency (p50/p99/max over every robot) and
 # sensor-to-global-map latency (the GLOBAL_MAP that includes the frame).
-#   tools/latency.sh [--config FILE] [--rates "10 30 100"] [--seconds S] [--mode M] [--no-realtime] [--out DIR]
-# As root the team runs with real-time scheduling (run_team.sh --realtime) unless
-# --no-realtime. Pose latency is sensor publish to the robot's POSE publish (the
-# POSE utime); "at logger" adds the hop to lcm-logger's receipt.
+#   tools/latency.sh [--config FILE] [--rates "10 30 100"] [--seconds S] [--mode M]
+#                    [--no-realtime] [--out DIR] [--build-dir DIR]
+# Each rate runs S seconds (default 30). As root the team runs with real-time
+# scheduling (run_team.sh --realtime) unless --no-realtime. Pose latency is sensor
+# publish to the robot's POSE publish (the POSE utime); "at logger" adds the hop to
+# lcm-logger's receipt. --out DIR (default results/latency_<time>) gets each rate's
+# run (F<rate>/) and output (F<rate>.txt). --build-dir DIR (default
+# $ELASLAM_BUILD_DIR, else build/) goes to run_team.sh.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 CONFIG="$ROOT/config/paper.yaml"
@@ -15,25 +19,35 @@ SECONDS_PER_RUN=30
 MODE=ela
 RT=(--realtime)
 OUT="$ROOT/results/latency_$(date +%Y%m%d_%H%M%S)"
+BUILD_ARGS=()
+usage_error() { echo "latency.sh: $1 (see --help)" >&2; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in
+    --config|--rates|--seconds|--mode|--out|--build-dir) [ $# -ge 2 ] || usage_error "$1 needs a value" ;;&
     --config) CONFIG="$2"; shift 2 ;;
     --rates) RATES="$2"; shift 2 ;;
     --seconds) SECONDS_PER_RUN="$2"; shift 2 ;;
     --mode) MODE="$2"; shift 2 ;;
     --no-realtime) RT=(); shift ;;
     --out) OUT="$2"; shift 2 ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
-    *) echo "latency.sh: unknown argument '$1'" >&2; exit 2 ;;
+    --build-dir) BUILD_ARGS=(--build-dir "$2"); shift 2 ;;
+    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) usage_error "unknown argument '$1'" ;;
   esac
 done
+positive() { [[ "$1" =~ ^[0-9]+([.][0-9]+)?$ ]] && [[ ! "$1" =~ ^0+([.]0*)?$ ]]; }
+positive "$SECONDS_PER_RUN" || usage_error "--seconds must be a positive number, got '$SECONDS_PER_RUN'"
+for f in $RATES; do positive "$f" || usage_error "--rates: not a rate: '$f'"; done
+[ -n "${RATES// /}" ] || usage_error "--rates is empty"
+case "$MODE" in ekf|gated|ela|consensus) ;; *) usage_error "--mode must be ekf, gated, ela or consensus, got '$MODE'" ;; esac
+[ -f "$CONFIG" ] || usage_error "no such config file: $CONFIG"
 mkdir -p "$OUT"
 [ "$(id -u)" -eq 0 ] || RT=()
 printf '%-8s %-8s %-30s %-30s %-30s %s\n' "F [Hz]" frames "pose latency p50/p99/max [us]" "at logger p50/p99/max [us]" \
   "map latency p50/p99/max [us]" "frames dropped"
 for f in $RATES; do
   frames=$(awk -v f="$f" -v s="$SECONDS_PER_RUN" 'BEGIN { printf "%d", f * s }')
-  "$ROOT/tools/run_team.sh" --config "$CONFIG" --mode "$MODE" --rate "$f" --frames "$frames" "${RT[@]}" --out "$OUT/F$f" >"$OUT/F$f.txt" 2>&1 ||
+  "$ROOT/tools/run_team.sh" --config "$CONFIG" --mode "$MODE" --rate "$f" --frames "$frames" "${RT[@]}" "${BUILD_ARGS[@]}" --out "$OUT/F$f" >"$OUT/F$f.txt" 2>&1 ||
     { echo "latency.sh: run at $f Hz failed, see $OUT/F$f.txt" >&2; exit 1; }
   "$ROOT/.venv/bin/python" - "$OUT/F$f/metrics.json" "$f" "$frames" <<'PY'
 import json, sys

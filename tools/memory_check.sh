@@ -2,14 +2,16 @@
 # Memory of the live team over a long run: does any node grow?
 #
 #   tools/memory_check.sh [--duration S] [--interval S] [--config FILE] [--out DIR]
-#                         [--build-dir DIR] [--port P] [--log] [--inside] [SCENARIO ARGS...]
+#                         [--build-dir DIR] [--port P] [--log]
+#                         [--dynamism P] [--speed V] [--seed S] [-- SIMULATOR ARGS...]
 #
 # - Runs the team free-running (no lockstep) at the scenario's rate (config/paper.yaml:
 #   10 Hz) for S seconds (default 600): the simulator gets --frames S * rate; main_robot
 #   and one robot_node per robot as in tools/run_team.sh (main_robot with --state).
-#   SCENARIO ARGS go to the simulator (default: --dynamism 50 --speed 0.5 --seed 3, so
-#   that landmarks keep moving and events, notices and snapshots keep flowing; the
-#   robots stop at the end of their semicircles after 15 s and keep observing).
+#   --dynamism, --speed, --seed and any SIMULATOR ARGS after -- go to the simulator
+#   (default: --dynamism 50 --speed 0.5 --seed 3, so that landmarks keep moving and
+#   events, notices and snapshots keep flowing; the robots stop at the end of their
+#   semicircles after 15 s and keep observing).
 # - Every S seconds (default 5) samples VmRSS and VmHWM (/proc/PID/status) of every
 #   robot_node, main_robot and the simulator into DIR/rss.csv
 #   (t_s,process,pid,rss_kb,hwm_kb).
@@ -31,20 +33,28 @@ INSIDE=0
 SIM_ARGS=()
 ORIG_ARGS=("$@")
 usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+usage_error() { echo "memory_check: $1 (see --help)" >&2; exit 2; }
+number() { [[ "$2" =~ ^[0-9]+([.][0-9]+)?$ ]] && [[ ! "$2" =~ ^0+([.]0*)?$ ]] || usage_error "$1 must be a positive number, got '$2'"; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --duration) DURATION="$2"; shift 2 ;;
-    --interval) INTERVAL="$2"; shift 2 ;;
+    --duration|--interval|--config|--out|--build-dir|--port|--dynamism|--speed|--seed)
+      [ $# -ge 2 ] || usage_error "$1 needs a value" ;;&
+    --duration) number "$1" "$2"; DURATION="$2"; shift 2 ;;
+    --interval) number "$1" "$2"; INTERVAL="$2"; shift 2 ;;
     --config) CONFIG="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --port) PORT="$2"; shift 2 ;;
     --log) LOG=1; shift ;;
     --inside) INSIDE=1; shift ;;  # internal: already in the namespace
+    --dynamism|--speed|--seed) SIM_ARGS+=("$1" "$2"); shift 2 ;;
+    --) shift; SIM_ARGS+=("$@"); break ;;
     -h|--help) usage 0 ;;
-    *) SIM_ARGS+=("$1"); shift ;;
+    *) usage_error "unknown argument '$1'" ;;
   esac
 done
+[ -f "$CONFIG" ] || usage_error "no such config file: $CONFIG"
+[ -d "$BUILD_DIR" ] || usage_error "no such build directory: $BUILD_DIR"
 [ ${#SIM_ARGS[@]} -gt 0 ] || SIM_ARGS=(--dynamism 50 --speed 0.5 --seed 3)
 BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
 BIN="$BUILD_DIR/bin"

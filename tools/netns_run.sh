@@ -3,7 +3,8 @@
 # its loopback, so that LCM traffic never touches the host's real interfaces and
 # parallel tests cannot hear each other.
 #
-#   tools/netns_run.sh [--port P] [--keep-env] -- CMD ARGS...
+#   tools/netns_run.sh [--port P] -- CMD ARGS...
+#   tools/netns_run.sh --help
 #
 # - needs root (ip netns); otherwise prints why and exits 77 (ctest: SKIP_RETURN_CODE 77)
 # - creates namespace elaslam_<pid>_<random>, brings lo up with multicast and a
@@ -15,23 +16,28 @@
 set -u
 
 PORT=7667
-usage() {
-  echo "usage: $0 [--port P] -- CMD [ARGS...]" >&2
+# --help: the comment block above; a usage error: one line naming the problem, exit 2.
+help() { sed -n '2,/^set -u/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0; }
+usage_error() {
+  echo "netns_run: $1" >&2
+  echo "usage: tools/netns_run.sh [--port P] -- CMD [ARGS...]   (--help: details)" >&2
   exit 2
 }
 while [ $# -gt 0 ]; do
   case "$1" in
     --port)
-      [ $# -ge 2 ] || usage
+      [ $# -ge 2 ] || usage_error "--port needs a value"
       PORT="$2"
       shift 2
       ;;
+    --port=*) PORT="${1#--port=}"; shift ;;
     --) shift; break ;;
-    -h|--help) usage ;;
-    *) usage ;;
+    -h|--help) help ;;
+    -*) usage_error "unknown argument '$1'" ;;
+    *) usage_error "unexpected argument '$1': the command goes after --" ;;
   esac
 done
-[ $# -ge 1 ] || usage
+[ $# -ge 1 ] || usage_error "no command after --"
 case "$PORT" in
   ''|*[!0-9]*) echo "netns_run: --port must be a number, got '$PORT'" >&2; exit 2 ;;
 esac

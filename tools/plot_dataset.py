@@ -3,22 +3,39 @@
 its true (Vicon) and estimated paths, the true landmark positions and the team's
 global map (estimates with 3-sigma ellipses; landmarks flagged as moving marked).
 
-    .venv/bin/python tools/plot_dataset.py RUN_DIR [--out FILE.png]
+    tools/plot_dataset.py RUN_DIR [--out FILE.png]
 
 RUN_DIR holds map.csv and trajectories/robot<R>.tum, robot<R>_gt.tum (written by
 build/bin/run_dataset or run_scenario). Default output: RUN_DIR/paths.png.
+Exit status 1 when RUN_DIR lacks them, 2 on a bad command line or a missing
+module: in a source tree the script runs itself in the project's .venv
+(tools/setup.sh); an installed copy needs Debian's python3-matplotlib.
 """
-import argparse
-import csv
-import math
+# ---- start-up: standard library only, before any third-party import (tools/elaslam_tool.py)
 import os
 import sys
 
-import matplotlib
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.patches import Ellipse  # noqa: E402
+if __name__ == "__main__":
+    run_in_venv()
+# ----------------------------------------------------------------------------------
+import argparse  # noqa: E402
+import csv  # noqa: E402
+import math  # noqa: E402
+
+# matplotlib: imported by load_modules() once the command line is parsed (so --help
+# and usage errors need no third-party module).
+plt = Ellipse = None
+
+
+def load_modules():
+    global plt, Ellipse
+    _need("matplotlib", "python3-matplotlib").use("Agg")
+    plt = _need("matplotlib.pyplot", "python3-matplotlib")
+    Ellipse = _need("matplotlib.patches", "python3-matplotlib").Ellipse
 
 
 def read_tum(path):
@@ -54,10 +71,12 @@ def ellipse(cxx, cxy, cyy, x, y, k=3.0, **kw):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("run_dir")
-    ap.add_argument("--out")
-    a = ap.parse_args()
+    ap = argparse.ArgumentParser(prog="plot_dataset.py", description=__doc__.split("\n\n")[0],
+                                 epilog=__doc__.split("\n\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("run_dir", help="a run_dataset (or run_scenario) output folder")
+    ap.add_argument("--out", help="the PNG to write (default: RUN_DIR/paths.png)")
+    a = _parse(ap)
+    load_modules()
     traj = os.path.join(a.run_dir, "trajectories")
     map_csv = os.path.join(a.run_dir, "map.csv")
     for p in (traj, map_csv):

@@ -3,34 +3,90 @@
 paths over the run), the robots' paths, each robot's field of view at its start
 pose, on a 2 m grid.
 
-    .venv/bin/python tools/plot_scenario.py --config config/paper.yaml \
-        [--dynamism 50] [--speed 0.5] [--seed 1] --out runs/scenario.png
+    tools/plot_scenario.py [--config config/paper.yaml] [--dynamism 50] [--speed 0.5] \
+        [--seed 1] [--out scenario.png]
 
-It runs build/bin/scenario_dump (the simulator library itself, so the plot shows
-exactly what the simulator publishes) and reads its CSV.
+It runs scenario_dump (build/bin/scenario_dump; the simulator library itself, so
+the plot shows exactly what the simulator publishes) and reads its CSV. Without
+--config, scenario_dump's default config (config/paper.yaml in a build tree).
+Exit status 1 on a failure (scenario_dump not found or failing), 2 on a bad
+command line or a missing module: in a source tree the script runs itself in the
+project's .venv (tools/setup.sh); an installed copy needs Debian's
+python3-matplotlib.
 """
-import argparse
-import csv
-import math
+# ---- start-up: standard library only, before any third-party import (tools/elaslam_tool.py)
 import os
-import subprocess
 import sys
-import tempfile
 
-import matplotlib
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+if __name__ == "__main__":
+    run_in_venv()
+# ----------------------------------------------------------------------------------
+import argparse  # noqa: E402
+import csv  # noqa: E402
+import math  # noqa: E402
+import shutil  # noqa: E402
+import subprocess  # noqa: E402
+import tempfile  # noqa: E402
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# matplotlib: imported by load_modules() once the command line is parsed (so --help
+# and usage errors need no third-party module).
+plt = None
+
+
+def load_modules():
+    global plt
+    _need("matplotlib", "python3-matplotlib").use("Agg")
+    plt = _need("matplotlib.pyplot", "python3-matplotlib")
+
+
+DUMP_NAMES = ["scenario_dump", "elaslam-scenario-dump", "elaslam-scenario_dump"]
 ROBOT_COLOURS = ["tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
 
 
+def find_dump():
+    """scenario_dump: $ELASLAM_BUILD_DIR/bin, next to an installed or build-tree copy
+    of this script (<prefix>/share/elaslam/tools -> <prefix>/bin), the source tree's
+    build/bin, then PATH. Returns (path or None, places looked at)."""
+    bins = []
+    if os.environ.get("ELASLAM_BUILD_DIR"):
+        bins.append(os.path.join(os.environ["ELASLAM_BUILD_DIR"], "bin"))
+    for here in dict.fromkeys([os.path.dirname(os.path.abspath(__file__)), os.path.dirname(os.path.realpath(__file__))]):
+        if here.endswith(os.path.join("share", "elaslam", "tools")):
+            bins.append(os.path.normpath(os.path.join(here, "..", "..", "..", "bin")))
+        elif os.path.basename(here) == "bin":
+            bins.append(here)
+    bins.append(os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "build", "bin"))
+    looked = []
+    for b in dict.fromkeys(bins):
+        for name in DUMP_NAMES:
+            exe = os.path.join(b, name)
+            looked.append(exe)
+            if os.path.isfile(exe) and os.access(exe, os.X_OK):
+                return exe, looked
+    for name in DUMP_NAMES:
+        exe = shutil.which(name)
+        if exe:
+            return exe, looked
+    return None, looked + [f"{n} on PATH" for n in DUMP_NAMES]
+
+
 def run_dump(args, csv_path):
-    exe = args.dump or os.path.join(ROOT, "build", "bin", "scenario_dump")
-    if not os.access(exe, os.X_OK):
-        sys.exit(f"plot_scenario: {exe} not found: build first (cmake --build build)")
-    cmd = [exe, "--config", args.config, "--out", csv_path]
+    if args.dump:
+        exe = args.dump
+        if not (os.path.isfile(exe) and os.access(exe, os.X_OK)):
+            sys.exit(f"plot_scenario: --dump {exe}: no such executable")
+    else:
+        exe, looked = find_dump()
+        if exe is None:
+            sys.exit("plot_scenario: scenario_dump not found (build first: cmake --build build); looked at:\n  "
+                     + "\n  ".join(looked))
+    cmd = [exe, "--out", csv_path]
+    if args.config:
+        cmd += ["--config", args.config]
     for flag, value in (("--dynamism", args.dynamism), ("--speed", args.speed), ("--seed", args.seed)):
         if value is not None:
             cmd += [flag, str(value)]
@@ -99,15 +155,18 @@ def plot(meta, robots, landmarks, out):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--config", required=True, help="scenario YAML (config/paper.yaml)")
+    p = argparse.ArgumentParser(prog="plot_scenario.py", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--config", help="YAML config with a scenario: section (default: scenario_dump's: $ELASLAM_CONFIG, "
+                   "else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)")
     p.add_argument("--dynamism", type=float, help="override scenario.dynamism_percent [%%]")
     p.add_argument("--speed", type=float, help="override scenario.landmark_speed_mps [m/s]")
     p.add_argument("--seed", type=int, help="override scenario.seed")
-    p.add_argument("--dump", help="path of scenario_dump (default build/bin/scenario_dump)")
+    p.add_argument("--dump", help="path of scenario_dump (default: $ELASLAM_BUILD_DIR/bin, the build's bin/, PATH)")
     p.add_argument("--csv", help="keep the dumped CSV here")
-    p.add_argument("--out", required=True, help="output PNG")
-    args = p.parse_args()
+    p.add_argument("--out", default="scenario.png", help="output PNG (default: scenario.png)")
+    args = _parse(p)
+    load_modules()
     with tempfile.TemporaryDirectory() as tmp:
         csv_path = args.csv or os.path.join(tmp, "scenario.csv")
         run_dump(args, csv_path)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plot the results of build/bin/sweep like the paper's Figs 4-8.
 
-    .venv/bin/python tools/plot_sweep.py DIR [--out DIR2]
+    tools/plot_sweep.py DIR [--out DIR2]
 
 DIR is a sweep output directory (runs.csv, frames.csv, maps/<mode>/ as written by
 tools/sweep_tables.cpp and team/src/report.cpp); the PNGs go to DIR2 (default DIR):
@@ -16,22 +16,44 @@ tools/sweep_tables.cpp and team/src/report.cpp); the PNGs go to DIR2 (default DI
 
 Error bars are the sample standard deviation over runs. Exit status 1 (with the
 missing file or column named) when runs.csv / frames.csv are absent or malformed;
-a figure whose data is absent (e.g. no maps/) is skipped with a note.
+a figure whose data is absent (e.g. no maps/) is skipped with a note. Exit status 2
+on a bad command line or a missing module: in a source tree the script runs itself
+in the project's .venv (tools/setup.sh); an installed copy needs Debian's
+python3-numpy and python3-matplotlib.
 """
-import argparse
-import csv
-import math
+# ---- start-up: standard library only, before any third-party import (tools/elaslam_tool.py)
 import os
-import re
 import sys
-import textwrap
 
-import matplotlib
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.patches import Ellipse  # noqa: E402
+if __name__ == "__main__":
+    run_in_venv()
+# ----------------------------------------------------------------------------------
+import argparse  # noqa: E402
+import csv  # noqa: E402
+import math  # noqa: E402
+import re  # noqa: E402
+import textwrap  # noqa: E402
+
+# numpy and matplotlib: imported by load_modules() once the command line is parsed
+# (so --help and usage errors need neither).
+matplotlib = plt = np = Ellipse = None
+
+
+def load_modules():
+    global matplotlib, plt, np, Ellipse
+    np = _need("numpy", "python3-numpy")
+    matplotlib = _need("matplotlib", "python3-matplotlib")
+    matplotlib.use("Agg")
+    plt = _need("matplotlib.pyplot", "python3-matplotlib")
+    _need("matplotlib.ticker", "python3-matplotlib")
+    _need("matplotlib.lines", "python3-matplotlib")
+    Ellipse = _need("matplotlib.patches", "python3-matplotlib").Ellipse
+    plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9})
+
 
 DPI = 150
 # One colour (and marker / line style) per mode, the same in every figure.
@@ -50,9 +72,6 @@ RUNS_FIXED = ["mode", "dynamism", "speed", "run", "seed", "landmark_error", "lan
 RUNS_TAIL = ["precision", "recall", "static_landmark_error", "frames_to_detect", "flagged"]
 FRAMES_COLS = ["mode", "dynamism", "speed", "frame", "landmark_error", "robot_error_mean"]
 MAP_COLS = ["id", "true_x", "true_y", "truly_moving", "status", "est_x", "est_y", "cov_xx", "cov_xy", "cov_yy"]
-
-plt.rcParams.update({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10, "legend.fontsize": 9})
-
 
 class InputError(Exception):
     pass
@@ -488,10 +507,12 @@ def fig4(sweep, out, written):
 
 
 def main():
-    ap = argparse.ArgumentParser(description="Plot a sweep output directory like the paper's Figs 4-8.")
+    ap = argparse.ArgumentParser(prog="plot_sweep.py", description=__doc__.split("\n\n")[0],
+                                 epilog=__doc__.split("\n\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dir", help="sweep output directory (runs.csv, frames.csv, maps/)")
     ap.add_argument("--out", help="directory for the PNGs (default: DIR)")
-    args = ap.parse_args()
+    args = _parse(ap)
+    load_modules()
     out = args.out or args.dir
     try:
         if not os.path.isdir(args.dir):

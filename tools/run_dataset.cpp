@@ -20,6 +20,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/cli.hpp"
 #include "elaslam/team/dataset_run.hpp"
 #include "elaslam/team/report.hpp"
 
@@ -116,15 +117,15 @@ void write_report(const std::string& path, const mrclam::FrameSource& src, const
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string root = std::filesystem::weakly_canonical(std::filesystem::path(argv[0])).parent_path().string() + "/../..";
-  std::string dataset_dir, config_path = root + "/config/mrclam.yaml", mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
+  std::string dataset_dir, config_path, mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
   bool barcodes = false, report = false, no_plots = false;
   double rate = -1.0, start = -1.0, duration = -1.0;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   CLI::App app{"elaslam run_dataset: the team on a recorded MRCLAM dataset, against Vicon ground truth"};
   app.add_option("--dataset", dataset_dir, "MRCLAM dataset directory (e.g. ../shared/data/mrclam/dataset6)")
       ->required()->check(CLI::ExistingDirectory);
-  app.add_option("--config", config_path, "YAML config (dataset, robot, main sections)")->check(CLI::ExistingFile);
+  cli::add_version_flag(app, "run_dataset");
+  app.add_option("--config", config_path, "YAML config: dataset, robot, main sections (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
   app.add_option("--mode", mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--with-robot-barcodes", barcodes, "keep other robots' barcodes (moving landmarks)");
@@ -144,6 +145,7 @@ int main(int argc, char** argv) {
   }
   DatasetConfig cfg;
   try {
+    config_path = cli::find_config(config_path, "mrclam.yaml").path;
     cfg = load_dataset_config(config_path);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
@@ -224,7 +226,7 @@ int main(int argc, char** argv) {
       const mrclam::FrameSource& src = run.barcodes ? *with : *without;
       mrclam::Options so = o;
       so.with_robot_barcodes = run.barcodes;
-      RunInfo info{run.mode, 0.0, 0.0, 0, config_path, cfg.effective_yaml};
+      RunInfo info{run.mode, 0.0, 0.0, 0, config_path, cfg.effective_yaml, command};
       nlohmann::json j = metrics_json(info, run.result);
       j["dataset"] = dataset_json(src, so, dataset_dir, dr);
       j["robot_barcode_corrections"] = run.robot_corrections;
@@ -248,18 +250,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   // A plot per run: every robot's true and estimated path with the landmarks.
-  const std::string py = root + "/.venv/bin/python", script = root + "/tools/plot_dataset.py";
+  const std::string script = cli::python_tool("plot_dataset.py");
   if (!no_plots) {
     std::fflush(stdout);
-    if (std::filesystem::exists(py) && std::filesystem::exists(script)) {
+    if (std::filesystem::exists(script)) {
       for (const auto& dir : plot_dirs) {
-        const std::string cmd = "'" + py + "' '" + script + "' '" + dir + "' > /dev/null";
+        const std::string cmd = "'" + script + "' '" + dir + "' > /dev/null";
         if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "run_dataset: plotting failed (%s)\n", cmd.c_str());
       }
       std::printf("plots: <run dir>/paths.png\n");
     } else {
-      std::fprintf(stderr, "run_dataset: no .venv (tools/setup.sh makes it): plot with .venv/bin/python "
-                           "tools/plot_dataset.py RUN_DIR\n");
+      std::fprintf(stderr, "run_dataset: no %s: no plots\n", script.c_str());
     }
   }
   return 0;

@@ -1,27 +1,40 @@
 // run_scenario: one in-process run of the whole team (simulator + robots + main),
 // its metrics against ground truth, and its output files.
-//   run_scenario --config FILE [--mode M] [--dynamism P] [--speed V] [--seed S] [--out DIR]
+//   run_scenario [--config FILE] [--mode M] [--dynamism P] [--speed V] [--seed S]
+//                [--rate F] [--frames N] [--baseline M] [--oracle] [--out DIR]
+// --baseline M also runs mode M on the same scenario and seed and prints the two
+// side by side (metrics.json gets it under "baseline").
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/cli.hpp"
 #include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
 
 int main(int argc, char** argv) {
   using namespace elaslam;
-  std::string config_path = "config/paper.yaml", mode, out_dir;
-  double dynamism = -1.0, speed = -1.0;
+  std::string config_path, mode, baseline, out_dir;
+  double dynamism = -1.0, speed = -1.0, rate = -1.0;
   long long seed = -1;
+  int frames = -1;
   CLI::App app{"elaslam run_scenario: one in-process team run and its metrics"};
-  app.add_option("--config", config_path, "YAML config (scenario, robot, main sections)")->check(CLI::ExistingFile);
+  cli::add_version_flag(app, "run_scenario");
+  app.add_option("--config", config_path,
+                 "YAML config: scenario, robot, main sections (default: $ELASLAM_CONFIG, else "
+                 "/etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
   app.add_option("--mode", mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_option("--dynamism", dynamism, "percent of landmarks that move")->check(CLI::Range(0.0, 100.0));
   app.add_option("--speed", speed, "landmark speed [m/s]")->check(CLI::Range(0.0, 100.0));
   app.add_option("--seed", seed, "master seed")->check(CLI::Range(0LL, 2147483647LL));
+  app.add_option("--rate", rate, "frames per second (scenario.rate_hz; motion per frame changes with it)")
+      ->check(CLI::Range(1e-3, 100000.0));
+  app.add_option("--frames", frames, "frames to run (scenario.frames)")->check(CLI::Range(1, 100000000));
+  app.add_option("--baseline", baseline, "also run this mode on the same scenario and seed, and compare")
+      ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_option("--out", out_dir, "directory for metrics.json, frames.csv, trajectories/");
   bool oracle = false;
   app.add_flag("--oracle", oracle,
@@ -33,31 +46,52 @@ int main(int argc, char** argv) {
   }
   TeamConfig cfg;
   try {
+    config_path = cli::find_config(config_path).path;
     cfg = load_team_config(config_path);
+    RunOverrides ov;
+    Mode m;
+    if (!mode.empty() && parse_mode(mode, &m)) ov.mode = m;
+    if (dynamism >= 0.0) ov.dynamism_percent = dynamism;
+    if (speed >= 0.0) ov.landmark_speed_mps = speed;
+    if (seed >= 0) ov.seed = static_cast<int>(seed);
+    if (rate > 0.0) ov.rate_hz = rate;
+    if (frames > 0) ov.frames = frames;
+    cfg = apply_overrides(cfg, ov);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "run_scenario: %s\n", e.what());
     return 2;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "run_scenario: %s\n", e.what());
+    return 2;
   }
-  RunOverrides ov;
-  Mode m;
-  if (!mode.empty() && parse_mode(mode, &m)) ov.mode = m;
-  if (dynamism >= 0.0) ov.dynamism_percent = dynamism;
-  if (speed >= 0.0) ov.landmark_speed_mps = speed;
-  if (seed >= 0) ov.seed = static_cast<int>(seed);
-  cfg = apply_overrides(cfg, ov);
   cfg.oracle = oracle;
 
   const auto t0 = std::chrono::steady_clock::now();
   const RunResult r = run_team(cfg);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-  RunInfo info{to_string(cfg.robot.mode), cfg.scenario.dynamism_percent, cfg.scenario.landmark_speed_mps,
-               cfg.scenario.seed, config_path, cfg.effective_yaml};
+  const std::string command = cli::command_line(argc, argv);
+  const RunInfo info{to_string(cfg.robot.mode), cfg.scenario.dynamism_percent, cfg.scenario.landmark_speed_mps,
+                     cfg.scenario.seed,         config_path,                    cfg.effective_yaml,
+                     command};
   print_summary(std::cout, info, r);
   std::cout << "  run time: " << ms << " ms (" << r.bus_messages << " messages on the in-process bus)\n";
+  nlohmann::json metrics = metrics_json(info, r);
+  if (!baseline.empty()) {
+    Mode bm = Mode::kEkf;
+    parse_mode(baseline, &bm);
+    RunOverrides bo;
+    bo.mode = bm;
+    const TeamConfig bc = apply_overrides(cfg, bo);
+    const RunResult br = run_team(bc);
+    const RunInfo binfo{baseline, info.dynamism_percent, info.speed_mps, info.seed, config_path, bc.effective_yaml,
+                        command};
+    print_comparison(std::cout, info, r, binfo, br, "in process");
+    metrics["baseline"] = baseline_json(binfo, br, "in process, same scenario and seed");
+  }
   if (!out_dir.empty()) {
     try {
-      write_outputs(out_dir, metrics_json(info, r), r);
+      write_outputs(out_dir, metrics, r);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "run_scenario: %s\n", e.what());
       return 1;

@@ -2,18 +2,25 @@
 # Set-up for elaslam on Debian (bookworm): installs what is missing, makes the
 # Python virtual environment, configures the build in build/.
 # Idempotent and fast when everything is there.
-#   tools/setup.sh [--build-dir DIR] [--sanitize] [--no-python]
+#   tools/setup.sh [--build-dir DIR] [--sanitize] [--no-python] [--with-test-tools] [--with-spy]
+# --with-test-tools: also what the tests need beyond building and running the team
+#   (Debian packaging, systemd-analyze, Xvfb, a Java runtime for lcm-spy);
+#   tools/run_tests.sh passes it. --with-spy: what tools/spy.sh needs (Java, Xlibs).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD_DIR="$ROOT/build"
 SANITIZE=OFF
 PYTHON=1
+TEST_TOOLS=0
+SPY=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --sanitize) SANITIZE=ON; shift ;;
     --no-python) PYTHON=0; shift ;;
-    -h|--help) sed -n '2,6p' "$0"; exit 0 ;;
+    --with-test-tools) TEST_TOOLS=1; SPY=1; shift ;;
+    --with-spy) SPY=1; shift ;;
+    -h|--help) sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "setup.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -24,6 +31,14 @@ PKGS=(g++ cmake ninja-build pkg-config git
       libeigen3-dev libyaml-cpp-dev libgtest-dev googletest libbenchmark-dev
       libcli11-dev nlohmann-json3-dev
       python3 python3-venv iproute2 procps)
+# lcm-spy (tools/spy.sh): a JDK to build the message jar, a JRE with AWT, jchart2d.
+SPY_PKGS=(openjdk-17-jdk-headless openjdk-17-jre libjchart2d-java)
+# Tests beyond the build: Debian packages (cpack's dpkg-shlibdeps needs dpkg-dev and
+# file), systemd-analyze for the units, Xvfb and X tools for the lcm-spy test,
+# nftables for loss in a namespace.
+TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables)
+[ "$SPY" -eq 1 ] && PKGS+=("${SPY_PKGS[@]}")
+[ "$TEST_TOOLS" -eq 1 ] && PKGS+=("${TEST_PKGS[@]}")
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

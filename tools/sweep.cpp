@@ -19,6 +19,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/cli.hpp"
 #include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
 #include "sweep_tables.hpp"
@@ -103,12 +104,13 @@ void run_all(const TeamConfig& base, const std::vector<SweepJob>& jobs, int thre
 
 int main(int argc, char** argv) {
   using namespace elaslam;
-  std::string config_path = "config/paper.yaml", out_dir, modes_text = "ekf,gated,ela,consensus";
+  std::string config_path, out_dir, modes_text = "ekf,gated,ela,consensus";
   std::string dyn_text = "5,20,35,50,65,80", speed_text = "0.1,0.3,0.5,0.7,0.9";
   int runs = 10, seed_base = 1, jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool no_plots = false, oracle = false;
   CLI::App app{"elaslam sweep: the paper's experiment grid, in parallel"};
-  app.add_option("--config", config_path, "YAML config")->check(CLI::ExistingFile);
+  cli::add_version_flag(app, "sweep");
+  app.add_option("--config", config_path, "YAML config (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
   app.add_option("--modes", modes_text, "comma-separated modes");
   app.add_option("--dynamism", dyn_text, "comma-separated dynamism levels [%]");
   app.add_option("--speed", speed_text, "comma-separated landmark speeds [m/s]");
@@ -131,6 +133,7 @@ int main(int argc, char** argv) {
     grid.dynamism = parse_list(dyn_text, "--dynamism", 0.0, 100.0);
     grid.speed = parse_list(speed_text, "--speed", 0.0, 100.0);
     grid.runs = runs;
+    config_path = cli::find_config(config_path).path;
     base = load_team_config(config_path);
     base.oracle = oracle;
     grid.oracle = oracle;
@@ -162,7 +165,7 @@ int main(int argc, char** argv) {
     const TeamConfig c = apply_overrides(base, o);
     const RunResult r = run_team(c);
     RunInfo info{to_string(map_mode), c.scenario.dynamism_percent, c.scenario.landmark_speed_mps, seed_base,
-                 config_path, c.effective_yaml};
+                 config_path, c.effective_yaml, cli::command_line(argc, argv)};
     write_outputs(out_dir + "/maps/" + to_string(map_mode), metrics_json(info, r), r);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sweep: %s\n", e.what());
@@ -170,16 +173,14 @@ int main(int argc, char** argv) {
   }
   std::printf("sweep: %zu runs in %.1f s (%.1f runs/s); tables: %s/tables.md\n", job_list.size(), wall,
               static_cast<double>(job_list.size()) / wall, out_dir.c_str());
-  const std::string root = std::filesystem::path(argv[0]).parent_path().string() + "/../..";
-  const std::string py = root + "/.venv/bin/python", script = root + "/tools/plot_sweep.py";
+  const std::string script = cli::python_tool("plot_sweep.py");
   std::fflush(stdout);
   if (!no_plots) {
-    if (std::filesystem::exists(py) && std::filesystem::exists(script)) {
-      const std::string cmd = "'" + py + "' '" + script + "' '" + out_dir + "'";
+    if (std::filesystem::exists(script)) {
+      const std::string cmd = "'" + script + "' '" + out_dir + "'";
       if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "sweep: plotting failed (%s)\n", cmd.c_str());
     } else {
-      std::fprintf(stderr, "sweep: no .venv (tools/setup.sh makes it): plot with .venv/bin/python tools/plot_sweep.py %s\n",
-                   out_dir.c_str());
+      std::fprintf(stderr, "sweep: no %s: no plots\n", script.c_str());
     }
   }
   return 0;

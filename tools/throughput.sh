@@ -6,36 +6,55 @@
 #   2. free running at each rate of --rates: frames lost by any robot node (gaps,
 #      from the nodes' final status lines), to find the highest F with no loss.
 #   3. robot_node resident memory (VmRSS) sampled during the lockstep run.
-#   tools/throughput.sh [--config FILE] [--frames N] [--rates "100 200 500 1000"] [--mode M]
+#
+#   tools/throughput.sh [--config FILE] [--frames N] [--rates "100 200 500 1000 2000"]
+#                       [--mode M] [--build-dir DIR]
+#
+# Defaults: config/paper.yaml, 5000 frames per run, rates 100 200 500 1000 2000 Hz,
+# mode ela, the programs of DIR/bin (default $ELASLAM_BUILD_DIR, else build/; the
+# script runs tools/setup.sh and builds them first). Not as root: exits 77 (no
+# namespace).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-BIN="$ROOT/build/bin"
+BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=5000
 RATES="100 200 500 1000 2000"
 MODE=ela
 INSIDE=0
 PHASE=""
+usage_error() { echo "throughput.sh: $1 (see --help)" >&2; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in
+    --config|--frames|--rates|--mode|--build-dir|--inside) [ $# -ge 2 ] || usage_error "$1 needs a value" ;;&
     --config) CONFIG="$2"; shift 2 ;;
     --frames) FRAMES="$2"; shift 2 ;;
     --rates) RATES="$2"; shift 2 ;;
     --mode) MODE="$2"; shift 2 ;;
-    --inside) INSIDE=1; PHASE="$2"; shift 2 ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
-    *) echo "throughput.sh: unknown argument '$1'" >&2; exit 2 ;;
+    --build-dir) BUILD_DIR="$2"; shift 2 ;;
+    --inside) INSIDE=1; PHASE="$2"; shift 2 ;;  # internal: one run, inside the namespace
+    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) usage_error "unknown argument '$1'" ;;
   esac
 done
+[[ "$FRAMES" =~ ^[1-9][0-9]*$ ]] || usage_error "--frames must be a positive integer, got '$FRAMES'"
+for f in $RATES; do [[ "$f" =~ ^[0-9]+([.][0-9]+)?$ ]] && [[ ! "$f" =~ ^0+([.]0*)?$ ]] || usage_error "--rates: not a rate: '$f'"; done
+case "$MODE" in ekf|gated|ela|consensus) ;; *) usage_error "--mode must be ekf, gated, ela or consensus, got '$MODE'" ;; esac
+[ -f "$CONFIG" ] || usage_error "no such config file: $CONFIG"
+[ -d "$BUILD_DIR" ] || usage_error "no such build directory: $BUILD_DIR"
+BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
+BIN="$BUILD_DIR/bin"
 
 if [ "$INSIDE" -eq 0 ]; then
   "$ROOT/tools/setup.sh" >/dev/null
-  cmake --build "$ROOT/build" --target simulator robot_node main_robot -j "$(nproc)" >/dev/null
+  cmake --build "$BUILD_DIR" --target simulator robot_node main_robot -j "$(nproc)" >/dev/null
   echo "# throughput of the live team: $(nproc) CPUs, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
   echo "# config $CONFIG, mode $MODE, $FRAMES frames per run"
-  "$ROOT/tools/netns_run.sh" --port 7690 -- "$0" --inside lockstep --config "$CONFIG" --frames "$FRAMES" --mode "$MODE"
+  "$ROOT/tools/netns_run.sh" --port 7690 -- "$0" --inside lockstep --config "$CONFIG" --frames "$FRAMES" --mode "$MODE" \
+    --build-dir "$BUILD_DIR"
   for f in $RATES; do
-    "$ROOT/tools/netns_run.sh" --port 7690 -- "$0" --inside "$f" --config "$CONFIG" --frames "$FRAMES" --mode "$MODE"
+    "$ROOT/tools/netns_run.sh" --port 7690 -- "$0" --inside "$f" --config "$CONFIG" --frames "$FRAMES" --mode "$MODE" \
+      --build-dir "$BUILD_DIR"
   done
   exit 0
 fi

@@ -35,6 +35,15 @@ std::string num(T v) {
 ConfigError::ConfigError(const std::string& source, std::vector<std::string> problems)
     : std::runtime_error(join_lines(source, problems)), problems_(std::move(problems)) {}
 
+ConfigError::ConfigError(std::string message, std::vector<std::string> problems, int)
+    : std::runtime_error(std::move(message)), problems_(std::move(problems)) {}
+
+ConfigError ConfigError::not_found(const std::string& headline, std::vector<std::string> places) {
+  std::string message = headline;
+  for (const auto& p : places) message += "\n  " + p;
+  return ConfigError(std::move(message), std::move(places), 0);
+}
+
 Reader::Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> state)
     : node_(std::move(node)), path_(std::move(path)), state_(std::move(state)) {
   // Locate (creating) this map in the effective config.

@@ -9,6 +9,17 @@
 namespace elaslam {
 namespace {
 
+/// The filter's mode as STATUS_ROBOT reports it (node_status_t::MODE_*).
+std::int8_t status_mode(Mode m) {
+  switch (m) {
+    case Mode::kEkf: return node_status_t::MODE_EKF;
+    case Mode::kGated: return node_status_t::MODE_GATED;
+    case Mode::kEla: return node_status_t::MODE_ELA;
+    case Mode::kConsensus: return node_status_t::MODE_CONSENSUS;
+  }
+  return node_status_t::MODE_NONE;
+}
+
 constexpr double kMaxRange = 1e4;       // [m] anything beyond is a corrupt message
 constexpr double kMaxOdomVar = 1e3;     // [m^2/m], [rad^2/rad]: sanity bound on the noise model
 constexpr double kBearingSlack = 1e-9;  // [rad] tolerance on [-pi, pi]
@@ -142,6 +153,7 @@ void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, con
   pose_.num_accepted = static_cast<int16_t>(s.num_accepted);
   pose_.num_rejected = static_cast<int16_t>(s.num_rejected);
   pose_.num_landmarks = static_cast<int16_t>(f.num_landmarks());
+  pose_.frames_processed = counters_.frames;
 }
 
 void RobotNode::fill_events(std::int64_t now_utime) {
@@ -224,6 +236,7 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   s.frame = last_frame_;
   s.node_kind = node_status_t::ROBOT;
   s.node_id = static_cast<int16_t>(robot_id_);
+  s.mode = status_mode(options_.mode);
   s.frames = counters_.frames;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;
   s.rejected_inputs = counters_.rejected_inputs;

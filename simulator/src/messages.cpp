@@ -1,5 +1,9 @@
 #include "elaslam/simulator/messages.hpp"
 
+#include <yaml-cpp/yaml.h>
+
+#include "elaslam/common/cli.hpp"
+
 namespace elaslam::sim {
 
 elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime) {
@@ -44,6 +48,46 @@ elaslam::ground_truth_t to_message(const World& w, std::int64_t utime) {
     m.landmarks[i].y = p[static_cast<std::size_t>(i)].y();
     m.landmarks[i].moving = w.is_moving(i);
   }
+  return m;
+}
+
+}  // namespace elaslam::sim
+
+namespace elaslam::sim {
+
+elaslam::run_info_t to_run_info(const ScenarioOptions& o, const std::string& scenario, const std::string& effective_yaml,
+                                const std::string& mode, std::int64_t utime) {
+  elaslam::run_info_t m{};
+  m.utime = utime;
+  m.frame = -1;
+  m.schema_version = elaslam::run_info_t::SCHEMA_VERSION;
+  m.source = "simulator";
+  m.version = cli::version_line("simulator");
+  m.scenario = scenario;
+  m.mode = mode;
+  m.seed = o.seed;
+  m.dynamism_percent = o.dynamism_percent;
+  m.landmark_speed_mps = o.landmark_speed_mps;
+  m.rate_hz = o.rate_hz;
+  m.frames = o.frames;
+  m.num_robots = static_cast<std::int16_t>(o.robots.size());  // <= 8: checked by check_scenario
+  for (std::size_t i = 0; i < o.robots.size() && i < 8; ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
+  YAML::Node root;
+  try {
+    root = YAML::Load(effective_yaml);
+  } catch (const YAML::Exception&) {
+    root = YAML::Node(YAML::NodeType::Map);  // the loader produced it: cannot happen; record the facts anyway
+  }
+  if (!root.IsMap()) root = YAML::Node(YAML::NodeType::Map);
+  YAML::Node sc = root["scenario"];
+  sc["frames"] = o.frames;
+  sc["rate_hz"] = o.rate_hz;
+  sc["seed"] = o.seed;
+  sc["dynamism_percent"] = o.dynamism_percent;
+  sc["landmark_speed_mps"] = o.landmark_speed_mps;
+  YAML::Emitter out;
+  out << root;
+  m.config_yaml = out.c_str();
   return m;
 }
 

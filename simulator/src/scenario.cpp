@@ -185,11 +185,12 @@ void parse(config::Reader& r, ScenarioOptions* o) {
 }
 
 namespace {
-ScenarioOptions load(config::Document& doc) {
+ScenarioOptions load(config::Document& doc, std::string* effective_yaml = nullptr) {
   ScenarioOptions o;
   doc.allow({"robot", "main", "lcm", "team"});  // read by the other components
   doc.section("scenario", [&](config::Reader& r) { parse(r, &o); });
   doc.finish();
+  if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;
 }
 }  // namespace
@@ -199,9 +200,9 @@ ScenarioOptions load_scenario_text(const std::string& text, const std::string& s
   return load(doc);
 }
 
-ScenarioOptions load_scenario(const std::string& path) {
+ScenarioOptions load_scenario(const std::string& path, std::string* effective_yaml) {
   config::Document doc = config::Document::from_file(path);
-  return load(doc);
+  return load(doc, effective_yaml);
 }
 
 std::string describe(const ScenarioOptions& o) {

@@ -6,9 +6,12 @@
 #include <fstream>
 #include <iomanip>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
+
+#include "elaslam/common/version.hpp"
 
 namespace elaslam {
 namespace {
@@ -50,9 +53,21 @@ std::ofstream open(const std::filesystem::path& p) {
 
 }  // namespace
 
+nlohmann::json yaml_text_to_json(const std::string& yaml) {
+  if (yaml.empty()) return nullptr;
+  try {
+    return yaml_to_json(YAML::Load(yaml));
+  } catch (const YAML::Exception&) {
+    return yaml;
+  }
+}
+
 nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
   const RunMetrics& m = r.metrics;
   nlohmann::json j;
+  j["schema_version"] = kMetricsSchemaVersion;
+  j["elaslam_version"] = std::string(version()) + " (git " + git_commit() + ")";
+  j["command_line"] = info.command_line;
   j["mode"] = info.mode;
   j["dynamism"] = info.dynamism_percent;
   j["speed"] = info.speed_mps;
@@ -78,11 +93,7 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
   j["timing"] = {{"frame_us_p50", m.frame_us_p50}, {"frame_us_p99", m.frame_us_p99}, {"frame_us_max", m.frame_us_max}};
   j["final_map"] = {{"static", r.final_map.size()}, {"moving", r.final_moving.size()}};
   j["source"] = info.source;
-  try {
-    j["config"] = yaml_to_json(YAML::Load(info.effective_config));
-  } catch (const YAML::Exception&) {
-    j["config"] = info.effective_config;
-  }
+  j["config"] = yaml_text_to_json(info.effective_config);
   return j;
 }
 
@@ -145,6 +156,46 @@ void write_outputs(const std::string& dir, const nlohmann::json& metrics, const 
           << (flagged ? "moving" : "absent") << ",,,,,\n";
     }
   }
+}
+
+void print_comparison(std::ostream& out, const RunInfo& info, const RunResult& r, const RunInfo& base_info,
+                      const RunResult& base, const std::string& how) {
+  const RunMetrics& a = r.metrics;
+  const RunMetrics& b = base.metrics;
+  auto change = [](double x, double ref) -> std::string {
+    if (!(ref > 0.0) || !std::isfinite(x)) return "";
+    std::ostringstream os;
+    os << std::showpos << std::fixed << std::setprecision(0) << 100.0 * (x - ref) / ref << " %";
+    return os.str();
+  };
+  auto row = [&](const std::string& name, double x, double ref) {
+    out << "    " << std::left << std::setw(24) << name << std::right << std::fixed << std::setprecision(3)
+        << std::setw(10) << x << std::setw(10) << ref << std::setw(10) << change(x, ref) << '\n';
+  };
+  out << "  against " << base_info.mode << " on the same scenario and seed (" << how << "):\n";
+  out << "    " << std::left << std::setw(24) << "" << std::right << std::setw(10) << info.mode << std::setw(10)
+      << base_info.mode << std::setw(10) << "change" << '\n';
+  row("landmark error [m]", a.landmark_error_mean, b.landmark_error_mean);
+  for (std::size_t i = 0; i < a.robots.size() && i < b.robots.size(); ++i)
+    row("robot " + std::to_string(a.robots[i].id) + " error [m]", a.robots[i].error_mean, b.robots[i].error_mean);
+  auto map_text = [](const RunResult& x) {
+    return std::to_string(x.final_map.size()) + " + " + std::to_string(x.final_moving.size());
+  };
+  out << "    " << std::left << std::setw(24) << "final map, static + moving" << std::right << std::setw(10)
+      << map_text(r) << std::setw(10) << map_text(base) << '\n';
+  auto found = [](const RunMetrics& m) {
+    return std::to_string(m.true_positives) + "/" + std::to_string(m.detectable);
+  };
+  out << "    " << std::left << std::setw(24) << "movers detected" << std::right << std::setw(10) << found(a)
+      << std::setw(10) << found(b) << '\n';
+  out.unsetf(std::ios::floatfield);
+}
+
+nlohmann::json baseline_json(const RunInfo& base_info, const RunResult& base, const std::string& how) {
+  nlohmann::json j = metrics_json(base_info, base);
+  for (const char* key : {"config", "command_line", "schema_version", "elaslam_version", "source"}) j.erase(key);
+  j["how"] = how;
+  return j;
 }
 
 void print_summary(std::ostream& out, const RunInfo& info, const RunResult& r) {

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
+
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/simulator/messages.hpp"
@@ -85,7 +87,39 @@ TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
       throw std::invalid_argument("speed must be in [0, 100] m/s");
     c.scenario.landmark_speed_mps = *o.landmark_speed_mps;
   }
-  if (o.seed) c.scenario.seed = *o.seed;
+  if (o.seed) {
+    if (*o.seed < 0) throw std::invalid_argument("seed must be >= 0");
+    c.scenario.seed = *o.seed;
+  }
+  if (o.rate_hz) {
+    if (!(*o.rate_hz >= 1e-3 && *o.rate_hz <= 100000.0)) throw std::invalid_argument("rate must be in [0.001, 100000] Hz");
+    c.scenario.rate_hz = *o.rate_hz;
+  }
+  if (o.frames) {
+    if (*o.frames < 1) throw std::invalid_argument("frames must be at least 1");
+    c.scenario.frames = *o.frames;
+  }
+  const auto problems = sim::check_scenario(c.scenario);
+  if (!problems.empty()) throw std::invalid_argument("scenario." + problems.front().key + ": " + problems.front().what);
+  // The echo of the effective config follows the overrides.
+  YAML::Node root;
+  try {
+    root = YAML::Load(c.effective_yaml);
+  } catch (const YAML::Exception&) {
+  }
+  if (!root.IsMap()) return c;  // a config built in code (tests): nothing to echo
+  if (root["scenario"].IsMap()) {
+    YAML::Node s = root["scenario"];
+    s["dynamism_percent"] = c.scenario.dynamism_percent;
+    s["landmark_speed_mps"] = c.scenario.landmark_speed_mps;
+    s["seed"] = c.scenario.seed;
+    s["rate_hz"] = c.scenario.rate_hz;
+    s["frames"] = c.scenario.frames;
+  }
+  if (root["robot"].IsMap()) root["robot"]["mode"] = to_string(c.robot.mode);
+  YAML::Emitter out;
+  out << root;
+  c.effective_yaml = out.c_str();
   return c;
 }
 

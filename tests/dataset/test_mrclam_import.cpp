@@ -1,7 +1,8 @@
 // mrclam_import end to end: the LCM log it writes for the tiny dataset holds one
 // GROUND_TRUTH and one SENSOR_<r> per robot per frame, in order, and each decodes to
-// exactly what mrclam::FrameSource gives for that frame. Bad arguments and bad
-// data exit with 2 and 1.
+// exactly what mrclam::FrameSource gives for that frame; a RUN_INFO before frame 0
+// and then once a second of log time says what the recording is. Bad arguments and
+// bad data exit with 2 and 1.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/dataset/mrclam.hpp"
+#include "elaslam/run_info_t.hpp"
 
 namespace elaslam {
 namespace {
@@ -44,6 +46,21 @@ TEST(MrclamImportTool, LogHoldsEveryFrameAsTheFrameSourceGivesIt) {
   int frame = -1;
   for (const lcm::LogEvent* e = file.readNextEvent(); e != nullptr; e = file.readNextEvent()) {
     ++count[e->channel];
+    if (e->channel == "RUN_INFO") {
+      run_info_t info;
+      ASSERT_EQ(info.decode(e->data, 0, e->datalen), e->datalen);
+      EXPECT_EQ(info.frame, frame) << "RUN_INFO comes before its frame's messages";
+      EXPECT_EQ(info.source, "mrclam_import");
+      EXPECT_EQ(info.scenario, kTiny);
+      EXPECT_EQ(info.frames, src.num_frames());
+      EXPECT_EQ(info.rate_hz, o.rate_hz);
+      EXPECT_EQ(info.seed, -1) << "real data: no seed";
+      ASSERT_EQ(info.num_robots, 2);
+      EXPECT_EQ(info.robot_ids[0], 1);
+      EXPECT_EQ(info.robot_ids[1], 2);
+      EXPECT_NE(info.config_yaml.find("with_robot_barcodes: true"), std::string::npos) << info.config_yaml;
+      continue;
+    }
     if (e->channel == "GROUND_TRUTH") {
       ground_truth_t gt;
       ASSERT_EQ(gt.decode(e->data, 0, e->datalen), e->datalen);
@@ -77,7 +94,9 @@ TEST(MrclamImportTool, LogHoldsEveryFrameAsTheFrameSourceGivesIt) {
   EXPECT_EQ(count["GROUND_TRUTH"], src.num_frames());
   EXPECT_EQ(count["SENSOR_1"], src.num_frames());
   EXPECT_EQ(count["SENSOR_2"], src.num_frames());
-  EXPECT_EQ(count.size(), 3u);
+  const int per_second = static_cast<int>(o.rate_hz);
+  EXPECT_EQ(count["RUN_INFO"], (src.num_frames() + per_second - 1) / per_second);
+  EXPECT_EQ(count.size(), 4u);
 }
 
 TEST(MrclamImportTool, BadArgumentsAndBadDataAreRefused) {

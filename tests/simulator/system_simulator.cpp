@@ -167,19 +167,40 @@ TEST(SystemSimulator, StopsCleanlyOnSigterm) {
 }
 
 TEST(SystemSimulator, BadCommandLineOrConfigExitsWith2) {
-  Child no_config(kSimulator, {"--frames", "20"});
-  EXPECT_EQ(no_config.wait(), 2);
-  EXPECT_NE(no_config.stderr_text().find("--config"), std::string::npos) << no_config.stderr_text();
+  // The config lookup: a variable that names no file is an error, never a fall-through.
+  Child bad_env(kSimulator, {"--frames", "20"}, {"ELASLAM_CONFIG=/nonexistent/elaslam.yaml"});
+  EXPECT_EQ(bad_env.wait(), 2);
+  EXPECT_NE(bad_env.stderr_text().find("$ELASLAM_CONFIG=/nonexistent/elaslam.yaml: no such file"), std::string::npos)
+      << bad_env.stderr_text();
   Child bad_range(kSimulator, {"--config", kConfig, "--frames", "0"});
   EXPECT_EQ(bad_range.wait(), 2);
   Child missing(kSimulator, {"--config", "/nonexistent.yaml"});
   EXPECT_EQ(missing.wait(), 2);
-  EXPECT_NE(missing.stderr_text().find("cannot open"), std::string::npos) << missing.stderr_text();
+  EXPECT_NE(missing.stderr_text().find("--config /nonexistent.yaml: no such file"), std::string::npos)
+      << missing.stderr_text();
   // An override that breaks a cross-field check: robot 1 would move 12.7 m per frame > D = 8 m.
   Child too_fast(kSimulator, {"--config", kConfig, "--rate", "0.1"});
   EXPECT_EQ(too_fast.wait(), 2);
   EXPECT_NE(too_fast.stderr_text().find("scenario.robots[0].speed_mps"), std::string::npos)
       << too_fast.stderr_text();
+}
+
+// Without --config or $ELASLAM_CONFIG, a program of the build tree finds the default
+// where an installed one would: <prefix>/share/elaslam/config/paper.yaml, the build
+// tree mirroring the installed layout (build/share/elaslam/config -> config/).
+TEST(SystemSimulator, FindsTheInstalledDefaultConfig) {
+  if (access("/etc/elaslam/elaslam.yaml", F_OK) == 0) GTEST_SKIP() << "this host has /etc/elaslam/elaslam.yaml";
+  Child sim(kSimulator, {"--check"}, {"ELASLAM_CONFIG"});
+  EXPECT_EQ(sim.wait(), 0) << sim.stderr_text();
+  Child robot(std::string(ELASLAM_BINARY_DIR) + "/bin/robot_node", {"--robot", "1", "--lcm-url", "memq://"},
+              {"ELASLAM_CONFIG"});
+  // The node starts (memq://) and says which config it read; stop it.
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (robot.stderr_text().find("config") == std::string::npos && std::chrono::steady_clock::now() < end && !robot.poll())
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));  // polling a child's output, bounded
+  EXPECT_EQ(robot.stop(), 0) << robot.stderr_text();
+  EXPECT_NE(robot.stderr_text().find("share/elaslam/config/paper.yaml (installed default)"), std::string::npos)
+      << robot.stderr_text();
 }
 
 }  // namespace

@@ -22,7 +22,9 @@ namespace elaslam::test {
 
 class Child {
  public:
-  Child(const std::string& program, std::vector<std::string> args) {
+  /// `env`: changes to this process's environment for the child: "NAME=value" sets,
+  /// "NAME" alone removes.
+  Child(const std::string& program, std::vector<std::string> args, const std::vector<std::string>& env = {}) {
     char tmpl[] = "/tmp/elaslam_child_stderr_XXXXXX";
     const int fd = mkstemp(tmpl);
     EXPECT_GE(fd, 0);
@@ -34,7 +36,20 @@ class Child {
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
-    EXPECT_EQ(posix_spawn(&pid_, program.c_str(), &fa, nullptr, argv.data(), environ), 0) << program;
+    std::vector<std::string> vars;
+    for (char** e = environ; *e; ++e) {
+      const std::string v = *e;
+      bool changed = false;
+      for (const auto& c : env) changed = changed || v.compare(0, c.find('=') == std::string::npos ? c.size() + 1 : c.find('=') + 1,
+                                                              c.substr(0, c.find('=')) + "=") == 0;
+      if (!changed) vars.push_back(v);
+    }
+    for (const auto& c : env)
+      if (c.find('=') != std::string::npos) vars.push_back(c);
+    std::vector<char*> envp;
+    for (auto& v : vars) envp.push_back(v.data());
+    envp.push_back(nullptr);
+    EXPECT_EQ(posix_spawn(&pid_, program.c_str(), &fa, nullptr, argv.data(), envp.data()), 0) << program;
     posix_spawn_file_actions_destroy(&fa);
     close(fd);
   }

@@ -17,12 +17,21 @@ generated Python types (BUILD/lcmgen/python).
       the last GLOBAL_MAP of each log: same static ids, positions within T,
       same moving ids
 """
-import argparse
-import math
+# ---- start-up: standard library only, before any third-party import (tools/elaslam_tool.py)
 import os
-import re
 import sys
-import time
+
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path.insert(0, os.path.join(_here, "..", "..", "tools"))
+from elaslam_tool import need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+
+if __name__ == "__main__":
+    run_in_venv()
+# ----------------------------------------------------------------------------------
+import argparse  # noqa: E402
+import math  # noqa: E402
+import re  # noqa: E402
+import time  # noqa: E402
 
 
 def load_types(build_dir):
@@ -32,13 +41,13 @@ def load_types(build_dir):
 
 
 def read_log(path):
-    import lcm
+    lcm = _need("lcm")
     for ev in lcm.EventLog(path, "r"):
         yield ev
 
 
 def cmd_wait_nodes(args, T):
-    import lcm
+    lcm = _need("lcm")
     lc = lcm.LCM()
     seen = set()
 
@@ -57,7 +66,7 @@ def cmd_wait_nodes(args, T):
 
 
 def cmd_wait_frame(args, T):
-    import lcm
+    lcm = _need("lcm")
     lc = lcm.LCM()
     best = [-1]
 

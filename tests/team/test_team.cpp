@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "../robot_logic/scene.hpp"
+#include "elaslam/common/version.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/team/report.hpp"
@@ -102,12 +103,55 @@ TEST(TeamRun, SameSeedSameMetricsApartFromTiming) {
     j.erase("timing");
     return j.dump();
   };
-  RunInfo info{"ela", 35.0, 0.7, 4, "paper.yaml", ""};
+  RunInfo info{"ela", 35.0, 0.7, 4, "paper.yaml", "", "test"};
   const std::string a = strip(metrics_json(info, run(Mode::kEla, 35.0, 0.7, 4)));
   const std::string b = strip(metrics_json(info, run(Mode::kEla, 35.0, 0.7, 4)));
   EXPECT_EQ(a, b);
   const std::string c = strip(metrics_json(info, run(Mode::kEla, 35.0, 0.7, 5)));
   EXPECT_NE(a, c);
+}
+
+// metrics.json says what ran: provenance, and the effective config with every
+// override applied (what the run used, not what the file said).
+TEST(TeamRun, MetricsJsonCarriesProvenanceAndTheConfigThatRan) {
+  RunOverrides o;
+  o.mode = Mode::kConsensus;
+  o.dynamism_percent = 20.0;
+  o.landmark_speed_mps = 0.3;
+  o.seed = 7;
+  o.rate_hz = 20.0;
+  o.frames = 30;
+  const TeamConfig c = apply_overrides(paper(), o);
+  const RunResult r = run_team(c);
+  const RunInfo info{"consensus", 20.0, 0.3, 7, "paper.yaml", c.effective_yaml, "run_scenario --seed 7"};
+  const nlohmann::json j = metrics_json(info, r);
+  EXPECT_EQ(j["schema_version"], kMetricsSchemaVersion);
+  EXPECT_EQ(j["elaslam_version"].get<std::string>().rfind(version(), 0), 0u) << j["elaslam_version"];
+  EXPECT_EQ(j["command_line"], "run_scenario --seed 7");
+  EXPECT_EQ(j["frames"], 30);
+  const nlohmann::json& cfg = j["config"];
+  EXPECT_EQ(cfg["robot"]["mode"], "consensus");
+  EXPECT_EQ(cfg["scenario"]["dynamism_percent"], 20);
+  EXPECT_DOUBLE_EQ(cfg["scenario"]["landmark_speed_mps"].get<double>(), 0.3);
+  EXPECT_EQ(cfg["scenario"]["seed"], 7);
+  EXPECT_EQ(cfg["scenario"]["rate_hz"], 20);
+  EXPECT_EQ(cfg["scenario"]["frames"], 30);
+  EXPECT_EQ(cfg["robot"]["filter"]["capacity"], paper().robot.ekf.capacity) << "the rest is the file's";
+}
+
+// An override the scenario cannot run is refused with the reason, as the simulator does.
+TEST(TeamRun, OverridesAreCheckedAgainstTheWholeScenario) {
+  RunOverrides o;
+  o.rate_hz = 0.1;  // robot 1 would move 12.7 m per frame, more than D = 8 m
+  try {
+    apply_overrides(paper(), o);
+    FAIL() << "a rate of 0.1 Hz was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("scenario.robots[0].speed_mps"), std::string::npos) << e.what();
+  }
+  o.rate_hz.reset();
+  o.frames = 0;
+  EXPECT_THROW(apply_overrides(paper(), o), std::invalid_argument);
 }
 
 // A landmark that one robot sees moving is dropped by the other after main_robot's

@@ -22,6 +22,7 @@ inline std::string global_map(const std::string& suffix = "") { return "GLOBAL_M
 inline std::string dynamic_notice(const std::string& suffix = "") { return "DYNAMIC_NOTICE" + suffix; }
 inline std::string status_main(const std::string& suffix = "") { return "STATUS_MAIN" + suffix; }
 inline std::string status_sim(const std::string& suffix = "") { return "STATUS_SIM" + suffix; }
+inline std::string run_info(const std::string& suffix = "") { return "RUN_INFO" + suffix; }
 
 /// Capacities fixed by the message contract (lcmtypes/*.lcm array sizes).
 constexpr int kMaxObsPerFrame = 64;

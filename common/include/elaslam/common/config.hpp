@@ -29,9 +29,12 @@ namespace elaslam::config {
 class ConfigError : public std::runtime_error {
  public:
   ConfigError(const std::string& source, std::vector<std::string> problems);
+  /// A file that could not be found: `headline`, then one line per place looked at.
+  static ConfigError not_found(const std::string& headline, std::vector<std::string> places);
   const std::vector<std::string>& problems() const { return problems_; }
 
  private:
+  ConfigError(std::string message, std::vector<std::string> problems, int);
   std::vector<std::string> problems_;
 };
 

@@ -105,7 +105,8 @@ std::vector<Problem> check_scenario(const ScenarioOptions& o);
 /// Load the `scenario` section of a YAML file; the sections of the other
 /// components (robot, main, lcm, team) are allowed and left alone.
 /// Throws config::ConfigError listing every problem with its key path.
-ScenarioOptions load_scenario(const std::string& path);
+/// `effective_yaml`, when given, receives the scenario section as read (YAML).
+ScenarioOptions load_scenario(const std::string& path, std::string* effective_yaml = nullptr);
 /// The same from YAML text (tests). `source` names the text in errors.
 ScenarioOptions load_scenario_text(const std::string& text, const std::string& source = "<string>");
 

@@ -18,10 +18,19 @@ struct RunInfo {
   double speed_mps = 0.0;
   long long seed = 0;
   std::string source;              // config file or log
-  std::string effective_config;    // YAML text, echoed as a parsed object
+  std::string effective_config;    // YAML text, echoed as a parsed object ("" -> null)
+  std::string command_line;        // the command that made the file (provenance)
 };
 
+/// Version of metrics.json's layout; docs/data_dictionary.md describes every key.
+/// 2: provenance (schema_version, elaslam_version, command_line, config in live runs).
+constexpr int kMetricsSchemaVersion = 2;
+
 nlohmann::json metrics_json(const RunInfo& info, const RunResult& r);
+
+/// The YAML text as a JSON value (scalars typed as numbers / booleans where they
+/// parse); null for empty text.
+nlohmann::json yaml_text_to_json(const std::string& yaml);
 
 /// Write every output file into `dir` (created). Throws std::runtime_error naming
 /// the file that could not be written.
@@ -31,5 +40,15 @@ void write_outputs(const std::string& dir, const nlohmann::json& metrics, const 
 void write_tum(std::ostream& out, const std::vector<TrajectoryPoint>& traj);
 
 void print_summary(std::ostream& out, const RunInfo& info, const RunResult& r);
+
+/// This run against a baseline on the same scenario and seed (e.g. plain ekf), side
+/// by side: landmark error, each robot's error, the final map, detection. `how` says
+/// how the baseline was obtained ("in process").
+void print_comparison(std::ostream& out, const RunInfo& info, const RunResult& r, const RunInfo& base_info,
+                      const RunResult& base, const std::string& how);
+
+/// The baseline's figures for metrics.json ("baseline"): its metrics_json without
+/// the config and command line (the same as the run's but for the mode), plus `how`.
+nlohmann::json baseline_json(const RunInfo& base_info, const RunResult& base, const std::string& how);
 
 }  // namespace elaslam

@@ -21,10 +21,14 @@ struct RunOverrides {
   std::optional<double> dynamism_percent;
   std::optional<double> landmark_speed_mps;
   std::optional<int> seed;
+  std::optional<double> rate_hz;  // the live team's --rate: motion per frame changes with it
+  std::optional<int> frames;
 };
 
-/// Apply overrides to a copy of the config (validated ranges; throws
-/// std::invalid_argument with the field named on a bad value).
+/// Apply overrides to a copy of the config and to its effective_yaml (so that what
+/// metrics.json echoes is what ran). The scenario is checked again as a whole
+/// (sim::check_scenario: e.g. a speed too high for the rate); throws
+/// std::invalid_argument naming the field on a bad value.
 TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o);
 
 struct TrajectoryPoint {

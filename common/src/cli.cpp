@@ -1,0 +1,95 @@
+#include "elaslam/common/cli.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+#include <system_error>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "elaslam/common/config.hpp"
+#include "elaslam/common/version.hpp"
+
+namespace elaslam::cli {
+namespace {
+
+bool is_file(const std::string& p) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(p, ec);
+}
+
+/// Why a path cannot be used, "" when it can.
+std::string file_problem(const std::string& p) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(p, ec);
+  if (ec || !std::filesystem::exists(st)) return "no such file";
+  if (!std::filesystem::is_regular_file(st)) return "not a regular file";
+  return "";
+}
+
+std::string shell_quote(const std::string& s) {
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=./,:@%") ==
+                        std::string::npos)
+    return s;
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+}  // namespace
+
+std::string version_line(const std::string& program) {
+  return program + " (elaslam " + version() + ", git " + git_commit() + ")";
+}
+
+void add_version_flag(CLI::App& app, const std::string& program) {
+  app.set_version_flag("--version", version_line(program), "print the version and the source commit, then exit");
+}
+
+std::string data_dir() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) return "/usr/share/elaslam";  // no /proc: the packaged location
+  return (exe.parent_path().parent_path() / "share" / "elaslam").string();
+}
+
+std::string python_tool(const std::string& name) { return data_dir() + "/tools/" + name; }
+
+ConfigChoice find_config(const ConfigPlaces& p) {
+  if (!p.given.empty()) {
+    const std::string why = file_problem(p.given);
+    if (!why.empty()) throw config::ConfigError::not_found("--config " + p.given + ": " + why, {});
+    return {p.given, "--config"};
+  }
+  if (p.env) {
+    const std::string why = file_problem(*p.env);
+    if (!why.empty())
+      throw config::ConfigError::not_found(std::string("$") + kConfigEnv + "=" + *p.env + ": " + why + " (unset " +
+                                               kConfigEnv + " or point it at a config file)",
+                                           {});
+    return {*p.env, std::string("$") + kConfigEnv};
+  }
+  if (is_file(p.system)) return {p.system, p.system};
+  if (is_file(p.installed)) return {p.installed, "installed default"};
+  throw config::ConfigError::not_found(
+      "no configuration file; looked at, in this order:",
+      {"--config: not given", std::string("$") + kConfigEnv + ": not set", p.system + ": " + file_problem(p.system),
+       p.installed + " (installed default): " + file_problem(p.installed),
+       "give one with --config FILE (config/paper.yaml in the source tree)"});
+}
+
+ConfigChoice find_config(const std::string& given, const std::string& default_name) {
+  ConfigPlaces p;
+  p.given = given;
+  if (const char* env = std::getenv(kConfigEnv); env && *env) p.env = std::string(env);
+  p.installed = data_dir() + "/config/" + default_name;
+  return find_config(p);
+}
+
+std::string command_line(int argc, const char* const* argv) {
+  std::string out;
+  for (int i = 0; i < argc; ++i) out += (i ? " " : "") + shell_quote(argv[i]);
+  return out;
+}
+
+}  // namespace elaslam::cli

@@ -1,0 +1,187 @@
+// What a recorded LCM log holds, like `ros2 bag info`: its channels (count, bytes,
+// rate, type, undecodable events), the run it recorded (RUN_INFO), the frames it
+// covers, and per robot an account of every frame of the run: logged, never
+// started, dropped by the robot, or processed by the robot but lost by the
+// recorder. Used by `log_info` (tools/log_info.cpp); docs/tools.md.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace elaslam {
+
+// ---------------------------------------------------------------------------------
+// Frame accounting
+// ---------------------------------------------------------------------------------
+
+/// A POSE_<r> in the log: its frame and pose_estimate_t.frames_processed (frames the
+/// node processed since it started, this one included).
+struct PoseCheckpoint {
+  int frame;
+  std::int64_t frames_processed;
+};
+
+/// A STATUS_ROBOT_<r> in the log: frame = last frame processed, frames = frames
+/// processed so far, frames_dropped = the node's own count of lost/refused frames.
+struct StatusCheckpoint {
+  int frame;
+  std::int64_t frames;
+  std::int64_t frames_dropped;
+};
+
+/// What happened to each frame of [first_frame, last_frame] for one robot.
+/// Invariant: poses_logged + not_started + dropped + missing_from_log == frames_in_run.
+struct RobotFrameAccount {
+  int robot_id = 0;
+  int frames_in_run = 0;     // last_frame - first_frame + 1 (0 when last < first)
+  int poses_logged = 0;      // frames with a POSE in the log
+  int not_started = 0;       // frames before the robot's first processed frame (it joined late)
+  int dropped = 0;           // frames the robot did not process (lost, refused, or it was down)
+  int missing_from_log = 0;  // frames the robot processed whose POSE the recorder lost
+  int restarts = 0;          // times frames_processed went back (the node was restarted)
+  std::vector<std::pair<int, int>> missing_pose_ranges;    // [from, to] runs of frames without a logged POSE
+  bool sensor_recorded = false;                            // any SENSOR frame given at all
+  int sensors_logged = 0;                                  // distinct SENSOR frames in [first, last]
+  std::vector<std::pair<int, int>> missing_sensor_ranges;  // same for SENSOR; empty when !sensor_recorded
+  std::int64_t node_reported_dropped = -1;                 // frames_dropped of the latest STATUS, -1 when none
+};
+
+/// Accounts for every frame of [first_frame, last_frame] of robot `robot_id`.
+///
+/// POSEs are sorted by frame; of several POSEs of one frame the first given is kept;
+/// POSEs outside [first_frame, last_frame] are ignored. With (f, n) = (frame,
+/// frames_processed) of the kept POSEs, in frame order:
+/// - Between consecutive POSEs (f_a, n_a) and (f_b, n_b): g = f_b - f_a - 1 frames
+///   have no POSE. When n_b > n_a the robot processed p = clamp(n_b - n_a - 1, 0, g)
+///   of them; when n_b <= n_a the node restarted in between (restarts += 1) and
+///   processed p = clamp(n_b - 1, 0, g) since its restart. missing_from_log += p,
+///   dropped += g - p.
+/// - Before the first POSE (f_0, n_0): the robot processed q = clamp(n_0 - 1, 0,
+///   f_0 - first_frame) of first_frame..f_0-1, whose POSEs the recorder lost
+///   (missing_from_log += q); the others are not_started (it joined late; not a drop).
+/// - After the last POSE (f_L, n_L): the STATUS with the largest frame > f_L (the
+///   later one given on a tie) tells how many more frames the robot processed:
+///   a = clamp(frames - n_L, 0, last_frame - f_L), or clamp(frames, 0, ...) when
+///   frames < n_L (a restart, restarts += 1). missing_from_log += a, dropped += the
+///   rest of f_L+1..last_frame (the robot stopped, or lost them). No such STATUS:
+///   all of them are dropped.
+/// - No POSE at all: the latest STATUS (largest frame) with frames > 0 gives
+///   missing_from_log = clamp(frames, 0, frames_in_run); the rest, or every frame
+///   when there is no such STATUS, are not_started.
+/// Which frames were processed is not known, only how many: the ranges list every
+/// frame without a POSE, whatever its class. `sensor_frames` are the robot's SENSOR
+/// frames in the log (any order, duplicates allowed); empty means no SENSOR was
+/// recorded (e.g. a log of the robots' outputs only): then sensor_recorded is false
+/// and no SENSOR range is reported. `statuses` may be in any order. A run longer than
+/// INT_MAX / 2 frames (only a damaged log has one) is cut to that length.
+RobotFrameAccount account_frames(int robot_id, int first_frame, int last_frame, std::vector<PoseCheckpoint> poses,
+                                 const std::vector<StatusCheckpoint>& statuses, const std::vector<int>& sensor_frames);
+
+/// Maximal runs [from, to] of frames in [first, last] that are not in `present`
+/// (sorted ascending, without duplicates).
+std::vector<std::pair<int, int>> absent_ranges(int first, int last, const std::vector<int>& present);
+
+/// "2, 40-42" for {{2, 2}, {40, 42}}; "none" when empty.
+std::string format_ranges(const std::vector<std::pair<int, int>>& ranges);
+
+// ---------------------------------------------------------------------------------
+// Log summary
+// ---------------------------------------------------------------------------------
+
+struct ChannelSummary {
+  std::string name;               // printable(): damaged names have \xNN escapes
+  std::string type;               // e.g. "pose_estimate_t", "other" for channels not of elaslam
+  long count = 0;                 // events on the channel, undecodable ones included
+  std::int64_t bytes = 0;         // payload bytes (the events' data, no log framing)
+  std::int64_t first_us = 0;      // [us] first / last event timestamp (log receive time)
+  std::int64_t last_us = 0;
+  double rate_hz = 0.0;           // (count - 1) / (last - first); 0 when count < 2 or no span
+  long decode_errors = 0;         // events of an elaslam type that did not decode (0 for "other")
+  long fingerprint_mismatches = 0;  // of those, events whose LCM fingerprint is another type's:
+                                    // recorded with another version of the message, as a rule
+};
+
+/// The last RUN_INFO that decoded (run_info_t; -1 marks "unknown" as in the message).
+struct RunInfoSummary {
+  bool present = false;        // false: no RUN_INFO decoded (logs older than RUN_INFO)
+  long messages = 0;           // RUN_INFO messages decoded
+  bool varies = false;         // source, scenario, seed, mode or robots changed within the log
+  int schema_version = 0;
+  int frame = -1;              // last frame published when it was sent
+  std::string source, version, scenario, mode;
+  std::int64_t seed = -1;
+  double dynamism_percent = -1.0;
+  double landmark_speed_mps = -1.0;
+  double rate_hz = 0.0;
+  int frames = 0;
+  std::vector<int> robot_ids;
+};
+
+struct RobotSummary {
+  int robot_id = 0;
+  std::vector<int> modes;          // node_status_t.mode values seen on STATUS_ROBOT_<r>, in order, no repeats
+  long pose_events = 0;            // events on POSE_<r>, decoded or not
+  long pose_undecodable = 0;       // of those, not decoded: the account counts their frames as missing
+  long status_events = 0;          // events on STATUS_ROBOT_<r>, decoded or not
+  long status_undecodable = 0;
+  RobotFrameAccount account;       // only meaningful when LogSummary::frames_source is not empty
+
+  /// False for a log of the robots' inputs only (e.g. mrclam_import's, or lcm-logger
+  /// with a channel filter): then the account says nothing about the robot.
+  bool outputs_recorded() const { return pose_events > 0 || status_events > 0; }
+};
+
+struct LogSummary {
+  std::string file;
+  std::int64_t size_bytes = 0;
+  long events = 0;                 // events read
+  bool complete = true;            // the read reached the end of the file
+  std::int64_t bytes_read = 0;     // offset where the read stopped (== size_bytes when complete)
+  std::int64_t bytes_skipped = 0;  // bytes between events skipped while looking for the next one
+  std::int64_t first_us = 0;       // [us] earliest / latest event timestamp (0 when no event)
+  std::int64_t last_us = 0;
+  std::vector<ChannelSummary> channels;  // sorted by name
+  RunInfoSummary run_info;
+
+  std::string frames_source;       // "GROUND_TRUTH", "SENSOR", or "" when neither is in the log
+  int first_frame = 0, last_frame = -1;
+  int frames_logged = 0;           // distinct frames on the frames_source channel(s)
+  std::vector<std::pair<int, int>> frames_missing;  // gaps in frames_source within [first, last]
+  std::vector<RobotSummary> robots;  // ids from RUN_INFO, else from SENSOR_<r> / POSE_<r> channels
+
+  double duration_s() const {
+    return events > 0 ? (static_cast<double>(last_us) - static_cast<double>(first_us)) * 1e-6 : 0.0;
+  }
+};
+
+/// Reads the whole log at `path`. Throws std::runtime_error when the file cannot be
+/// opened or does not start with an LCM event (an empty file is a log of no
+/// events). Never throws on bad content: undecodable events are counted per
+/// channel, and a truncated or corrupt tail ends the read (complete = false).
+LogSummary summarize_log(const std::string& path);
+
+/// Human-readable summary (what `log_info` prints).
+void print_log_summary(std::ostream& out, const LogSummary& s);
+
+/// Machine-readable summary; units in the keys (_s, _us, _hz, _bytes, ...).
+nlohmann::json to_json(const LogSummary& s);
+nlohmann::json to_json(const RobotFrameAccount& a);
+
+/// "ekf", "gated", "ela", "consensus", "none", or "unknown(N)" for node_status_t.mode.
+std::string status_mode_name(int mode);
+
+/// `in` with control characters and bytes that are not well-formed UTF-8 written as
+/// \xNN: every string of a summary that comes from the log (channel names, RUN_INFO
+/// text) goes through it, so that printing and JSON never choke on a damaged log.
+std::string printable(const std::string& in);
+
+/// "2024-05-01T12:00:00.123456Z" for microseconds since the Unix epoch.
+std::string iso_utc(std::int64_t utime);
+
+}  // namespace elaslam

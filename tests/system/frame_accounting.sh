@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# System test `system_frame_accounting`: "frames dropped" means what it says.
+# A live team in a private namespace (80 frames at 20 Hz) where robot 3 starts when
+# robot 1 has done frame 15 (it joins late), and robot 2 is killed (SIGKILL) after
+# frame 40 and started again after frame 50. evaluate and log_info must say:
+#   robot 1: every frame logged or missing from the log, none dropped or not started;
+#   robot 2: no frame "not started", about 10 dropped (it was down), 1 restart;
+#   robot 3: about 15 frames "not yet started", none dropped;
+# and for every robot poses + not started + dropped + missing from the log = 80.
+#   tests/system/frame_accounting.sh BUILD_DIR
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+CONFIG="$ROOT/config/paper.yaml"
+PY="$ROOT/.venv/bin/python"
+CHECK="$ROOT/tests/system/lcm_check.py"
+
+if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
+  BUILD="$2" OUT="$3"
+  mkdir -p "$OUT/logs"
+  PIDS=()
+  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  robot() { "$BUILD/bin/robot_node" --config "$CONFIG" --robot "$1" >> "$OUT/logs/robot_node_$1.log" 2>&1 & }
+  lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
+  "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
+  robot 1; PIDS+=($!)
+  robot 2; R2=$!
+  "$BUILD/bin/simulator" --config "$CONFIG" --frames 80 --rate 20 --wait-for-nodes 3 > "$OUT/logs/simulator.log" 2>&1 &
+  SIM=$!
+  "$PY" "$CHECK" --build-dir "$BUILD" wait-frame POSE_1 15 --timeout 60 > /dev/null
+  robot 3; PIDS+=($!)
+  "$PY" "$CHECK" --build-dir "$BUILD" wait-frame POSE_1 40 --timeout 60 > /dev/null
+  kill -KILL "$R2"; wait "$R2" 2>/dev/null || true
+  "$PY" "$CHECK" --build-dir "$BUILD" wait-frame POSE_1 50 --timeout 60 > /dev/null
+  robot 2; PIDS+=($!)
+  wait "$SIM"
+  sleep 0.3  # the last frame's messages reach the logger
+  rc=0
+  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
+  for p in "${PIDS[@]}"; do wait "$p" || rc=1; done
+  PIDS=()
+  exit $rc
+fi
+
+BUILD="$(cd "${1:?usage: frame_accounting.sh BUILD_DIR}" && pwd)"
+[ "$(id -u)" -eq 0 ] || { echo "frame_accounting: skipped (needs root for network namespaces)"; exit 77; }
+ip netns list >/dev/null 2>&1 || { echo "frame_accounting: skipped (no ip netns)"; exit 77; }
+[ -x "$PY" ] || { echo "frame_accounting: skipped (no .venv; tools/setup.sh makes it)"; exit 77; }
+OUT="$(mktemp -d)"
+trap 'rm -rf "$OUT"' EXIT
+"$ROOT/tools/netns_run.sh" --port 7705 -- "$0" --inner "$BUILD" "$OUT" || { tail -n 3 "$OUT"/logs/*.log; exit 1; }
+"$BUILD/bin/evaluate" --log "$OUT/run.lcmlog" --out "$OUT/eval" > "$OUT/eval.txt"
+"$BUILD/bin/log_info" --json "$OUT/run.lcmlog" > "$OUT/log_info.json"
+grep -E "frames dropped|robot [0-9]:" "$OUT/eval.txt"
+python3 - "$OUT/eval/metrics.json" "$OUT/log_info.json" <<'PY'
+import json, sys
+m, info = (json.load(open(p)) for p in sys.argv[1:3])
+fails = []
+robots = {r["id"]: r for r in m["robots"]}
+logged = {r["robot_id"]: r for r in info["robots"]}
+for rid, r in robots.items():
+    total = r["frames"] + r["frames_not_started"] + r["frames_dropped"] + r["poses_missing_from_log"]
+    if total != 80:
+        fails.append(f"robot {rid}: {total} frames accounted for, not 80")
+    l = logged[rid]  # log_info tells the same story
+    for a, b in (("frames_not_started", "not_started"), ("frames_dropped", "dropped"),
+                 ("poses_missing_from_log", "missing_from_log"), ("restarts", "restarts")):
+        if r[a] != l[b]:
+            fails.append(f"robot {rid}: evaluate {a} {r[a]}, log_info {b} {l[b]}")
+def want(rid, key, lo, hi):
+    if not lo <= robots[rid][key] <= hi:
+        fails.append(f"robot {rid}: {key} = {robots[rid][key]}, expected {lo}..{hi}")
+want(1, "frames_dropped", 0, 0); want(1, "frames_not_started", 0, 0); want(1, "restarts", 0, 0)
+want(2, "frames_not_started", 0, 0); want(2, "restarts", 1, 1); want(2, "frames_dropped", 5, 15)
+want(3, "frames_not_started", 12, 22); want(3, "frames_dropped", 0, 0); want(3, "restarts", 0, 0)
+if m["frames_dropped"] != robots[2]["frames_dropped"]:
+    fails.append(f"frames_dropped {m['frames_dropped']} is not robot 2's alone")
+print("frame_accounting:", {rid: (r["frames"], r["frames_not_started"], r["frames_dropped"], r["poses_missing_from_log"],
+                                 r["restarts"]) for rid, r in robots.items()}, "(logged, not started, dropped, missing, restarts)")
+if fails:
+    print("\n".join(fails)); sys.exit(1)
+PY

@@ -1,0 +1,66 @@
+"""Start-up shared by the Python tools (standard library only: it runs before any
+third-party import).
+
+In a source tree with a .venv (tools/setup.sh), run_in_venv() re-execs the calling
+script with the venv's python and the same arguments, so `tools/plot_sweep.py` and
+`python3 tools/plot_sweep.py` work with any python3. An installed copy (this module
+in <prefix>/share/elaslam/tools, no .venv beside it) runs with the interpreter that
+started it (Debian's python3 and its python3-numpy / python3-matplotlib).
+
+A script finds this module beside itself (source tree, share/elaslam/tools) or, as
+bin/elaslam-<tool>, in ../share/elaslam/tools:
+
+    import os, sys
+    _here = os.path.dirname(os.path.realpath(__file__))
+    sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+    from elaslam_tool import need, parse_args, run_in_venv
+"""
+import importlib
+import os
+import sys
+
+# <root>/.venv for a source tree: this file is <root>/tools/elaslam_tool.py.
+_ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
+
+
+def prog():
+    """The calling program's name, for messages."""
+    return os.path.splitext(os.path.basename(sys.argv[0]))[0]
+
+
+def run_in_venv():
+    """Re-exec the running script in <root>/.venv when there is one and this is not it."""
+    venv = os.path.join(_ROOT, ".venv")
+    python = os.path.join(venv, "bin", "python")
+    if not os.access(python, os.X_OK) or os.path.realpath(sys.prefix) == os.path.realpath(venv):
+        os.environ.pop("ELASLAM_VENV_REEXEC", None)  # in the venv (or none): children start afresh
+        return
+    if os.environ.get("ELASLAM_VENV_REEXEC") == venv:
+        return  # the venv's python did not become the venv: never loop, go on with this one
+    os.environ["ELASLAM_VENV_REEXEC"] = venv
+    os.execv(python, [python] + sys.argv)
+
+
+def need(module, debian=None):
+    """Import a third-party module, or exit 2 naming it and how to get it."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as e:
+        top = module.split(".")[0]
+        how = (f"Debian: apt-get install {debian}" if debian else
+               f"it is on PyPI only (Debian has no package): {sys.executable} -m pip install {top}")
+        sys.stderr.write(f"{prog()}: the Python module '{top}' is missing for {sys.executable} ({e}).\n"
+                         f"  {how}; in a source tree, tools/setup.sh makes .venv with every module the tools need.\n")
+        sys.exit(2)
+
+
+def parse_args(ap):
+    """ap.parse_args(), naming an unknown option (exit 2) even when a required argument is missing too."""
+    known = [s for a in ap._actions for s in a.option_strings]
+    for tok in sys.argv[1:]:
+        if tok == "--":
+            break
+        if tok.startswith("-") and tok != "-" and not ap._negative_number_matcher.match(tok):
+            if not any(k.startswith(tok.split("=", 1)[0]) for k in known):
+                ap.error(f"unrecognized argument: {tok}")
+    return ap.parse_args()

@@ -1,0 +1,42 @@
+// log_info: what a recorded LCM log holds, like `ros2 bag info`: size, events, time
+// span, per channel count / bytes / rate / type / undecodable events, the run it
+// recorded (RUN_INFO), the frames it covers and, per robot, what happened to every
+// frame: POSE logged, robot not started yet, frame dropped by the robot, or POSE
+// processed but lost by the recorder (docs/tools.md "log_info").
+//   log_info LOG [--json]
+// Exit status: 0 on success, 2 on a bad argument or a file that cannot be read or is
+// not an LCM log (the reason on stderr).
+#include <cstdio>
+#include <iostream>
+#include <stdexcept>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "elaslam/common/cli.hpp"
+#include "elaslam/team/log_summary.hpp"
+
+int main(int argc, char** argv) {
+  std::string path;
+  bool json = false;
+  CLI::App app{"elaslam log_info: summary of a recorded LCM log (channels, run info, frames per robot)"};
+  elaslam::cli::add_version_flag(app, "log_info");
+  app.add_option("LOG", path, "LCM log (lcm-logger, mrclam_import)")->required();
+  app.add_flag("--json", json, "print the summary as JSON (units in the keys) instead of text");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    const elaslam::LogSummary s = elaslam::summarize_log(path);
+    if (json)
+      std::cout << elaslam::to_json(s).dump(2) << "\n";
+    else
+      elaslam::print_log_summary(std::cout, s);
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "log_info: %s\n", e.what());
+    return 2;
+  }
+  return std::cout.good() ? 0 : 1;
+}
