@@ -47,7 +47,7 @@ printf '%-8s %-8s %-30s %-30s %-30s %s\n' "F [Hz]" frames "pose latency p50/p99/
   "map latency p50/p99/max [us]" "frames dropped"
 for f in $RATES; do
   frames=$(awk -v f="$f" -v s="$SECONDS_PER_RUN" 'BEGIN { printf "%d", f * s }')
-  "$ROOT/tools/run_team.sh" --config "$CONFIG" --mode "$MODE" --rate "$f" --frames "$frames" "${RT[@]}" "${BUILD_ARGS[@]}" --out "$OUT/F$f" >"$OUT/F$f.txt" 2>&1 ||
+  "$ROOT/tools/run_team.sh" --no-progress --no-baseline --config "$CONFIG" --mode "$MODE" --rate "$f" --frames "$frames" "${RT[@]}" "${BUILD_ARGS[@]}" --out "$OUT/F$f" >"$OUT/F$f.txt" 2>&1 ||
     { echo "latency.sh: run at $f Hz failed, see $OUT/F$f.txt" >&2; exit 1; }
   "$ROOT/.venv/bin/python" - "$OUT/F$f/metrics.json" "$f" "$frames" <<'PY'
 import json, sys

@@ -46,8 +46,9 @@ class Progress {
   std::string line() const {
     char buf[512];
     const std::string of = frames_ > 0 ? "/" + std::to_string(frames_) : "";
+    // Frames are numbered from 0: after frame k, k + 1 are done ("frame 150/150").
     std::snprintf(buf, sizeof buf, "frame %d%s | poses %lld from %zu robot%s | moving landmarks found %zu | notices %lld",
-                  frame_, of.c_str(), poses_, pose_robots_.size(), pose_robots_.size() == 1 ? "" : "s",
+                  frame_ + 1, of.c_str(), poses_, pose_robots_.size(), pose_robots_.size() == 1 ? "" : "s",
                   moving_.size(), notices_);
     std::string out = buf;
     if (dropped_ > 0) out += " | robots report " + std::to_string(dropped_) + " dropped frames";
