@@ -1,7 +1,9 @@
 # Build-time script: writes OUT, a C++ source holding the project version and the
 # git commit of the source tree, and touches it only when the text changed (so an
 # unchanged tree relinks nothing).
-#   cmake -DSRC=<source dir> -DOUT=<file> -DVERSION=<x.y.z> [-DCOMMIT=<override>] -P version.cmake
+#   cmake -DSRC=<source dir> -DOUT=<file> -DVERSION=<x.y.z> [-DCOMMIT=<override>] [-DTEXT=<file>] -P version.cmake
+# TEXT, when given, receives the same facts as one line, "elaslam <version>, git
+# <commit>", for the scripts' --version (installed as share/elaslam/VERSION).
 # The commit comes from `git rev-parse` (with "-dirty" when tracked files differ
 # from it); a tree without git (a source tarball) says "unknown" unless COMMIT is
 # given (packagers: -DELASLAM_GIT_COMMIT=...).
@@ -27,3 +29,8 @@ string(APPEND text "}  // namespace elaslam\n")
 file(WRITE "${OUT}.tmp" "${text}")
 execute_process(COMMAND ${CMAKE_COMMAND} -E copy_if_different "${OUT}.tmp" "${OUT}")
 file(REMOVE "${OUT}.tmp")
+if(TEXT)
+  file(WRITE "${TEXT}.tmp" "elaslam ${VERSION}, git ${COMMIT}\n")
+  execute_process(COMMAND ${CMAKE_COMMAND} -E copy_if_different "${TEXT}.tmp" "${TEXT}")
+  file(REMOVE "${TEXT}.tmp")
+endif()

@@ -13,7 +13,7 @@ bin/elaslam-<tool>, in ../share/elaslam/tools:
     import os, sys
     _here = os.path.dirname(os.path.realpath(__file__))
     sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-    from elaslam_tool import need, parse_args, run_in_venv
+    from elaslam_tool import need, parse_args, run_in_venv, add_version
 """
 import importlib
 import os
@@ -26,6 +26,27 @@ _ROOT = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 def prog():
     """The calling program's name, for messages."""
     return os.path.splitext(os.path.basename(sys.argv[0]))[0]
+
+
+def version_line():
+    """"<prog> (elaslam <version>, git <commit>)", as the C++ programs' --version, from the
+    build's share/elaslam/VERSION: installed beside this module's folder, in a source
+    tree in $ELASLAM_BUILD_DIR or build/."""
+    here = os.path.dirname(os.path.realpath(__file__))
+    builds = [os.environ.get("ELASLAM_BUILD_DIR", ""), os.path.join(_ROOT, "build")]
+    for path in [os.path.join(here, "..", "VERSION")] + [os.path.join(b, "share", "elaslam", "VERSION") for b in builds if b]:
+        try:
+            with open(path, encoding="utf-8") as f:
+                return f"{prog()} ({f.read().strip()})"
+        except OSError:
+            continue
+    return f"{prog()} (elaslam, version unknown: no build's share/elaslam/VERSION)"
+
+
+def add_version(ap):
+    """--version on an argparse parser."""
+    ap.add_argument("--version", action="version", version=version_line(),
+                    help="print the version and the source commit, then exit")
 
 
 def run_in_venv():

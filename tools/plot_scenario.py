@@ -20,7 +20,7 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+from elaslam_tool import add_version, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
 if __name__ == "__main__":
     run_in_venv()
@@ -157,6 +157,7 @@ def plot(meta, robots, landmarks, out):
 def main():
     p = argparse.ArgumentParser(prog="plot_scenario.py", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_version(p)
     p.add_argument("--config", help="YAML config with a scenario: section (default: scenario_dump's: $ELASLAM_CONFIG, "
                    "else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)")
     p.add_argument("--dynamism", type=float, help="override scenario.dynamism_percent [%%]")

@@ -115,11 +115,14 @@ trap interrupted INT TERM
 
 TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor)
 if [ "$INSIDE" -eq 0 ]; then
+  first=0
   if [ ! -f "$BUILD_DIR/build.ninja" ] || [ ! -x "$ROOT/.venv/bin/python" ]; then
     echo "run_team.sh: first run: set-up (Debian packages, Python venv, build configuration)" >&2
+    first=1
   fi
   "$ROOT/tools/setup.sh" --build-dir "$BUILD_DIR" >&2
-  echo "run_team.sh: building ${TARGETS[*]} in ${BUILD_DIR#$ROOT/}" >&2
+  echo "run_team.sh: building ${TARGETS[*]} in ${BUILD_DIR#$ROOT/}$([ "$first" -eq 1 ] &&
+    echo " (the first build takes a few minutes)")" >&2
   build_log="$OUT/logs/build.log"
   if ! cmake --build "$BUILD_DIR" --target "${TARGETS[@]}" -j "$(nproc)" >"$build_log" 2>&1; then
     tail -n 30 "$build_log" >&2

@@ -2,7 +2,7 @@
 # Start lcm-spy with the elaslam message types, so that every channel of the team
 # (SENSOR_<r>, POSE_<r>, GLOBAL_MAP, ...) is decoded field by field.
 #
-#   tools/spy.sh [--lcm-url URL] [--build-dir DIR] [-h|--help]
+#   tools/spy.sh [--lcm-url URL] [--build-dir DIR] [--version] [-h|--help]
 #
 #   --lcm-url URL    the LCM network to watch (default: $LCM_DEFAULT_URL, else
 #                    LCM's default udpm://239.255.76.67:7667)
@@ -28,7 +28,7 @@ PROG="$(basename "${BASH_SOURCE[0]}")"
 
 usage() {
   cat <<EOF
-usage: $PROG [--lcm-url URL] [--build-dir DIR] [-h|--help]
+usage: $PROG [--lcm-url URL] [--build-dir DIR] [--version] [-h|--help]
 
 Start lcm-spy (a GUI) with the elaslam message types.
 
@@ -36,6 +36,7 @@ Start lcm-spy (a GUI) with the elaslam message types.
                    udpm://239.255.76.67:7667)
   --build-dir DIR  build directory with elaslam_types.jar (default: \$ELASLAM_BUILD_DIR,
                    else <repo>/build); from a source tree the jar is built there first
+  --version        print the version and the source commit, then exit
   -h, --help       print this help and exit
 
 Needs a display (DISPLAY): run it on a desktop, over ssh -X, or headless with
@@ -45,12 +46,23 @@ EOF
 die() { echo "$PROG: $*" >&2; exit 1; }
 bad_arg() { echo "$PROG: $*" >&2; echo "see $PROG --help" >&2; exit 2; }
 
+# "<prog> (elaslam <version>, git <commit>)" from the build's share/elaslam/VERSION
+# (installed: beside bin/; source tree: the build directory's).
+version() {
+  local f
+  for f in "$HERE/../share/elaslam/VERSION" "${BUILD_DIR:-${ELASLAM_BUILD_DIR:-$HERE/../build}}/share/elaslam/VERSION"; do
+    [ -f "$f" ] && { echo "${PROG%.sh} ($(cat "$f"))"; return; }
+  done
+  echo "${PROG%.sh} (elaslam, version unknown: no build's share/elaslam/VERSION)"
+}
+
 URL=""
 URL_SET=0
 BUILD_DIR=""
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
+    --version) version; exit 0 ;;
     --lcm-url|--build-dir)
       [ $# -ge 2 ] && [ -n "$2" ] || bad_arg "option '$1' needs a value"
       if [ "$1" = --lcm-url ]; then URL="$2"; URL_SET=1; else BUILD_DIR="$2"; fi

@@ -48,6 +48,7 @@ expected_files() {
       echo "$p/share/elaslam/config/paper.yaml"; echo "$p/share/elaslam/config/mrclam.yaml"
       for f in "$SRC"/lcmtypes/*.lcm; do echo "$p/share/elaslam/lcmtypes/$(basename "$f")"; done
       echo "$p/share/elaslam/systemd/realtime.conf"
+      echo "$p/share/elaslam/VERSION"
       echo "$p/share/doc/elaslam/deployment.md" ;;
     elaslam-robot)
       echo "$p/bin/elaslam-robot-node"; echo "$p/lib/systemd/system/elaslam-robot@.service" ;;
@@ -125,9 +126,9 @@ PY
 }
 
 # Every ELF program answers --version with exit 0 and this version.
-version_check() { # BIN_DIR
+version_check() { # BIN_DIR: every program and script answers --version with this version
   local f out n=0
-  for f in $(elf_programs "$1"); do
+  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy"; do
     out="$("$f" --version 2>&1)" || fail "$f --version: exit $?: $out"
     case "$out" in
       *"(elaslam $VERSION"*) ;;
@@ -135,7 +136,7 @@ version_check() { # BIN_DIR
     esac
     n=$((n + 1))
   done
-  [ "$n" -ge 9 ] || fail "only $n programs in $1"
+  [ "$n" -ge 14 ] || fail "only $n programs in $1"
   note "--version: $n programs answer 'elaslam $VERSION'"
 }
 

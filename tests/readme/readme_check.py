@@ -12,7 +12,7 @@
       ran passed, 1 on a failure, 77 when nothing could run (ctest: skipped)
   readme_check.py help --build DIR [--source DIR] [--scratch DIR]
       --help and -h of every tools/*.sh and tools/*.py and --help of every
-      program in BUILD/bin, --version of every C++ program: exit 0 and output
+      program in BUILD/bin, --version of every C++ program and installed script: exit 0 and output
       that names the program; tools/* --no-such-option: exit 2 and a message
       naming it; else the test fails
 
@@ -396,12 +396,14 @@ def cmd_help(args):
         for flag in ("--help", "-h"):
             checks.append((f"tools/{f} {flag}", f, "script"))
         checks.append((f"tools/{f} {BAD_OPTION}", f, "bad"))
+        if f.endswith(".py") or f == "spy.sh":  # installed as elaslam-* programs: --version too
+            checks.append((f"tools/{f} --version", f, "version"))
     bindir = os.path.join(build, "bin")
     progs = sorted(programs_in(build))
     for p in progs:
         checks.append((f"build/bin/{p} --help", p, "program"))
         if not p.startswith("bench_"):  # Google Benchmark programs have no --version
-            checks.append((f"build/bin/{p} --version", p, "program"))
+            checks.append((f"build/bin/{p} --version", p, "version"))
     if not progs:
         print(f"no programs in {bindir}: build first")
         return 1
@@ -418,6 +420,8 @@ def cmd_help(args):
         body = out.split("\n", 1)[1] if "\n" in out else ""
         stem = os.path.splitext(name)[0]
         want_rc, want_text = (2, BAD_OPTION) if kind == "bad" else (0, stem)
+        if kind == "version":
+            want_text = f"{stem} (elaslam "  # "<program> (elaslam <version>, git <commit>)"
         if name.startswith("bench_"):
             want_text = ""  # Google Benchmark's help says "benchmark", not the program's name
         problems = []
