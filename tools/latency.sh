@@ -12,7 +12,8 @@
 # run (F<rate>/) and output (F<rate>.txt). --build-dir DIR (default
 # $ELASLAM_BUILD_DIR, else build/) goes to run_team.sh.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 CONFIG="$ROOT/config/paper.yaml"
 RATES="10 30 100"
 SECONDS_PER_RUN=30

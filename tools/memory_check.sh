@@ -21,7 +21,8 @@
 # - As root the team runs in a private network namespace (tools/netns_run.sh);
 #   otherwise on LCM_DEFAULT_URL (multicast on loopback must be enabled).
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
 DURATION=600

@@ -41,7 +41,8 @@
 #   fewer woken by every datagram).
 # Exit status: 0 done, 1 the run failed, 2 bad arguments, 130 interrupted.
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
 OUT=""

@@ -10,7 +10,8 @@ set -euo pipefail
 case "${1:-}" in
   -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
 esac
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="$ROOT/build"
 SETUP_ARGS=(--with-test-tools)
 if [ "${1:-}" = "--sanitize" ]; then

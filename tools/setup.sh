@@ -7,7 +7,8 @@
 #   (Debian packaging, systemd-analyze, Xvfb, a Java runtime for lcm-spy);
 #   tools/run_tests.sh passes it. --with-spy: what tools/spy.sh needs (Java, Xlibs).
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="$ROOT/build"
 SANITIZE=OFF
 PYTHON=1
@@ -74,7 +75,11 @@ fi
 # ---- Configure ------------------------------------------------------------------
 WERROR=OFF
 [ "${CI:-}" = "true" ] && WERROR=ON
-if [ ! -f "$BUILD_DIR/build.ninja" ] || [ "$SANITIZE" = ON ] || [ "$WERROR" = ON ]; then
+# Configure when there is no build yet or its options differ from these (a build
+# configured by hand keeps its own; CI turns warnings into errors).
+cache="$BUILD_DIR/CMakeCache.txt"
+if [ ! -f "$BUILD_DIR/build.ninja" ] || ! grep -qx "ELASLAM_SANITIZE:BOOL=$SANITIZE" "$cache" ||
+   { [ "$WERROR" = ON ] && ! grep -qx "ELASLAM_WERROR:BOOL=ON" "$cache"; }; then
   cmake -S "$ROOT" -B "$BUILD_DIR" -G Ninja -DELASLAM_WERROR="$WERROR" -DELASLAM_SANITIZE="$SANITIZE" \
     $([ "$SANITIZE" = ON ] && echo -DCMAKE_BUILD_TYPE=RelWithDebInfo) >/dev/null
 fi

@@ -15,7 +15,8 @@
 # script runs tools/setup.sh and builds them first). Not as root: exits 77 (no
 # namespace).
 set -euo pipefail
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=5000
