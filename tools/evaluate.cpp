@@ -12,7 +12,7 @@
 // section is known). --baseline MODE (needs --config): the same scenario and seed in
 // process with MODE (e.g. plain ekf), side by side with the live run.
 //
-// Frames per robot (team/log_summary.hpp, account_frames): a frame is "dropped" only
+// Frames per robot (team/frame_accounting.hpp, account_frames): a frame is "dropped" only
 // when the robot did not process it after it had started; frames before its first
 // are "not started"; a frame it processed whose POSE is not in the log is the
 // recorder's loss ("missing from the log"), told apart by POSE.frames_processed.
@@ -41,6 +41,7 @@
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/team/frame_accounting.hpp"
 #include "elaslam/team/log_summary.hpp"
 #include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
@@ -75,15 +76,6 @@ struct LogData {
   long events = 0;
 };
 
-const char* mode_name(int m) {
-  switch (m) {
-    case node_status_t::MODE_EKF: return "ekf";
-    case node_status_t::MODE_GATED: return "gated";
-    case node_status_t::MODE_ELA: return "ela";
-    case node_status_t::MODE_CONSENSUS: return "consensus";
-    default: return "";
-  }
-}
 
 template <typename Msg>
 bool decode(const lcm::LogEvent* ev, Msg* m, LogData* d) {
@@ -210,7 +202,7 @@ std::string reported_mode(const LogData& d, bool* disagree) {
   std::string mode;
   *disagree = false;
   for (const auto& [id, m] : d.robot_mode) {
-    const std::string name = mode_name(m);
+    const std::string name = status_mode_name(m);
     if (mode.empty()) mode = name;
     if (name != mode) *disagree = true;
   }
