@@ -32,7 +32,6 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/global_map_t.hpp"
@@ -42,6 +41,7 @@
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/team/frame_accounting.hpp"
+#include "elaslam/team/log_reader.hpp"
 #include "elaslam/team/log_summary.hpp"
 #include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
@@ -74,12 +74,14 @@ struct LogData {
   std::optional<run_info_t> run_info;                   // the last RUN_INFO
   std::map<std::string, long> decode_errors;
   long events = 0;
+  std::int64_t bytes_skipped = 0;  // [bytes] between events, not an event (a damaged log)
+  bool complete = true;            // false: the log ends in a truncated event
 };
 
 
 template <typename Msg>
-bool decode(const lcm::LogEvent* ev, Msg* m, LogData* d) {
-  if (m->decode(ev->data, 0, static_cast<int>(ev->datalen)) >= 0) return true;
+bool decode(const LogEvent* ev, Msg* m, LogData* d) {
+  if (m->decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) >= 0) return true;
   ++d->decode_errors[ev->channel];
   return false;
 }
@@ -133,13 +135,19 @@ int robot_of(const std::string& channel, const std::string& prefix) {
 }
 
 // Read every event; our channels are decoded, others ignored.
+// A damaged log (stray bytes, a truncated tail) is read as far as it holds whole
+// events (team/log_reader.hpp); what was skipped is counted.
 bool read_log(const std::string& path, LogData* d, std::string* why) {
-  lcm::LogFile log(path, "r");
-  if (!log.good()) {
-    *why = "cannot open the log " + path;
+  std::optional<LogReader> log;
+  try {
+    log.emplace(path);
+  } catch (const std::runtime_error& e) {
+    *why = e.what();
     return false;
   }
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+  LogEvent event;
+  while (log->next(&event)) {
+    const LogEvent* ev = &event;
     ++d->events;
     const std::string& ch = ev->channel;
     if (ch == "GROUND_TRUTH") {
@@ -168,6 +176,8 @@ bool read_log(const std::string& path, LogData* d, std::string* why) {
       if (m.mode != node_status_t::MODE_NONE) d->robot_mode[m.node_id] = m.mode;
     }
   }
+  d->bytes_skipped = log->skipped();
+  d->complete = log->complete();
   if (d->truth.empty()) {
     *why = "no GROUND_TRUTH in " + path + " (was the simulator's channel recorded?)";
     return false;
@@ -425,6 +435,8 @@ int main(int argc, char** argv) {
   j["frames_not_started"] = not_started;
   j["poses_missing_from_log"] = missing_from_log;
   j["log_events"] = d.events;
+  j["log_bytes_skipped"] = d.bytes_skipped;
+  j["log_complete"] = d.complete;
   for (const auto& [ch, n] : d.decode_errors) j["decode_errors"][ch] = n;
 
   std::optional<RunResult> base;
@@ -466,6 +478,9 @@ int main(int argc, char** argv) {
       std::cout << "  (POSEs missing from the log are the recorder's loss: lcm-logger drops messages when more "
                    "than 30 wait in its queue, as in the burst of landmark events a few frames into a run)\n";
     for (const auto& [ch, n] : d.decode_errors) std::cout << "  undecodable events on " << ch << ": " << n << "\n";
+    if (d.bytes_skipped > 0 || !d.complete)
+      std::cout << "  damaged log: " << d.bytes_skipped << " bytes between events skipped"
+                << (d.complete ? "" : ", the last event truncated") << "\n";
     if (base) print_comparison(std::cout, info, r, base_info, *base, "in process");
   }
   if (!a.out_dir.empty()) {

@@ -79,3 +79,31 @@ print("frame_accounting:", {rid: (r["frames"], r["frames_not_started"], r["frame
 if fails:
     print("\n".join(fails)); sys.exit(1)
 PY
+
+# A damaged copy of the recording: 1000 random bytes between two events in the
+# middle, and the file cut inside its last event. evaluate reads every whole event,
+# says what it skipped, and gives the figures of the recording without its last event.
+python3 - "$OUT/run.lcmlog" "$OUT/damaged.lcmlog" "$OUT/without_last.lcmlog" <<'PY'
+import random, sys
+data = open(sys.argv[1], "rb").read()
+marker = b"\xed\xa1\xda\x01"
+at = data.index(marker, len(data) // 2)   # an event boundary in the middle
+last = data.rindex(marker)                # where the last event starts
+junk = random.Random(7).randbytes(1000).replace(b"\xed\xa1", b"\x00\x00")
+open(sys.argv[2], "wb").write(data[:at] + junk + data[at:-10])
+open(sys.argv[3], "wb").write(data[:last])
+PY
+"$BUILD/bin/evaluate" --log "$OUT/damaged.lcmlog" --out "$OUT/eval_damaged" > "$OUT/damaged.txt"
+"$BUILD/bin/evaluate" --log "$OUT/without_last.lcmlog" --out "$OUT/eval_without_last" --quiet
+grep -q "damaged log: 1000 bytes between events skipped, the last event truncated" "$OUT/damaged.txt" ||
+  { cat "$OUT/damaged.txt"; echo "frame_accounting: the damage was not reported"; exit 1; }
+python3 - "$OUT/eval_without_last/metrics.json" "$OUT/eval_damaged/metrics.json" <<'PY'
+import json, sys
+want, damaged = (json.load(open(p)) for p in sys.argv[1:3])
+assert damaged["log_bytes_skipped"] == 1000 and damaged["log_complete"] is False
+assert want["log_bytes_skipped"] == 0 and want["log_complete"] is True
+for key in ("log_bytes_skipped", "log_complete", "command_line", "source", "timing"):
+    want.pop(key), damaged.pop(key)
+assert damaged == want, [k for k in want if want[k] != damaged.get(k)]
+print("frame_accounting: a damaged copy (1000 stray bytes, a truncated last event) gives the figures of its whole events")
+PY
