@@ -31,6 +31,7 @@ struct Args {
   std::string lcm_url;
   std::string suffix;
   int queue = 10000;
+  bool check = false;
 };
 
 GlobalMapOptions load_options(const std::string& path) {
@@ -131,6 +132,10 @@ int run(const Args& a) {
     std::fprintf(stderr, "main_robot: %s\n", e.what());
     return 2;
   }
+  if (a.check) {  // e.g. after editing /etc/elaslam/elaslam.yaml, before restarting the service
+    std::printf("main_robot: %s (%s): valid\n", cfg.path.c_str(), cfg.origin.c_str());
+    return 0;
+  }
   lcm::LCM lc(a.lcm_url);
   if (!lc.good()) {
     std::fprintf(stderr, "main_robot: cannot open LCM (%s). Multicast on loopback needs a route: "
@@ -206,6 +211,7 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", a.lcm_url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
   app.add_option("--channel-suffix", a.suffix, "suffix appended to every channel name");
   app.add_option("--event-queue", a.queue, "LMAP_EVENT subscription queue capacity")->check(CLI::Range(1, 1000000));
+  app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

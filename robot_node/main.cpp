@@ -29,6 +29,7 @@ struct Args {
   int notice_queue = 1000;
   double status_period_s = 1.0;
   bool verbose = false;
+  bool check = false;
 };
 
 class Shell {
@@ -130,6 +131,12 @@ int run(const Args& a) {
     std::fprintf(stderr, "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
     return 2;
   }
+  if (a.check) {  // e.g. after editing /etc/elaslam/elaslam.yaml, before restarting the service
+    std::printf("robot_node %d: %s (%s): valid, mode %s\n", a.robot, cfg.path.c_str(), cfg.origin.c_str(),
+                to_string(o.mode));
+    if (a.verbose) std::printf("%s\n", effective.c_str());
+    return 0;
+  }
   lcm::LCM lc(a.lcm_url);
   if (!lc.good()) {
     std::fprintf(stderr, "robot_node %d: cannot open LCM (%s). Multicast on loopback needs a route: "
@@ -181,6 +188,7 @@ int main(int argc, char** argv) {
   app.add_option("--notice-queue", a.notice_queue, "DYNAMIC_NOTICE queue capacity")->check(CLI::Range(1, 100000));
   app.add_option("--status-period", a.status_period_s, "seconds between STATUS_ROBOT messages")->check(CLI::Range(0.05, 60.0));
   app.add_flag("--verbose", a.verbose, "print the effective configuration");
+  app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -203,4 +203,22 @@ TEST(SystemSimulator, FindsTheInstalledDefaultConfig) {
       << robot.stderr_text();
 }
 
+// --check validates a node's configuration without starting it (after an edit of
+// /etc/elaslam/elaslam.yaml on a robot, before restarting its service).
+TEST(SystemSimulator, NodesCheckTheirConfigWithoutStarting) {
+  const std::string bin = std::string(ELASLAM_BINARY_DIR) + "/bin/";
+  Child robot_ok(bin + "robot_node", {"--robot", "2", "--config", kConfig, "--check"});
+  EXPECT_EQ(robot_ok.wait(), 0) << robot_ok.stderr_text();
+  Child main_ok(bin + "main_robot", {"--config", kConfig, "--check"});
+  EXPECT_EQ(main_ok.wait(), 0) << main_ok.stderr_text();
+  const std::string bad = testing::TempDir() + "/bad_robot.yaml";
+  std::ofstream(bad) << "robot:\n  mode: fast\n";
+  Child robot_bad(bin + "robot_node", {"--robot", "2", "--config", bad, "--check"});
+  EXPECT_EQ(robot_bad.wait(), 2);
+  EXPECT_NE(robot_bad.stderr_text().find("robot.mode: invalid value 'fast'"), std::string::npos) << robot_bad.stderr_text();
+  Child main_bad(bin + "main_robot", {"--config", bad, "--check"});
+  EXPECT_EQ(main_bad.wait(), 2);
+  EXPECT_NE(main_bad.stderr_text().find("main: missing"), std::string::npos) << main_bad.stderr_text();
+}
+
 }  // namespace
