@@ -55,6 +55,7 @@ if [ ${#missing[@]} -gt 0 ]; then
   fi
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get update -qq
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  NEW_PACKAGES=1  # e.g. a JDK: an existing build must look again (CMake finds Java at configure time)
 fi
 
 # ---- Python virtual environment (tools) -----------------------------------------
@@ -78,7 +79,7 @@ WERROR=OFF
 # Configure when there is no build yet or its options differ from these (a build
 # configured by hand keeps its own; CI turns warnings into errors).
 cache="$BUILD_DIR/CMakeCache.txt"
-if [ ! -f "$BUILD_DIR/build.ninja" ] || ! grep -qx "ELASLAM_SANITIZE:BOOL=$SANITIZE" "$cache" ||
+if [ ! -f "$BUILD_DIR/build.ninja" ] || [ -n "${NEW_PACKAGES:-}" ] || ! grep -qx "ELASLAM_SANITIZE:BOOL=$SANITIZE" "$cache" ||
    { [ "$WERROR" = ON ] && ! grep -qx "ELASLAM_WERROR:BOOL=ON" "$cache"; }; then
   cmake -S "$ROOT" -B "$BUILD_DIR" -G Ninja -DELASLAM_WERROR="$WERROR" -DELASLAM_SANITIZE="$SANITIZE" \
     $([ "$SANITIZE" = ON ] && echo -DCMAKE_BUILD_TYPE=RelWithDebInfo) >/dev/null
