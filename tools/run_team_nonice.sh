@@ -1,0 +1,311 @@
+#!/usr/bin/env bash
+# Run the team live, one process per role over LCM, record every channel, evaluate
+# the recording against ground truth and print the summary, beside what plain
+# EKF-SLAM gives on the same scenario and seed.
+#
+#   tools/run_team.sh [--config FILE] [--mode M] [--rate F] [--dynamism P] [--speed V]
+#                     [--seed S] [--frames N] [--out DIR] [--hosts] [--port P] [--in-process]
+#                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
+#
+# - Works as the very first command on a fresh clone: does the set-up when needed
+#   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
+#   Arguments are checked before any of that starts.
+# - Defaults: config/paper.yaml (its scenario: 50 % of the landmarks moving at
+#   0.5 m/s, seed 1, 150 frames at 10 Hz), the config's robot.mode (ela).
+# - Starts lcm-logger (DIR/run.lcmlog), main_robot, one robot_node per robot of the
+#   scenario, a progress line (monitor: frame k/N, poses, moving landmarks found),
+#   then the simulator, which waits until every node has announced itself on
+#   STATUS_* and then publishes at F frames/s. Process logs go to DIR/logs/.
+# - The summary (tools' evaluate): per-robot and global map error, moving landmarks
+#   detected, latency, frames per robot (dropped / not yet started / missing from
+#   the recording), and the same scenario and seed run in process with plain `ekf`
+#   (--no-baseline: without). DIR/metrics.json has everything, with provenance.
+# - As root, the whole team runs in a private network namespace with multicast on
+#   its loopback (nothing leaves the machine); with --hosts each process gets a
+#   namespace of its own, joined by a bridge (veth pairs), as separate onboard
+#   computers would be (multicast TTL 1). Not as root: the LCM URL comes from
+#   LCM_DEFAULT_URL (or LCM's default) and multicast on loopback must be enabled.
+# - A process that dies is reported with its exit status; the script then exits 1.
+#   Ctrl-C stops everything, says the run was interrupted and exits 130. Nothing is
+#   left behind (processes, namespaces).
+# - --in-process runs the same scenario in one process, in lockstep (run_scenario).
+# - --build-dir DIR (or ELASLAM_BUILD_DIR) takes the programs from DIR/bin (default:
+#   build/); tests pass their own build dir.
+# - --realtime (root): real-time scheduling (SCHED_FIFO, chrt) as an onboard
+#   computer would give its control loop: the simulator at priority 60 (it publishes
+#   a frame's SENSOR messages in one burst, not preempted by the robots it wakes),
+#   every robot_node and lcm-logger at 50 (the logger at the robots' level, or its
+#   LCM queue overflows while the robots hold both CPUs), main_robot normal. On this
+#   2-vCPU machine it brings sensor-to-pose p99 at 100 Hz under 1 ms
+#   (docs/benchmarks.md). --no-progress: no progress line (measurements: one process
+#   fewer woken by every datagram).
+# Exit status: 0 done, 1 the run failed, 2 bad arguments, 130 interrupted.
+set -euo pipefail
+# The real source tree, also when started through a symbolic link (a scratch copy).
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
+BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
+CONFIG="$ROOT/config/paper.yaml"
+OUT=""
+MODE=""
+PORT=7667
+HOSTS=0
+IN_PROCESS=0
+INSIDE=0
+REALTIME=0
+PROGRESS=1
+BASELINE=1
+SIM_ARGS=()      # overrides for the simulator (and run_scenario)
+EVAL_ARGS=()     # the same facts, for the record when a log lacks RUN_INFO
+
+usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+die() { echo "run_team.sh: $*" >&2; exit 2; }
+# number NAME VALUE LO HI [int]: VALUE is a number (an integer with "int") in [LO, HI].
+number() {
+  local re='^[+]?([0-9]+([.][0-9]*)?|[.][0-9]+)([eE][-+]?[0-9]+)?$'
+  [ "${5:-}" = int ] && re='^[+]?[0-9]+$'
+  [[ "$2" =~ $re ]] || die "$1 must be ${5:+an integer }in [$3, $4], got '$2'"
+  awk -v v="$2" -v lo="$3" -v hi="$4" 'BEGIN { exit !(v + 0 >= lo + 0 && v + 0 <= hi + 0) }' ||
+    die "$1 must be in [$3, $4], got $2"
+}
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir)
+      [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
+    --config) CONFIG="$2"; shift 2 ;;
+    --out) OUT="$2"; shift 2 ;;
+    --mode) MODE="$2"; shift 2 ;;
+    --dynamism) number --dynamism "$2" 0 100; SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
+    --speed) number --speed "$2" 0 100; SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
+    --seed) number --seed "$2" 0 2147483647 int; SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
+    --rate) number --rate "$2" 0.001 100000; SIM_ARGS+=("$1" "$2"); shift 2 ;;
+    --frames) number --frames "$2" 1 100000000 int; SIM_ARGS+=("$1" "$2"); shift 2 ;;
+    --port) number --port "$2" 1 65535 int; PORT="$2"; shift 2 ;;
+    --build-dir) BUILD_DIR="$2"; shift 2 ;;
+    --hosts) HOSTS=1; shift ;;
+    --in-process) IN_PROCESS=1; shift ;;
+    --realtime) REALTIME=1; shift ;;
+    --no-progress) PROGRESS=0; shift ;;
+    --no-baseline) BASELINE=0; shift ;;
+    --inside) INSIDE=1; shift ;;  # internal: already inside the namespace, set-up done
+    -h|--help) usage 0 ;;
+    *) echo "run_team.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+case "$MODE" in ""|ekf|gated|ela|consensus) ;; *) die "--mode must be ekf, gated, ela or consensus, got '$MODE'" ;; esac
+[ -f "$CONFIG" ] || die "no such config file: $CONFIG"
+CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
+[ "$HOSTS" -eq 0 ] || [ "$(id -u)" -eq 0 ] || die "--hosts needs root (network namespaces)"
+[ "$IN_PROCESS" -eq 0 ] || [ "$HOSTS" -eq 0 ] || die "--in-process and --hosts do not go together"
+if [ "$REALTIME" -eq 1 ] && { [ "$(id -u)" -ne 0 ] || ! command -v chrt >/dev/null; }; then
+  echo "run_team.sh: --realtime needs root and chrt (util-linux); running with normal scheduling" >&2
+  REALTIME=0
+fi
+[ -n "$OUT" ] || OUT="$ROOT/runs/team_$(date +%Y%m%d_%H%M%S)"
+mkdir -p "$OUT/logs" 2>/dev/null || die "cannot create the output directory $OUT"
+OUT="$(cd "$OUT" && pwd)"
+
+# Whoever is outermost says that the run was interrupted (once).
+NESTED_PID=""
+interrupted() {
+  trap - INT TERM
+  if [ -n "$NESTED_PID" ]; then kill -TERM "$NESTED_PID" 2>/dev/null || true; wait "$NESTED_PID" 2>/dev/null || true; fi
+  [ -n "${ELASLAM_RUN_TEAM_NESTED:-}" ] || echo -e "\nrun_team.sh: interrupted: the run did not finish (partial logs in $OUT)" >&2
+  exit 130
+}
+trap interrupted INT TERM
+
+TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor)
+if [ "$INSIDE" -eq 0 ]; then
+  first=0
+  if [ ! -f "$BUILD_DIR/build.ninja" ] || [ ! -x "$ROOT/.venv/bin/python" ]; then
+    echo "run_team.sh: first run: set-up (Debian packages, Python venv, build configuration)" >&2
+    first=1
+  fi
+  "$ROOT/tools/setup.sh" --build-dir "$BUILD_DIR" >&2
+  echo "run_team.sh: building ${TARGETS[*]} in ${BUILD_DIR#$ROOT/}$([ "$first" -eq 1 ] &&
+    echo " (the first build takes a few minutes)")" >&2
+  build_log="$OUT/logs/build.log"
+  if ! cmake --build "$BUILD_DIR" --target "${TARGETS[@]}" -j "$(nproc)" >"$build_log" 2>&1; then
+    tail -n 30 "$build_log" >&2
+    echo "run_team.sh: the build failed (log: $build_log)" >&2
+    exit 1
+  fi
+fi
+[ -d "$BUILD_DIR/bin" ] || die "no programs in $BUILD_DIR/bin (build them: cmake --build $BUILD_DIR)"
+BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
+BIN="$BUILD_DIR/bin"
+# The whole configuration with the overrides, checked by the simulator before anything starts.
+"$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" --check >"$OUT/logs/check.log" 2>&1 ||
+  { sed 's/^/  /' "$OUT/logs/check.log" >&2; die "the configuration with these arguments is not valid"; }
+
+# The mode for the report: the override, else the config's robot.mode.
+config_mode() { awk '/^robot:/ {r = 1; next} /^[^ #]/ {r = 0} r && $1 == "mode:" {print $2; exit}' "$CONFIG"; }
+MODE_NAME="${MODE:-$(config_mode)}"
+BASE_ARGS=()
+[ "$BASELINE" -eq 1 ] && [ "$MODE_NAME" != ekf ] && BASE_ARGS=(--baseline ekf)
+
+if [ "$IN_PROCESS" -eq 1 ]; then
+  exec "$BIN/run_scenario" --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} "${SIM_ARGS[@]}" "${BASE_ARGS[@]}"
+fi
+
+ROBOTS=($("$BIN/simulator" --config "$CONFIG" --list-robots))
+MODE_ARGS=(${MODE:+--mode "$MODE"})
+PIDS=()
+NAMES=()
+NETNS=()
+MONITOR_PID=""
+declare -A HOST_NS
+
+cleanup() {
+  local pid
+  for pid in "${PIDS[@]}" $MONITOR_PID; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${PIDS[@]}" $MONITOR_PID; do wait "$pid" 2>/dev/null || true; done
+  for ns in "${NETNS[@]}"; do ip netns del "$ns" 2>/dev/null || true; done
+  PIDS=(); NETNS=(); MONITOR_PID=""
+}
+trap cleanup EXIT
+
+# start NAME PREFIX... -- CMD...: a process in the background, output in logs/NAME.log.
+start() {
+  local name="$1"; shift
+  local prefix=()
+  while [ "$1" != "--" ]; do prefix+=("$1"); shift; done
+  shift
+  "${prefix[@]}" "$@" >"$OUT/logs/$name.log" 2>&1 &
+  PIDS+=($!)
+  NAMES+=("$name")
+}
+
+# One namespace per "host", joined by the bridge in the hub namespace.
+make_host() {
+  local name="$1" index="$2" ns="elaslam_${$}_$1"
+  ip netns add "$ns"; NETNS+=("$ns"); HOST_NS[$name]="$ns"
+  ip link add "v$$_$index" type veth peer name eth0 netns "$ns"
+  ip link set "v$$_$index" netns "$HUB" up
+  ip -n "$HUB" link set "v$$_$index" master br0 up
+  ip -n "$ns" link set lo up
+  ip -n "$ns" addr add "10.77.0.$((index + 1))/24" dev eth0
+  ip -n "$ns" link set eth0 up multicast on
+  ip -n "$ns" route add 224.0.0.0/4 dev eth0
+}
+
+# lcm-logger's LCM queue holds 30 messages; a burst (the first landmarks' ADD
+# events, ~30 at once a few frames in) overflows it when the logger waits for a CPU.
+# As root it gets a higher share (nice -10), unless it runs real-time anyway.
+logger_nice() { [ "$REALTIME" -eq 0 ] && [ "$(id -u)" -eq 0 ] && return 0; }
+
+# Real-time priority prefix for a role (--realtime), empty otherwise.
+rt() { [ "$REALTIME" -eq 1 ] && echo chrt -f "$1"; return 0; }
+
+launch() {  # $1: how to run each role (a function printing the prefix)
+  local where="$1"
+  start logger $($where main) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
+  start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json"
+  for r in "${ROBOTS[@]}"; do
+    start "robot_node_$r" $($where "robot$r") $(rt 50) -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}"
+  done
+  if [ "$PROGRESS" -eq 1 ]; then  # to the terminal; not supervised (a failure costs only the line)
+    $($where main) "$BIN/monitor" &
+    MONITOR_PID=$!
+  fi
+  start simulator $($where sim) $(rt 60) -- "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) \
+    ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}"
+}
+
+# Wait for the simulator to finish; any other process that exits first is a failure.
+supervise() {
+  local sim_pid="${PIDS[-1]}" i
+  while kill -0 "$sim_pid" 2>/dev/null; do
+    for i in "${!PIDS[@]}"; do
+      [ "${PIDS[$i]}" = "$sim_pid" ] && continue
+      if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
+        local rc=0; wait "${PIDS[$i]}" || rc=$?
+        echo "run_team.sh: ${NAMES[$i]} died with exit status $rc (log: $OUT/logs/${NAMES[$i]}.log)" >&2
+        tail -n 5 "$OUT/logs/${NAMES[$i]}.log" >&2 || true
+        return 1
+      fi
+    done
+    sleep 0.1
+  done
+  local rc=0; wait "$sim_pid" || rc=$?
+  if [ "$rc" -ne 0 ]; then
+    echo "run_team.sh: simulator exited with status $rc (log: $OUT/logs/simulator.log)" >&2
+    tail -n 5 "$OUT/logs/simulator.log" >&2 || true
+    return 1
+  fi
+}
+
+# Stop every node (SIGINT: clean exit with a final status line), bounded.
+stop_all() {
+  local failed=0 i
+  sleep 0.3  # let the last frame's messages arrive at the logger
+  for i in "${!PIDS[@]}"; do kill -INT "${PIDS[$i]}" 2>/dev/null || true; done
+  for i in "${!PIDS[@]}"; do
+    local rc=0 waited=0
+    while kill -0 "${PIDS[$i]}" 2>/dev/null && [ $waited -lt 50 ]; do sleep 0.1; waited=$((waited + 1)); done
+    kill -KILL "${PIDS[$i]}" 2>/dev/null || true
+    wait "${PIDS[$i]}" || rc=$?
+    if [ "$rc" -ne 0 ] && [ "${NAMES[$i]}" != simulator ]; then
+      echo "run_team.sh: ${NAMES[$i]} exited with status $rc (log: $OUT/logs/${NAMES[$i]}.log)" >&2
+      failed=1
+    fi
+  done
+  PIDS=()
+  if [ -n "$MONITOR_PID" ]; then
+    kill -INT "$MONITOR_PID" 2>/dev/null || true
+    wait "$MONITOR_PID" 2>/dev/null || true
+    MONITOR_PID=""
+  fi
+  return $failed
+}
+
+same_host() { :; }                       # every role here, no prefix
+own_host() { echo ip netns exec "${HOST_NS[$1]}" env "LCM_DEFAULT_URL=$URL"; }
+
+if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; then
+  # The whole team in a private namespace: run this script again inside it.
+  # In the background with `wait`: a signal to this script alone (kill, timeout,
+  # systemd) is handled at once, not after the run; netns_run.sh passes it on.
+  rc=0
+  ELASLAM_RUN_TEAM_NESTED=1 "$ROOT/tools/netns_run.sh" --port "$PORT" -- "$0" --inside --build-dir "$BUILD_DIR" \
+    --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} $([ "$REALTIME" -eq 1 ] && echo --realtime) \
+    $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" &
+  NESTED_PID=$!
+  wait "$NESTED_PID" || rc=$?
+  NESTED_PID=""
+  [ "$rc" -ne 130 ] || interrupted
+  exit $rc
+fi
+
+if [ "$HOSTS" -eq 1 ]; then
+  HUB="elaslam_${$}_hub"
+  ip netns add "$HUB"; NETNS+=("$HUB")
+  ip -n "$HUB" link add br0 type bridge
+  ip -n "$HUB" link set br0 type bridge mcast_snooping 0
+  ip -n "$HUB" link set br0 up
+  URL="udpm://239.255.76.67:${PORT}?ttl=1&recv_buf_size=8388608"
+  idx=0
+  for h in sim main "${ROBOTS[@]/#/robot}"; do
+    make_host "$h" $idx
+    idx=$((idx + 1))
+  done
+  echo "run_team.sh: ${#HOST_NS[@]} hosts on a bridge (10.77.0.0/24), LCM $URL"
+  launch own_host
+elif [ "$INSIDE" -eq 1 ]; then
+  echo "run_team.sh: team in a private network namespace, LCM $LCM_DEFAULT_URL"
+  launch same_host
+else
+  echo "run_team.sh: not root: using ${LCM_DEFAULT_URL:-the LCM default URL}. Multicast on loopback needs" >&2
+  echo "  sudo ip link set lo multicast on && sudo ip route add 224.0.0.0/4 dev lo" >&2
+  launch same_host
+fi
+echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator, lcm-logger; logs in $OUT/logs" >&2
+
+status=0
+supervise || status=1
+stop_all || status=1
+[ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
+echo "run_team.sh: recorded $OUT/run.lcmlog"
+"$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --config "$CONFIG" "${BASE_ARGS[@]}" ${MODE_NAME:+--mode "$MODE_NAME"} \
+  "${EVAL_ARGS[@]}"
+echo "run_team.sh: results in $OUT (metrics.json, frames.csv, map.csv, trajectories/, logs/)"
