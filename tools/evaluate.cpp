@@ -34,6 +34,7 @@
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/node_status_t.hpp"
@@ -89,15 +90,15 @@ bool decode(const LogEvent* ev, Msg* m, LogData* d) {
 void on_truth(const ground_truth_t& gt, LogData* d) {
   FrameData f;
   f.frame = gt.frame;
-  for (int i = 0; i < gt.num_robots && i < 8; ++i) {
+  for (int i = 0; i < contract::bounded(gt.num_robots, contract::kMaxRobots); ++i) {
     f.robot_ids.push_back(gt.robot_ids[i]);
     f.true_poses.push_back({gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta});
   }
   int max_id = -1;
-  for (int i = 0; i < gt.num_landmarks && i < 256; ++i) max_id = std::max(max_id, gt.landmarks[i].id);
+  for (int i = 0; i < contract::bounded(gt.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) max_id = std::max(max_id, gt.landmarks[i].id);
   f.true_landmarks.assign(static_cast<std::size_t>(max_id + 1), Eigen::Vector2d::Zero());
   f.truly_moving.assign(static_cast<std::size_t>(max_id + 1), 0);
-  for (int i = 0; i < gt.num_landmarks && i < 256; ++i) {
+  for (int i = 0; i < contract::bounded(gt.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) {
     const auto& l = gt.landmarks[i];
     if (l.id < 0) continue;
     f.true_landmarks[static_cast<std::size_t>(l.id)] = {l.x, l.y};
@@ -110,14 +111,14 @@ void on_truth(const ground_truth_t& gt, LogData* d) {
 void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   MapRecord m;
   m.received_us = received;
-  for (int i = 0; i < g.num_landmarks && i < 256; ++i) {
+  for (int i = 0; i < contract::bounded(g.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) {
     const auto& l = g.landmarks[i];
     m.landmarks.push_back({l.id, {l.x, l.y}});
     Eigen::Matrix2d C;
     C << l.cov[0][0], l.cov[0][1], l.cov[1][0], l.cov[1][1];
     m.full.push_back({l.id, {l.x, l.y}, C});
   }
-  for (int i = 0; i < g.num_moving && i < 256; ++i) m.moving.push_back(g.moving_ids[i]);
+  for (int i = 0; i < contract::bounded(g.num_moving, contract::kMaxLandmarksPerMessage); ++i) m.moving.push_back(g.moving_ids[i]);
   // The first GLOBAL_MAP stamped k is the one main_robot sends when every robot has
   // finished frame k; later ones stamped k (the periodic publication) may already
   // hold some of frame k+1's events.
@@ -168,7 +169,7 @@ bool read_log(const std::string& path, LogData* d, std::string* why) {
       d->sensor_frames[m.robot_id].push_back(m.frame);
       auto& t = d->sensor_utime[m.frame];
       t = std::max(t, m.utime);
-      for (int i = 0; i < m.num_obs && i < 64; ++i) d->observed[m.frame].push_back(m.obs[i].landmark_id);
+      for (int i = 0; i < contract::bounded(m.num_obs, contract::kMaxObsPerFrame); ++i) d->observed[m.frame].push_back(m.obs[i].landmark_id);
     } else if (robot_of(ch, "STATUS_ROBOT_") > 0) {
       node_status_t m;
       if (!decode(ev, &m, d)) continue;
@@ -221,7 +222,7 @@ std::string reported_mode(const LogData& d, bool* disagree) {
 
 nlohmann::json run_info_json(const run_info_t& m) {
   nlohmann::json robots = nlohmann::json::array();
-  for (int i = 0; i < m.num_robots && i < 8; ++i) robots.push_back(m.robot_ids[i]);
+  for (int i = 0; i < contract::bounded(m.num_robots, contract::kMaxRobots); ++i) robots.push_back(m.robot_ids[i]);
   return {{"source", m.source},   {"version", m.version},
           {"scenario", m.scenario}, {"mode", m.mode},
           {"seed", m.seed},       {"dynamism_percent", m.dynamism_percent},

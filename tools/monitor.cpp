@@ -17,6 +17,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/common/lcm_util.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
@@ -81,7 +82,7 @@ class Progress {
   void on_map(const lcm::ReceiveBuffer* rb, const std::string&) {
     global_map_t m;
     if (!decode(rb, &m)) return;
-    for (int i = 0; i < m.num_moving && i < 256; ++i) moving_.insert(m.moving_ids[i]);
+    for (int i = 0; i < contract::bounded(m.num_moving, contract::kMaxLandmarksPerMessage); ++i) moving_.insert(m.moving_ids[i]);
   }
   void on_notice(const lcm::ReceiveBuffer* rb, const std::string&) {
     dynamic_notice_t m;

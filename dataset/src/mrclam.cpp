@@ -7,7 +7,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace elaslam::mrclam {
 namespace {
@@ -316,8 +316,8 @@ FrameSource::FrameSource(const Dataset& d, const Options& o) : options_(o), land
   if (!(std::isfinite(o.rate_hz) && o.rate_hz > 0.0))
     throw std::invalid_argument("mrclam: rate_hz must be > 0, got " + std::to_string(o.rate_hz));
   if (o.robots.empty()) throw std::invalid_argument("mrclam: robots is empty");
-  if (o.robots.size() > static_cast<std::size_t>(channels::kMaxRobots))
-    throw std::invalid_argument("mrclam: robots: more than " + std::to_string(channels::kMaxRobots));
+  if (o.robots.size() > static_cast<std::size_t>(contract::kMaxRobots))
+    throw std::invalid_argument("mrclam: robots: more than " + std::to_string(contract::kMaxRobots));
   for (std::size_t i = 0; i < o.robots.size(); ++i) {
     if (!d.has_robot(o.robots[i]))
       throw std::invalid_argument("mrclam: robots: robot " + std::to_string(o.robots[i]) +
@@ -332,7 +332,7 @@ FrameSource::FrameSource(const Dataset& d, const Options& o) : options_(o), land
   for (double v : {o.odom_var_trans_per_m, o.odom_var_rot_per_rad, o.odom_var_rot_per_m})
     if (!(std::isfinite(v) && v >= 0.0))
       throw std::invalid_argument("mrclam: odom_var_* must be finite and >= 0, got " + std::to_string(v));
-  if (landmarks_.size() + o.robots.size() > static_cast<std::size_t>(channels::kMaxLandmarksPerMessage))
+  if (landmarks_.size() + o.robots.size() > static_cast<std::size_t>(contract::kMaxLandmarksPerMessage))
     throw std::invalid_argument("mrclam: more landmarks than ground_truth_t holds");
 
   compute_frame_times(d);
@@ -460,7 +460,7 @@ void FrameSource::compute_robot(const Dataset& d, const RobotSeries& s, PerRobot
     }
     // Distinct subjects per frame <= number of subjects (20) < 64: never truncated.
     const int count = static_cast<int>(out->obs.size()) - begin;
-    if (count > channels::kMaxObsPerFrame) out->obs.resize(static_cast<std::size_t>(begin + channels::kMaxObsPerFrame));
+    if (count > contract::kMaxObsPerFrame) out->obs.resize(static_cast<std::size_t>(begin + contract::kMaxObsPerFrame));
   }
   out->obs_begin[n] = static_cast<int>(out->obs.size());
   st->used = static_cast<long>(out->obs.size());

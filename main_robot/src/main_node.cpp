@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace elaslam {
 namespace {
@@ -35,10 +35,10 @@ Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
 
 MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   robot_frame_.fill(-1);
-  pending_.reserve(256);
-  notices_.reserve(256);
-  snap_lms_.reserve(channels::kMaxLandmarksPerMessage);
-  snap_moving_.reserve(channels::kMaxLandmarksPerMessage);
+  pending_.reserve(contract::kMaxLandmarksPerMessage);
+  notices_.reserve(contract::kMaxLandmarksPerMessage);
+  snap_lms_.reserve(contract::kMaxLandmarksPerMessage);
+  snap_moving_.reserve(contract::kMaxLandmarksPerMessage);
 }
 
 std::string MainNode::validate(const landmark_event_t& m) const {
@@ -60,10 +60,10 @@ std::string MainNode::validate(const lmap_snapshot_t& m) const {
   if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return str("robot_id outside [1, 8]", m.robot_id);
   if (m.seq < 0) return str("seq is negative", m.seq);
   if (m.frame < 0) return str("frame is negative", m.frame);
-  if (m.num_landmarks < 0 || m.num_landmarks > channels::kMaxLandmarksPerMessage)
-    return str("num_landmarks outside [0, 256]", m.num_landmarks);
-  if (m.num_moving < 0 || m.num_moving > channels::kMaxLandmarksPerMessage)
-    return str("num_moving outside [0, 256]", m.num_moving);
+  if (m.num_landmarks < 0 || m.num_landmarks > contract::kMaxLandmarksPerMessage)
+    return str(contract::count_outside("num_landmarks", contract::kMaxLandmarksPerMessage).c_str(), m.num_landmarks);
+  if (m.num_moving < 0 || m.num_moving > contract::kMaxLandmarksPerMessage)
+    return str(contract::count_outside("num_moving", contract::kMaxLandmarksPerMessage).c_str(), m.num_moving);
   for (int k = 0; k < m.num_landmarks; ++k) {
     const landmark_estimate_t& l = m.landmarks[k];
     if (l.id < 0 || l.id >= map_.max_landmark_id()) return str("landmark id outside [0, max_landmark_id)", l.id);
@@ -157,7 +157,7 @@ const global_map_t& MainNode::global_map_msg(std::int64_t now_utime, int frame) 
   int n = 0, m = 0;
   for (int id = 0; id < map_.max_landmark_id(); ++id) {
     const GlobalEntry& g = map_.entry(id);
-    if (g.status == GlobalStatus::kStatic && n < channels::kMaxLandmarksPerMessage) {
+    if (g.status == GlobalStatus::kStatic && n < contract::kMaxLandmarksPerMessage) {
       global_landmark_t& l = msg_.landmarks[n++];
       l.id = id;
       l.x = g.fused.x();
@@ -167,7 +167,7 @@ const global_map_t& MainNode::global_map_msg(std::int64_t now_utime, int frame) 
       l.contributors = static_cast<int16_t>(g.contributors());
       l.status = global_landmark_t::STATIC;
       l.status_frame = g.status_frame;
-    } else if (g.status == GlobalStatus::kMoving && m < channels::kMaxLandmarksPerMessage) {
+    } else if (g.status == GlobalStatus::kMoving && m < contract::kMaxLandmarksPerMessage) {
       msg_.moving_ids[m++] = id;
     }
   }

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace elaslam {
 namespace {
@@ -50,7 +50,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
 std::string RobotNode::validate(const sensor_frame_t& m) const {
   if (m.robot_id != robot_id_) return str("robot_id is not this robot's", m.robot_id);
   if (m.frame < 0) return str("frame is negative", m.frame);
-  if (m.num_obs < 0 || m.num_obs > kMaxObservations) return str("num_obs outside [0, 64]", m.num_obs);
+  if (m.num_obs < 0 || m.num_obs > kMaxObservations) return str(contract::count_outside("num_obs", kMaxObservations).c_str(), m.num_obs);
   if (!finite(m.odom_x) || !finite(m.odom_y) || !finite(m.odom_theta)) return "odometer reading is not finite";
   if (std::fabs(m.odom_x) > 1e6 || std::fabs(m.odom_y) > 1e6) return "odometer position beyond 1e6 m";
   for (double v : {m.odom_var_trans_per_m, m.odom_var_rot_per_rad, m.odom_var_rot_per_m})
@@ -180,7 +180,7 @@ const lmap_snapshot_t& RobotNode::make_snapshot(std::int64_t now_utime) {
   snapshot_.robot_id = static_cast<int16_t>(robot_id_);
   snapshot_.seq = seq_;
   int n = 0;
-  for (int slot = 0; slot < f.num_landmarks() && n < channels::kMaxLandmarksPerMessage; ++slot) {
+  for (int slot = 0; slot < f.num_landmarks() && n < contract::kMaxLandmarksPerMessage; ++slot) {
     const int id = f.id_at(slot);
     if (robot_.lmap()[id].status != LandmarkStatus::kStatic) continue;  // candidates are not the map
     landmark_estimate_t& l = snapshot_.landmarks[n++];
@@ -193,7 +193,7 @@ const lmap_snapshot_t& RobotNode::make_snapshot(std::int64_t now_utime) {
   snapshot_.num_landmarks = static_cast<int16_t>(n);
   int m = 0;
   const LMap& lm = robot_.lmap();
-  for (int id = 0; id < lm.size() && m < channels::kMaxLandmarksPerMessage; ++id) {
+  for (int id = 0; id < lm.size() && m < contract::kMaxLandmarksPerMessage; ++id) {
     const LMapEntry& e = lm[id];
     if (e.status == LandmarkStatus::kMoving || (e.status == LandmarkStatus::kCandidate && e.was_moving))
       snapshot_.moving_ids[m++] = id;
@@ -206,7 +206,7 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
   std::string problem;
   if (msg.landmark_id < 0 || msg.landmark_id >= options_.ekf.max_landmark_id)
     problem = str("landmark_id outside [0, max_landmark_id)", msg.landmark_id);
-  else if (msg.detected_by < 1 || msg.detected_by > channels::kMaxRobots)
+  else if (msg.detected_by < 1 || msg.detected_by > contract::kMaxRobots)
     problem = str("detected_by outside [1, 8]", msg.detected_by);
   if (!problem.empty()) {
     ++counters_.rejected_inputs;

@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace elaslam::sim {
 
@@ -70,8 +71,8 @@ elaslam::run_info_t to_run_info(const ScenarioOptions& o, const std::string& sce
   m.landmark_speed_mps = o.landmark_speed_mps;
   m.rate_hz = o.rate_hz;
   m.frames = o.frames;
-  m.num_robots = static_cast<std::int16_t>(o.robots.size());  // <= 8: checked by check_scenario
-  for (std::size_t i = 0; i < o.robots.size() && i < 8; ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
+  m.num_robots = static_cast<std::int16_t>(o.robots.size());  // <= kMaxRobots: checked by check_scenario
+  for (std::size_t i = 0; i < o.robots.size() && i < static_cast<std::size_t>(contract::kMaxRobots); ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
   YAML::Node root;
   try {
     root = YAML::Load(effective_yaml);

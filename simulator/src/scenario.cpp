@@ -4,7 +4,7 @@
 #include <set>
 #include <sstream>
 
-#include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/simulator/layout.hpp"
 #include "elaslam/simulator/motion.hpp"
@@ -40,7 +40,7 @@ void parse_landmarks(config::Reader& r, LandmarkOptions* l) {
   std::string layout = "grid";
   r.read_enum("layout", &layout, {"grid", "cloister", "random"});
   l->layout = layout == "cloister" ? Layout::kCloister : layout == "random" ? Layout::kRandom : Layout::kGrid;
-  r.read("count", &l->count, 1, channels::kMaxLandmarksPerMessage);
+  r.read("count", &l->count, 1, contract::kMaxLandmarksPerMessage);
   auto want = [&](Layout which, const char* key) { return l->layout == which || r.has(key); };
   if (want(Layout::kGrid, "grid_columns")) r.read("grid_columns", &l->grid_columns, 1, 256);
   if (want(Layout::kGrid, "grid_rows")) r.read("grid_rows", &l->grid_rows, 1, 256);
@@ -53,7 +53,7 @@ void parse_landmarks(config::Reader& r, LandmarkOptions* l) {
 }
 
 void parse_robot(config::Reader& r, RobotPathOptions* p) {
-  r.read("id", &p->id, 1, channels::kMaxRobots);
+  r.read("id", &p->id, 1, contract::kMaxRobots);
   std::vector<double> c{p->center_x_m, p->center_y_m};
   r.read_vector("center_m", &c, 2, -kBig, kBig);
   p->center_x_m = c[0];
@@ -90,8 +90,8 @@ void check_robots(const ScenarioOptions& o, std::vector<Problem>* out) {
   for (std::size_t i = 0; i < o.robots.size(); ++i) {
     const RobotPathOptions& p = o.robots[i];
     const std::string key = "robots[" + std::to_string(i) + "]";
-    if (p.id < 1 || p.id > channels::kMaxRobots)
-      out->push_back({key + ".id", "must be in [1, " + std::to_string(channels::kMaxRobots) + "]"});
+    if (p.id < 1 || p.id > contract::kMaxRobots)
+      out->push_back({key + ".id", "must be in [1, " + std::to_string(contract::kMaxRobots) + "]"});
     if (!ids.insert(p.id).second) out->push_back({key + ".id", "duplicate robot id " + std::to_string(p.id)});
     const double step = p.speed_mps / o.rate_hz;
     if (step >= D)
@@ -147,8 +147,8 @@ std::vector<Problem> check_scenario(const ScenarioOptions& o) {
                                              " m (paper section 3.2) and below the world's size"});
   if (o.dynamism_percent < 0.0 || o.dynamism_percent > 100.0)
     out.push_back({"dynamism_percent", "must be in [0, 100], got " + num(o.dynamism_percent)});
-  if (o.robots.empty() || o.robots.size() > static_cast<std::size_t>(channels::kMaxRobots))
-    out.push_back({"robots", "need 1 to " + std::to_string(channels::kMaxRobots) + " robots"});
+  if (o.robots.empty() || o.robots.size() > static_cast<std::size_t>(contract::kMaxRobots))
+    out.push_back({"robots", "need 1 to " + std::to_string(contract::kMaxRobots) + " robots"});
   check_robots(o, &out);
   std::vector<Eigen::Vector2d> layout;
   std::string why;
@@ -179,7 +179,7 @@ void parse(config::Reader& r, ScenarioOptions* o) {
         o->robots.emplace_back();
         parse_robot(s, &o->robots.back());
       },
-      1, static_cast<std::size_t>(channels::kMaxRobots));
+      1, static_cast<std::size_t>(contract::kMaxRobots));
   if (o->robots.empty()) return;  // the list itself was bad: reported already
   for (const Problem& p : check_scenario(*o)) r.fail(p.key, p.what);
 }

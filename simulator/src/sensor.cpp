@@ -1,3 +1,4 @@
+#include "elaslam/common/contract.hpp"
 #include "elaslam/simulator/sensor.hpp"
 
 #include <algorithm>
@@ -41,7 +42,7 @@ int Sensor::observe(const Pose2& T_WB, const std::vector<Eigen::Vector2d>& p_Lin
     c.obs.bearing_rad = wrap_angle(z.bearing_rad + sigma_b * n_b);
     candidates_.push_back(c);
   }
-  constexpr std::size_t kCap = channels::kMaxObsPerFrame;
+  constexpr std::size_t kCap = contract::kMaxObsPerFrame;
   *truncated = 0;
   if (candidates_.size() > kCap) {
     std::nth_element(candidates_.begin(), candidates_.begin() + kCap, candidates_.end(),

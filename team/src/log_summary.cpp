@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
@@ -244,7 +245,7 @@ struct Reader {
 
 std::vector<int> robot_ids_of(const run_info_t& m) {
   std::vector<int> ids;
-  for (int i = 0; i < m.num_robots && i < channels::kMaxRobots; ++i) ids.push_back(m.robot_ids[i]);
+  for (int i = 0; i < m.num_robots && i < contract::kMaxRobots; ++i) ids.push_back(m.robot_ids[i]);
   return ids;
 }
 

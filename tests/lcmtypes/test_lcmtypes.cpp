@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
@@ -103,16 +104,16 @@ TEST(LcmTypes, SensorFrameFieldsSurvive) {
   EXPECT_EQ(d.obs[63].landmark_id, 71);
 }
 
-TEST(LcmTypes, ArraySizesMatchChannelConstants) {
-  // The capacities in channels.hpp mirror the .lcm array sizes; keep them in sync.
+TEST(LcmTypes, ArraySizesMatchTheContractConstants) {
+  // The capacities in contract.hpp mirror the .lcm array sizes (also static_asserts there).
   EXPECT_EQ(sizeof(sensor_frame_t::obs) / sizeof(sensor_frame_t::obs[0]),
-            static_cast<std::size_t>(channels::kMaxObsPerFrame));
+            static_cast<std::size_t>(contract::kMaxObsPerFrame));
   EXPECT_EQ(sizeof(ground_truth_t::robots) / sizeof(ground_truth_t::robots[0]),
-            static_cast<std::size_t>(channels::kMaxRobots));
+            static_cast<std::size_t>(contract::kMaxRobots));
   EXPECT_EQ(sizeof(global_map_t::landmarks) / sizeof(global_map_t::landmarks[0]),
-            static_cast<std::size_t>(channels::kMaxLandmarksPerMessage));
+            static_cast<std::size_t>(contract::kMaxLandmarksPerMessage));
   EXPECT_EQ(sizeof(lmap_snapshot_t::landmarks) / sizeof(lmap_snapshot_t::landmarks[0]),
-            static_cast<std::size_t>(channels::kMaxLandmarksPerMessage));
+            static_cast<std::size_t>(contract::kMaxLandmarksPerMessage));
   // Messages stay within one UDP datagram (LCM.md section 6: <= 65,499 bytes).
   EXPECT_LT(global_map_t{}.getEncodedSize(), 65000);
   EXPECT_LT(lmap_snapshot_t{}.getEncodedSize(), 65000);

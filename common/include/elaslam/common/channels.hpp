@@ -24,9 +24,4 @@ inline std::string status_main(const std::string& suffix = "") { return "STATUS_
 inline std::string status_sim(const std::string& suffix = "") { return "STATUS_SIM" + suffix; }
 inline std::string run_info(const std::string& suffix = "") { return "RUN_INFO" + suffix; }
 
-/// Capacities fixed by the message contract (lcmtypes/*.lcm array sizes).
-constexpr int kMaxObsPerFrame = 64;
-constexpr int kMaxRobots = 8;
-constexpr int kMaxLandmarksPerMessage = 256;
-
 }  // namespace elaslam::channels

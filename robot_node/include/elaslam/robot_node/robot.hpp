@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/consensus.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 #include "elaslam/robot_node/ela_gate.hpp"
@@ -18,7 +19,7 @@
 
 namespace elaslam {
 
-constexpr int kMaxObservations = 64;  // per frame, as in sensor_frame_t
+constexpr int kMaxObservations = contract::kMaxObsPerFrame;  // per frame, as in sensor_frame_t
 
 struct Observation {
   int landmark_id = -1;

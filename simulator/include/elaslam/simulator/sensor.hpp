@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/simulator/random.hpp"
 #include "elaslam/simulator/scenario.hpp"
@@ -21,7 +21,7 @@ struct Observation {
   double bearing_rad = 0.0;      // [rad] noisy, robot frame B, in [-pi, pi)
 };
 
-using ObservationArray = std::array<Observation, channels::kMaxObsPerFrame>;
+using ObservationArray = std::array<Observation, contract::kMaxObsPerFrame>;
 
 /// Noise-free range and bearing of p_LinW seen from T_WB.
 Observation true_observation(const Pose2& T_WB, const Eigen::Vector2d& p_LinW, std::int32_t id);
