@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/quantile.hpp"
 #include "elaslam/dataset/mrclam.hpp"
 
 namespace {
@@ -169,11 +170,6 @@ Detection detection(const mrclam::Dataset& d, const std::vector<int>& ids, doubl
   return out;
 }
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(std::min<double>(v.size() - 1, std::floor(q * static_cast<double>(v.size()))))];
-}
 
 struct RangeScale {
   double k0 = 0.0, k1 = 0.0, std_before = 0.0, std_after = 0.0;
@@ -449,7 +445,7 @@ int main(int argc, char** argv) {
     }
     const Detection det = detection(d, ids, rate, detect_range, deg2rad(detect_half_deg));
     const double p_frame = det.in_view > 0 ? static_cast<double>(det.reported) / static_cast<double>(det.in_view) : 0.0;
-    const double p99 = percentile(det.miss_streaks, 0.99), p999 = percentile(det.miss_streaks, 0.999);
+    const double p99 = quantile(det.miss_streaks, 0.99), p999 = quantile(det.miss_streaks, 0.999);
     // The rule sees thousands of miss runs in a run: it should wait longer than all
     // but 0.1 % of them. The per-frame detection probability for which the rule
     // (waiting until (1 - p)^n <= 0.01) waits p99.9 frames: (1 - p)^p999 = 0.01.
@@ -459,7 +455,7 @@ int main(int argc, char** argv) {
                 "p99.9 %.0f, max %.0f frames. Misses come in bursts; the missing rule waits p99.9 frames with a\n"
                 "per-frame detection probability of %.3f (robot.ela.detection_probability)\n",
                 detect_range, detect_half_deg, rate, p_frame, det.in_view, det.miss_streaks.size(),
-                percentile(det.miss_streaks, 0.5), percentile(det.miss_streaks, 0.9), p99, p999,
+                quantile(det.miss_streaks, 0.5), quantile(det.miss_streaks, 0.9), p99, p999,
                 det.miss_streaks.empty() ? 0.0 : *std::max_element(det.miss_streaks.begin(), det.miss_streaks.end()), p_eff);
     out["detection"] = {{"range_m", detect_range}, {"half_angle_deg", detect_half_deg}, {"reported_fraction", p_frame},
                         {"landmark_frames", det.in_view}, {"miss_run_p99_frames", p99}, {"miss_run_p999_frames", p999},

@@ -35,6 +35,7 @@
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/quantile.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/node_status_t.hpp"
@@ -44,6 +45,7 @@
 #include "elaslam/team/frame_accounting.hpp"
 #include "elaslam/team/log_reader.hpp"
 #include "elaslam/team/log_summary.hpp"
+#include "elaslam/team/frame_data.hpp"
 #include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
 
@@ -57,8 +59,8 @@ struct PoseRecord {
 
 struct MapRecord {
   std::vector<std::pair<int, Eigen::Vector2d>> landmarks;
-  std::vector<RunResult::MapLandmark> full;
   std::vector<int> moving;
+  std::vector<RunResult::MapLandmark> full;  // with covariances, for map.csv
   std::int64_t received_us = 0;
 };
 
@@ -79,46 +81,23 @@ struct LogData {
   bool complete = true;            // false: the log ends in a truncated event
 };
 
-
 template <typename Msg>
-bool decode(const LogEvent* ev, Msg* m, LogData* d) {
-  if (m->decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) >= 0) return true;
-  ++d->decode_errors[ev->channel];
+bool decode(const LogEvent& ev, Msg* m, LogData* d) {
+  if (m->decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) >= 0) return true;
+  ++d->decode_errors[ev.channel];
   return false;
-}
-
-void on_truth(const ground_truth_t& gt, LogData* d) {
-  FrameData f;
-  f.frame = gt.frame;
-  for (int i = 0; i < contract::bounded(gt.num_robots, contract::kMaxRobots); ++i) {
-    f.robot_ids.push_back(gt.robot_ids[i]);
-    f.true_poses.push_back({gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta});
-  }
-  int max_id = -1;
-  for (int i = 0; i < contract::bounded(gt.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) max_id = std::max(max_id, gt.landmarks[i].id);
-  f.true_landmarks.assign(static_cast<std::size_t>(max_id + 1), Eigen::Vector2d::Zero());
-  f.truly_moving.assign(static_cast<std::size_t>(max_id + 1), 0);
-  for (int i = 0; i < contract::bounded(gt.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) {
-    const auto& l = gt.landmarks[i];
-    if (l.id < 0) continue;
-    f.true_landmarks[static_cast<std::size_t>(l.id)] = {l.x, l.y};
-    f.truly_moving[static_cast<std::size_t>(l.id)] = l.moving ? 1 : 0;
-  }
-  f.time_s = static_cast<double>(gt.utime) * 1e-6;
-  d->truth[gt.frame] = std::move(f);
 }
 
 void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   MapRecord m;
   m.received_us = received;
+  read_map(g, &m.landmarks, &m.moving);
   for (int i = 0; i < contract::bounded(g.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) {
     const auto& l = g.landmarks[i];
-    m.landmarks.push_back({l.id, {l.x, l.y}});
     Eigen::Matrix2d C;
     C << l.cov[0][0], l.cov[0][1], l.cov[1][0], l.cov[1][1];
     m.full.push_back({l.id, {l.x, l.y}, C});
   }
-  for (int i = 0; i < contract::bounded(g.num_moving, contract::kMaxLandmarksPerMessage); ++i) m.moving.push_back(g.moving_ids[i]);
   // The first GLOBAL_MAP stamped k is the one main_robot sends when every robot has
   // finished frame k; later ones stamped k (the periodic publication) may already
   // hold some of frame k+1's events.
@@ -135,7 +114,40 @@ int robot_of(const std::string& channel, const std::string& prefix) {
   }
 }
 
-// Read every event; our channels are decoded, others ignored.
+// One event of the log: our channels are decoded (an undecodable one is counted),
+// others ignored.
+void on_event(const LogEvent& ev, LogData* d) {
+  const std::string& ch = ev.channel;
+  if (ch == "GROUND_TRUTH") {
+    ground_truth_t m;
+    if (!decode(ev, &m, d)) return;
+    FrameData& f = d->truth[m.frame];
+    set_truth(m, &f);
+    f.time_s = static_cast<double>(m.utime) * 1e-6;
+  } else if (ch == "GLOBAL_MAP") {
+    global_map_t m;
+    if (decode(ev, &m, d)) on_map(m, ev.timestamp, d);
+  } else if (robot_of(ch, "POSE_") > 0) {
+    pose_estimate_t m;
+    if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev.timestamp};
+  } else if (ch == "RUN_INFO") {
+    run_info_t m;
+    if (decode(ev, &m, d)) d->run_info = m;
+  } else if (robot_of(ch, "SENSOR_") > 0) {
+    sensor_frame_t m;
+    if (!decode(ev, &m, d)) return;
+    d->sensor_frames[m.robot_id].push_back(m.frame);
+    auto& t = d->sensor_utime[m.frame];
+    t = std::max(t, m.utime);
+    add_observed(m, &d->observed[m.frame]);
+  } else if (robot_of(ch, "STATUS_ROBOT_") > 0) {
+    node_status_t m;
+    if (!decode(ev, &m, d)) return;
+    d->status[m.node_id].push_back({m.frame, m.frames, m.frames_dropped});
+    if (m.mode != node_status_t::MODE_NONE) d->robot_mode[m.node_id] = m.mode;
+  }
+}
+
 // A damaged log (stray bytes, a truncated tail) is read as far as it holds whole
 // events (team/log_reader.hpp); what was skipped is counted.
 bool read_log(const std::string& path, LogData* d, std::string* why) {
@@ -146,36 +158,10 @@ bool read_log(const std::string& path, LogData* d, std::string* why) {
     *why = e.what();
     return false;
   }
-  LogEvent event;
-  while (log->next(&event)) {
-    const LogEvent* ev = &event;
+  LogEvent ev;
+  while (log->next(&ev)) {
     ++d->events;
-    const std::string& ch = ev->channel;
-    if (ch == "GROUND_TRUTH") {
-      ground_truth_t m;
-      if (decode(ev, &m, d)) on_truth(m, d);
-    } else if (ch == "GLOBAL_MAP") {
-      global_map_t m;
-      if (decode(ev, &m, d)) on_map(m, ev->timestamp, d);
-    } else if (robot_of(ch, "POSE_") > 0) {
-      pose_estimate_t m;
-      if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev->timestamp};
-    } else if (ch == "RUN_INFO") {
-      run_info_t m;
-      if (decode(ev, &m, d)) d->run_info = m;
-    } else if (robot_of(ch, "SENSOR_") > 0) {
-      sensor_frame_t m;
-      if (!decode(ev, &m, d)) continue;
-      d->sensor_frames[m.robot_id].push_back(m.frame);
-      auto& t = d->sensor_utime[m.frame];
-      t = std::max(t, m.utime);
-      for (int i = 0; i < contract::bounded(m.num_obs, contract::kMaxObsPerFrame); ++i) d->observed[m.frame].push_back(m.obs[i].landmark_id);
-    } else if (robot_of(ch, "STATUS_ROBOT_") > 0) {
-      node_status_t m;
-      if (!decode(ev, &m, d)) continue;
-      d->status[m.node_id].push_back({m.frame, m.frames, m.frames_dropped});
-      if (m.mode != node_status_t::MODE_NONE) d->robot_mode[m.node_id] = m.mode;
-    }
+    on_event(ev, d);
   }
   d->bytes_skipped = log->skipped();
   d->complete = log->complete();
@@ -191,20 +177,87 @@ struct Quantiles {
   std::size_t count = 0;
 };
 
-Quantiles quantiles(std::vector<std::int64_t> v) {
+Quantiles quantiles(const std::vector<std::int64_t>& v) {
   Quantiles q;
   q.count = v.size();
   if (v.empty()) return q;
-  std::sort(v.begin(), v.end());
-  auto at = [&](double f) { return v[std::min(v.size() - 1, static_cast<std::size_t>(f * static_cast<double>(v.size())))]; };
-  q.p50 = at(0.5);
-  q.p99 = at(0.99);
-  q.max = v.back();
+  q.p50 = quantile(v, 0.5);
+  q.p99 = quantile(v, 0.99);
+  q.max = *std::max_element(v.begin(), v.end());
   return q;
 }
 
 nlohmann::json to_json(const Quantiles& q) {
   return {{"p50", q.p50}, {"p99", q.p99}, {"max", q.max}, {"count", q.count}};
+}
+
+/// The log as the metrics' frames, with the latencies and each robot's POSE
+/// checkpoints (for the frame accounting) gathered on the way.
+struct Assembled {
+  RunResult r;
+  std::vector<int> robot_ids;
+  std::vector<std::vector<std::int64_t>> latency, publish_latency;  // [us] per robot
+  std::vector<std::int64_t> all_latency, all_publish_latency, map_latency;
+  std::vector<std::vector<PoseCheckpoint>> checkpoints;  // per robot
+};
+
+const PoseRecord* pose_of(const LogData& d, int frame, int robot_id) {
+  const auto poses = d.poses.find(frame);
+  if (poses == d.poses.end()) return nullptr;
+  const auto it = poses->second.find(robot_id);
+  return it != poses->second.end() ? &it->second : nullptr;
+}
+
+void add_pose(std::size_t i, int k, const PoseRecord& p, FrameData* f, Assembled* x) {
+  x->checkpoints[i].push_back({k, p.msg.frames_processed});
+  set_pose(i, p.msg, f);
+  x->latency[i].push_back(p.received_us - p.msg.source_utime);
+  x->all_latency.push_back(x->latency[i].back());
+  x->publish_latency[i].push_back(p.msg.utime - p.msg.source_utime);
+  x->all_publish_latency.push_back(x->publish_latency[i].back());
+  x->r.estimated[i].push_back({f->time_s, f->est_poses[i]});
+  x->r.truth[i].push_back({f->time_s, f->true_poses[i]});
+}
+
+Assembled assemble(LogData& d) {
+  Assembled x;
+  x.robot_ids = d.truth.begin()->second.robot_ids;
+  const std::size_t R = x.robot_ids.size();
+  x.r.estimated.resize(R);
+  x.r.truth.resize(R);
+  x.latency.resize(R);
+  x.publish_latency.resize(R);
+  x.checkpoints.resize(R);
+  MetricsAccumulator acc;
+  const double t0 = d.truth.begin()->second.time_s;
+  const MapRecord* map = nullptr;
+  for (auto& [k, f] : d.truth) {
+    f.time_s -= t0;
+    clear_estimates(R, &f);
+    for (std::size_t i = 0; i < R && i < f.robot_ids.size(); ++i)
+      if (const PoseRecord* p = pose_of(d, k, f.robot_ids[i])) add_pose(i, k, *p, &f, &x);
+    // The map of frame k: the first one stamped k, else the newest older one.
+    const auto m = d.maps.upper_bound(k);
+    if (m != d.maps.begin()) map = &std::prev(m)->second;
+    f.map_landmarks = map ? map->landmarks : decltype(f.map_landmarks){};
+    f.map_moving = map ? map->moving : std::vector<int>{};
+    f.observed = d.observed[k];
+    const auto first = d.first_map_receive.lower_bound(k);
+    const auto sensed = d.sensor_utime.find(k);
+    if (first != d.first_map_receive.end() && sensed != d.sensor_utime.end())
+      x.map_latency.push_back(first->second - sensed->second);
+    acc.add(f);
+  }
+  x.r.metrics = acc.finish();
+  x.r.frames = acc.frames();
+  x.r.robot_ids = acc.robot_ids();
+  if (map) {
+    x.r.final_map = map->full;
+    x.r.final_moving = map->moving;
+  }
+  x.r.final_truth = d.truth.rbegin()->second.true_landmarks;
+  x.r.truly_moving = d.truth.rbegin()->second.truly_moving;
+  return x;
 }
 
 /// The robots' mode as they report it (STATUS_ROBOT): "" when they did not report
@@ -285,140 +338,19 @@ TeamConfig team_config_of_run(const std::string& path, const RunInfo& info, cons
   return apply_overrides(cfg, ov);
 }
 
-}  // namespace
-}  // namespace elaslam
-
-int main(int argc, char** argv) {
-  using namespace elaslam;
-  Args a;
-  CLI::App app{"elaslam evaluate: metrics of a recorded LCM log against its ground truth"};
-  cli::add_version_flag(app, "evaluate");
-  app.add_option("--log", a.log_path, "LCM log (lcm-logger)")->required();
-  app.add_option("--out", a.out_dir, "directory for metrics.json, frames.csv, trajectories/");
-  app.add_option("--config", a.config, "the team's config file: its sections with the log's run facts become the "
-                                       "effective config in metrics.json")
-      ->check(CLI::ExistingFile);
-  app.add_option("--baseline", a.baseline, "also run this mode in process on the same scenario and seed and compare "
-                                           "(needs --config)")
-      ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
-  app.add_flag("--quiet", a.quiet, "no summary on stdout");
-  // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed).
-  app.add_option("--mode", a.mode, "mode to record when the robots' STATUS does not say");
-  app.add_option("--dynamism", a.dynamism, "dynamism [%] to record when the log has no RUN_INFO "
-                                           "(default: from the ground truth's moving flags)");
-  app.add_option("--speed", a.speed, "landmark speed [m/s] to record when the log has no RUN_INFO");
-  app.add_option("--seed", a.seed, "seed to record when the log has no RUN_INFO");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  if (!a.baseline.empty() && a.config.empty()) {
-    std::fprintf(stderr, "evaluate: --baseline needs --config (the team's config file)\n");
-    return 2;
-  }
-  LogData d;
-  std::string why;
-  if (!read_log(a.log_path, &d, &why)) {
-    std::fprintf(stderr, "evaluate: %s\n", why.c_str());
-    return 2;
-  }
-  const std::vector<int> robot_ids = d.truth.begin()->second.robot_ids;
-  const std::size_t R = robot_ids.size();
-  MetricsAccumulator acc;
-  RunResult r;
-  r.estimated.resize(R);
-  r.truth.resize(R);
-  std::vector<std::vector<std::int64_t>> latency(R), publish_latency(R);
-  std::vector<std::int64_t> all_latency, all_publish_latency, map_latency;
-  std::vector<std::vector<PoseCheckpoint>> checkpoints(R);
-  const double t0 = d.truth.begin()->second.time_s;
-  const MapRecord* map = nullptr;
-  for (auto& [k, f] : d.truth) {
-    f.time_s -= t0;
-    f.has_pose.assign(R, 0);
-    f.est_poses.assign(R, Pose2{});
-    f.mean_diag_p.assign(R, 0.0);
-    f.processing_us.assign(R, 0);
-    const auto poses = d.poses.find(k);
-    for (std::size_t i = 0; i < R && i < f.robot_ids.size(); ++i) {
-      const PoseRecord* p = nullptr;
-      if (poses != d.poses.end()) {
-        const auto it = poses->second.find(f.robot_ids[i]);
-        if (it != poses->second.end()) p = &it->second;
-      }
-      if (!p) continue;
-      checkpoints[i].push_back({k, p->msg.frames_processed});
-      f.has_pose[i] = 1;
-      f.est_poses[i] = {p->msg.x, p->msg.y, p->msg.theta};
-      f.mean_diag_p[i] = p->msg.mean_diag_p;
-      f.processing_us[i] = p->msg.processing_us;
-      latency[i].push_back(p->received_us - p->msg.source_utime);
-      all_latency.push_back(latency[i].back());
-      publish_latency[i].push_back(p->msg.utime - p->msg.source_utime);
-      all_publish_latency.push_back(publish_latency[i].back());
-      r.estimated[i].push_back({f.time_s, f.est_poses[i]});
-      r.truth[i].push_back({f.time_s, f.true_poses[i]});
-    }
-    // The map of frame k: the first one stamped k, else the newest older one.
-    const auto m = d.maps.upper_bound(k);
-    if (m != d.maps.begin()) map = &std::prev(m)->second;
-    f.map_landmarks = map ? map->landmarks : decltype(f.map_landmarks){};
-    f.map_moving = map ? map->moving : std::vector<int>{};
-    f.observed = d.observed[k];
-    const auto first = d.first_map_receive.lower_bound(k);
-    const auto sensed = d.sensor_utime.find(k);
-    if (first != d.first_map_receive.end() && sensed != d.sensor_utime.end())
-      map_latency.push_back(first->second - sensed->second);
-    acc.add(f);
-  }
-  r.metrics = acc.finish();
-  r.frames = acc.frames();
-  r.robot_ids = acc.robot_ids();
-  if (map) {
-    r.final_map = map->full;
-    r.final_moving = map->moving;
-  }
-  r.final_truth = d.truth.rbegin()->second.true_landmarks;
-  r.truly_moving = d.truth.rbegin()->second.truly_moving;
-
-  const std::string command = cli::command_line(argc, argv);
-  RunInfo info = run_facts(a, d, command);
-  TeamConfig team;
-  bool has_team = false;
-  if (!a.config.empty()) {
-    try {
-      team = team_config_of_run(a.config, info, d);
-      has_team = true;
-      info.effective_config = team.effective_yaml;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "evaluate: --config %s: %s\n", a.config.c_str(), e.what());
-      return 2;
-    }
-  } else if (d.run_info) {
-    info.effective_config = d.run_info->config_yaml;  // the frame source's section only
-  }
-  nlohmann::json j = metrics_json(info, r);
-  if (!has_team)
-    j["config_note"] = d.run_info ? "the frame source's section only (RUN_INFO); pass --config for the nodes' sections"
-                                  : "unknown: no RUN_INFO in the log and no --config";
-  j["run_info"] = d.run_info ? run_info_json(*d.run_info) : nlohmann::json(nullptr);
-
-  // Frames per robot over the run's frames.
+/// Every frame of the run, per robot (team/frame_accounting.hpp), into metrics.json.
+std::vector<RobotFrameAccount> account(const LogData& d, const Assembled& x, nlohmann::json* j) {
   const int first_frame = d.truth.begin()->first, last_frame = d.truth.rbegin()->first;
   long dropped = 0, not_started = 0, missing_from_log = 0;
   std::vector<RobotFrameAccount> accounts;
-  for (std::size_t i = 0; i < R; ++i) {
-    const int id = robot_ids[i];
+  for (std::size_t i = 0; i < x.robot_ids.size(); ++i) {
+    const int id = x.robot_ids[i];
     const auto st = d.status.find(id);
     const auto se = d.sensor_frames.find(id);
-    accounts.push_back(account_frames(id, first_frame, last_frame, checkpoints[i],
-                                      st != d.status.end() ? st->second : std::vector<StatusCheckpoint>{},
-                                      se != d.sensor_frames.end() ? se->second : std::vector<int>{}));
-    const RobotFrameAccount& acct = accounts.back();
-    auto& jr = j["robots"][i];
-    jr["latency_us"] = to_json(quantiles(latency[i]));
-    jr["pose_publish_latency_us"] = to_json(quantiles(publish_latency[i]));
+    const RobotFrameAccount& acct = accounts.emplace_back(account_frames(
+        id, first_frame, last_frame, x.checkpoints[i], st != d.status.end() ? st->second : std::vector<StatusCheckpoint>{},
+        se != d.sensor_frames.end() ? se->second : std::vector<int>{}));
+    auto& jr = (*j)["robots"][i];
     jr["frames_dropped"] = acct.dropped;
     jr["frames_not_started"] = acct.not_started;
     jr["poses_missing_from_log"] = acct.missing_from_log;
@@ -428,65 +360,143 @@ int main(int argc, char** argv) {
     not_started += acct.not_started;
     missing_from_log += acct.missing_from_log;
   }
-  const Quantiles lq = quantiles(all_latency), mq = quantiles(map_latency), pq = quantiles(all_publish_latency);
-  j["latency_us"] = to_json(lq);
-  j["pose_publish_latency_us"] = to_json(pq);
-  j["global_map_latency_us"] = to_json(mq);
-  j["frames_dropped"] = dropped;
-  j["frames_not_started"] = not_started;
-  j["poses_missing_from_log"] = missing_from_log;
-  j["log_events"] = d.events;
-  j["log_bytes_skipped"] = d.bytes_skipped;
-  j["log_complete"] = d.complete;
-  for (const auto& [ch, n] : d.decode_errors) j["decode_errors"][ch] = n;
+  (*j)["frames_dropped"] = dropped;
+  (*j)["frames_not_started"] = not_started;
+  (*j)["poses_missing_from_log"] = missing_from_log;
+  return accounts;
+}
 
-  std::optional<RunResult> base;
-  RunInfo base_info;
-  if (!a.baseline.empty()) {
-    Mode bm = Mode::kEkf;
-    parse_mode(a.baseline, &bm);
-    RunOverrides bo;
-    bo.mode = bm;
-    const TeamConfig bc = apply_overrides(team, bo);
-    base = run_team(bc);
-    base_info = RunInfo{a.baseline, info.dynamism_percent, info.speed_mps, info.seed, a.config, bc.effective_yaml,
-                        command};
-    j["baseline"] = baseline_json(base_info, *base, "in process, same scenario and seed");
+/// Latency quantiles (overall and per robot) and the log's own figures into metrics.json.
+void add_log_figures(const LogData& d, const Assembled& x, nlohmann::json* j) {
+  for (std::size_t i = 0; i < x.robot_ids.size(); ++i) {
+    (*j)["robots"][i]["latency_us"] = to_json(quantiles(x.latency[i]));
+    (*j)["robots"][i]["pose_publish_latency_us"] = to_json(quantiles(x.publish_latency[i]));
   }
-  if (!a.quiet) {
-    print_summary(std::cout, info, r);
-    std::cout << "  latency_us (sensor -> pose): p50 " << lq.p50 << " p99 " << lq.p99 << " max " << lq.max << " ("
-              << lq.count << " poses)\n"
-              << "  pose publish latency_us (sensor publish -> pose publish): p50 " << pq.p50 << " p99 " << pq.p99
-              << " max " << pq.max << "\n"
-              << "  global map latency_us (sensor -> map including the frame): p50 " << mq.p50 << " p99 " << mq.p99
-              << " max " << mq.max << "\n"
-              << "  frames dropped: " << dropped << " (frames a robot did not process after it started)\n";
-    for (const auto& acct : accounts) {
-      if (acct.not_started > 0)
-        std::cout << "  robot " << acct.robot_id << ": not yet started for its first " << acct.not_started
-                  << " frames\n";
-      if (acct.dropped > 0 || acct.missing_from_log > 0 || acct.restarts > 0) {
-        std::cout << "  robot " << acct.robot_id << ":";
-        if (acct.dropped > 0) std::cout << " " << acct.dropped << " frames dropped;";
-        if (acct.restarts > 0) std::cout << " " << acct.restarts << (acct.restarts == 1 ? " restart;" : " restarts;");
-        if (acct.missing_from_log > 0)
-          std::cout << " " << acct.missing_from_log << " frames processed but their POSE missing from the log;";
-        std::cout << " no POSE in the log for frames " << format_ranges(acct.missing_pose_ranges) << "\n";
-      }
+  (*j)["latency_us"] = to_json(quantiles(x.all_latency));
+  (*j)["pose_publish_latency_us"] = to_json(quantiles(x.all_publish_latency));
+  (*j)["global_map_latency_us"] = to_json(quantiles(x.map_latency));
+  (*j)["log_events"] = d.events;
+  (*j)["log_bytes_skipped"] = d.bytes_skipped;
+  (*j)["log_complete"] = d.complete;
+  for (const auto& [ch, n] : d.decode_errors) (*j)["decode_errors"][ch] = n;
+}
+
+void print_frames(const std::vector<RobotFrameAccount>& accounts, long dropped, long missing_from_log) {
+  std::cout << "  frames dropped: " << dropped << " (frames a robot did not process after it started)\n";
+  for (const auto& acct : accounts) {
+    if (acct.not_started > 0)
+      std::cout << "  robot " << acct.robot_id << ": not yet started for its first " << acct.not_started << " frames\n";
+    if (acct.dropped == 0 && acct.missing_from_log == 0 && acct.restarts == 0) continue;
+    std::cout << "  robot " << acct.robot_id << ":";
+    if (acct.dropped > 0) std::cout << " " << acct.dropped << " frames dropped;";
+    if (acct.restarts > 0) std::cout << " " << acct.restarts << (acct.restarts == 1 ? " restart;" : " restarts;");
+    if (acct.missing_from_log > 0)
+      std::cout << " " << acct.missing_from_log << " frames processed but their POSE missing from the log;";
+    std::cout << " no POSE in the log for frames " << format_ranges(acct.missing_pose_ranges) << "\n";
+  }
+  if (missing_from_log > 0)
+    std::cout << "  (POSEs missing from the log are the recorder's loss: lcm-logger drops messages when more "
+                 "than 30 wait in its queue, as in the burst of landmark events a few frames into a run)\n";
+}
+
+void print_report(const LogData& d, const Assembled& x, const RunInfo& info, const nlohmann::json& j,
+                  const std::vector<RobotFrameAccount>& accounts) {
+  print_summary(std::cout, info, x.r);
+  const Quantiles lq = quantiles(x.all_latency), mq = quantiles(x.map_latency), pq = quantiles(x.all_publish_latency);
+  std::cout << "  latency_us (sensor -> pose): p50 " << lq.p50 << " p99 " << lq.p99 << " max " << lq.max << " ("
+            << lq.count << " poses)\n"
+            << "  pose publish latency_us (sensor publish -> pose publish): p50 " << pq.p50 << " p99 " << pq.p99
+            << " max " << pq.max << "\n"
+            << "  global map latency_us (sensor -> map including the frame): p50 " << mq.p50 << " p99 " << mq.p99
+            << " max " << mq.max << "\n";
+  print_frames(accounts, j["frames_dropped"].get<long>(), j["poses_missing_from_log"].get<long>());
+  for (const auto& [ch, n] : d.decode_errors) std::cout << "  undecodable events on " << ch << ": " << n << "\n";
+  if (d.bytes_skipped > 0 || !d.complete)
+    std::cout << "  damaged log: " << d.bytes_skipped << " bytes between events skipped"
+              << (d.complete ? "" : ", the last event truncated") << "\n";
+}
+
+/// -1 to go on, else the exit code.
+int parse_args(int argc, char** argv, Args* a) {
+  CLI::App app{"elaslam evaluate: metrics of a recorded LCM log against its ground truth"};
+  cli::add_version_flag(app, "evaluate");
+  app.add_option("--log", a->log_path, "LCM log (lcm-logger)")->required();
+  app.add_option("--out", a->out_dir, "directory for metrics.json, frames.csv, trajectories/");
+  app.add_option("--config", a->config, "the team's config file: its sections with the log's run facts become the "
+                                        "effective config in metrics.json")
+      ->check(CLI::ExistingFile);
+  app.add_option("--baseline", a->baseline, "also run this mode in process on the same scenario and seed and compare "
+                                            "(needs --config)")
+      ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
+  app.add_flag("--quiet", a->quiet, "no summary on stdout");
+  // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed).
+  app.add_option("--mode", a->mode, "mode to record when the robots' STATUS does not say");
+  app.add_option("--dynamism", a->dynamism, "dynamism [%] to record when the log has no RUN_INFO "
+                                            "(default: from the ground truth's moving flags)");
+  app.add_option("--speed", a->speed, "landmark speed [m/s] to record when the log has no RUN_INFO");
+  app.add_option("--seed", a->seed, "seed to record when the log has no RUN_INFO");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (!a->baseline.empty() && a->config.empty()) {
+    std::fprintf(stderr, "evaluate: --baseline needs --config (the team's config file)\n");
+    return 2;
+  }
+  return -1;
+}
+
+}  // namespace
+}  // namespace elaslam
+
+int main(int argc, char** argv) {
+  using namespace elaslam;
+  Args a;
+  if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  LogData d;
+  std::string why;
+  if (!read_log(a.log_path, &d, &why)) {
+    std::fprintf(stderr, "evaluate: %s\n", why.c_str());
+    return 2;
+  }
+  const Assembled x = assemble(d);
+  const std::string command = cli::command_line(argc, argv);
+  RunInfo info = run_facts(a, d, command);
+  TeamConfig team;
+  if (!a.config.empty()) {
+    try {
+      team = team_config_of_run(a.config, info, d);
+      info.effective_config = team.effective_yaml;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "evaluate: --config %s: %s\n", a.config.c_str(), e.what());
+      return 2;
     }
-    if (missing_from_log > 0)
-      std::cout << "  (POSEs missing from the log are the recorder's loss: lcm-logger drops messages when more "
-                   "than 30 wait in its queue, as in the burst of landmark events a few frames into a run)\n";
-    for (const auto& [ch, n] : d.decode_errors) std::cout << "  undecodable events on " << ch << ": " << n << "\n";
-    if (d.bytes_skipped > 0 || !d.complete)
-      std::cout << "  damaged log: " << d.bytes_skipped << " bytes between events skipped"
-                << (d.complete ? "" : ", the last event truncated") << "\n";
-    if (base) print_comparison(std::cout, info, r, base_info, *base, "in process");
+  } else if (d.run_info) {
+    info.effective_config = d.run_info->config_yaml;  // the frame source's section only
+  }
+  nlohmann::json j = metrics_json(info, x.r);
+  if (a.config.empty())
+    j["config_note"] = d.run_info ? "the frame source's section only (RUN_INFO); pass --config for the nodes' sections"
+                                  : "unknown: no RUN_INFO in the log and no --config";
+  j["run_info"] = d.run_info ? run_info_json(*d.run_info) : nlohmann::json(nullptr);
+  add_log_figures(d, x, &j);
+  const std::vector<RobotFrameAccount> accounts = account(d, x, &j);
+  if (!a.quiet) print_report(d, x, info, j, accounts);
+  if (!a.baseline.empty()) {  // the same scenario and seed in process, with the baseline's mode
+    RunOverrides bo;
+    bo.mode = Mode::kEkf;
+    parse_mode(a.baseline, &*bo.mode);
+    const TeamConfig bc = apply_overrides(team, bo);
+    const RunResult base = run_team(bc);
+    const RunInfo base_info{a.baseline, info.dynamism_percent, info.speed_mps, info.seed, a.config, bc.effective_yaml,
+                            command};
+    j["baseline"] = baseline_json(base_info, base, "in process, same scenario and seed");
+    if (!a.quiet) print_comparison(std::cout, info, x.r, base_info, base, "in process");
   }
   if (!a.out_dir.empty()) {
     try {
-      write_outputs(a.out_dir, j, r);
+      write_outputs(a.out_dir, j, x.r);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "evaluate: %s\n", e.what());
       return 1;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "elaslam/common/quantile.hpp"
+
 namespace elaslam {
 
 void MetricsAccumulator::add(const FrameData& f) {
@@ -100,12 +102,9 @@ RunMetrics MetricsAccumulator::finish() const {
   out.recall = out.detectable ? static_cast<double>(out.true_positives) / out.detectable : 1.0;
   out.mean_frames_to_detect = out.true_positives ? frames_to_detect / out.true_positives : 0.0;
   if (!processing_.empty()) {
-    std::vector<std::int64_t> p = processing_;
-    std::sort(p.begin(), p.end());
-    auto q = [&](double f) { return p[std::min(p.size() - 1, static_cast<std::size_t>(f * static_cast<double>(p.size())))]; };
-    out.frame_us_p50 = q(0.5);
-    out.frame_us_p99 = q(0.99);
-    out.frame_us_max = p.back();
+    out.frame_us_p50 = quantile(processing_, 0.5);
+    out.frame_us_p99 = quantile(processing_, 0.99);
+    out.frame_us_max = *std::max_element(processing_.begin(), processing_.end());
   }
   return out;
 }

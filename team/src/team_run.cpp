@@ -10,6 +10,7 @@
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/world.hpp"
+#include "elaslam/team/frame_data.hpp"
 
 namespace elaslam {
 namespace {
@@ -34,32 +35,6 @@ class Bus {
   std::vector<std::uint8_t> buf_;
   long long messages_ = 0;
 };
-
-void fill_truth(const ground_truth_t& gt, FrameData* f) {
-  f->robot_ids.clear();
-  f->true_poses.clear();
-  for (int i = 0; i < gt.num_robots; ++i) {
-    f->robot_ids.push_back(gt.robot_ids[i]);
-    f->true_poses.push_back({gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta});
-  }
-  int max_id = -1;
-  for (int i = 0; i < gt.num_landmarks; ++i) max_id = std::max(max_id, gt.landmarks[i].id);
-  f->true_landmarks.assign(static_cast<std::size_t>(max_id + 1), Eigen::Vector2d::Zero());
-  f->truly_moving.assign(static_cast<std::size_t>(max_id + 1), 0);
-  for (int i = 0; i < gt.num_landmarks; ++i) {
-    const auto& l = gt.landmarks[i];
-    f->true_landmarks[static_cast<std::size_t>(l.id)] = {l.x, l.y};
-    f->truly_moving[static_cast<std::size_t>(l.id)] = l.moving ? 1 : 0;
-  }
-}
-
-void fill_map(const global_map_t& g, FrameData* f) {
-  f->map_landmarks.clear();
-  f->map_moving.clear();
-  for (int i = 0; i < g.num_landmarks; ++i)
-    f->map_landmarks.push_back({g.landmarks[i].id, {g.landmarks[i].x, g.landmarks[i].y}});
-  for (int i = 0; i < g.num_moving; ++i) f->map_moving.push_back(g.moving_ids[i]);
-}
 
 // The oracle: observations of truly moving landmarks never reach the robots.
 void remove_moving(const FrameData& f, sensor_frame_t* s) {
@@ -178,19 +153,15 @@ RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& ma
     const std::int64_t utime = gt.utime;
     if (k == 0) first_utime = utime;
     const double t = static_cast<double>(utime - first_utime) * 1e-6;
-    fill_truth(gt, &f);
+    set_truth(gt, &f);
     f.frame = k;
     f.time_s = t;
-    f.has_pose.assign(static_cast<std::size_t>(R), 0);
-    f.est_poses.assign(static_cast<std::size_t>(R), Pose2{});
-    f.mean_diag_p.assign(static_cast<std::size_t>(R), 0.0);
-    f.processing_us.assign(static_cast<std::size_t>(R), 0);
-    f.observed.clear();
+    clear_estimates(static_cast<std::size_t>(R), &f);
     // Sensors of frame k -> robots -> main_robot.
     for (int i = 0; i < R; ++i) {
       sensor_frame_t s = bus.carry(sensors[static_cast<std::size_t>(i)]);
       if (oracle) remove_moving(f, &s);
-      for (int o = 0; o < s.num_obs; ++o) f.observed.push_back(s.obs[o].landmark_id);
+      add_observed(s, &f.observed);
       RobotNode& node = robots[static_cast<std::size_t>(i)];
       if (node.on_sensor(s, utime) != RobotNode::Verdict::kProcessed) continue;
       for (const GateRecord& g : node.robot().gate_records())
@@ -198,10 +169,7 @@ RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& ma
             g.landmark_id < static_cast<int>(out.corrections_by_landmark.size()))
           ++out.corrections_by_landmark[static_cast<std::size_t>(g.landmark_id)];
       const pose_estimate_t p = bus.carry(node.pose_msg());
-      f.has_pose[static_cast<std::size_t>(i)] = 1;
-      f.est_poses[static_cast<std::size_t>(i)] = {p.x, p.y, p.theta};
-      f.mean_diag_p[static_cast<std::size_t>(i)] = p.mean_diag_p;
-      f.processing_us[static_cast<std::size_t>(i)] = p.processing_us;
+      set_pose(static_cast<std::size_t>(i), p, &f);
       out.estimated[static_cast<std::size_t>(i)].push_back({t, {p.x, p.y, p.theta}});
       if (static_cast<std::size_t>(i) < f.true_poses.size())
         out.truth[static_cast<std::size_t>(i)].push_back({t, f.true_poses[static_cast<std::size_t>(i)]});
@@ -214,7 +182,7 @@ RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& ma
       const dynamic_notice_t msg = bus.carry(n);
       for (auto& node : robots) node.on_notice(msg);
     }
-    fill_map(bus.carry(main.global_map_msg(utime, k)), &f);
+    read_map(bus.carry(main.global_map_msg(utime, k)), &f.map_landmarks, &f.map_moving);
     acc.add(f);
   }
   out.metrics = acc.finish();

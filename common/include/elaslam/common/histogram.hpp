@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "elaslam/common/quantile.hpp"
+
 namespace elaslam {
 
 class DurationHistogram {
@@ -23,10 +25,11 @@ class DurationHistogram {
   }
   std::int64_t count() const { return total_; }
   std::int64_t max() const { return max_; }
-  /// Smallest bucket value with at least q of the samples at or below it (0 < q <= 1).
+  /// The q-quantile (quantile.hpp's nearest rank), to the bucket: the smallest bucket
+  /// value with at least ceil(q n) samples at or below it (0 < q <= 1).
   std::int64_t quantile(double q) const {
     if (total_ == 0) return 0;
-    const auto need = static_cast<std::int64_t>(q * static_cast<double>(total_) + 0.999999);
+    const auto need = static_cast<std::int64_t>(quantile_rank(q, static_cast<std::size_t>(total_))) + 1;
     std::int64_t seen = 0;
     for (std::size_t i = 0; i < counts_.size(); ++i) {
       seen += counts_[i];

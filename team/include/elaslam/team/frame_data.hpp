@@ -1,0 +1,38 @@
+// From the team's messages to the metrics' FrameData (metrics.hpp): the one adapter
+// shared by the in-process run (team_run.cpp) and the evaluation of a recording
+// (tools/evaluate.cpp), so both read the messages the same way by construction.
+// Every loop is bounded by the contract's capacities (a recording is not trusted).
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "elaslam/global_map_t.hpp"
+#include "elaslam/ground_truth_t.hpp"
+#include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/team/metrics.hpp"
+
+namespace elaslam {
+
+/// GROUND_TRUTH: frame, robot ids and true poses (in the message's order), true
+/// landmark positions and moving flags indexed by landmark id (negative ids skipped).
+void set_truth(const ground_truth_t& gt, FrameData* f);
+
+/// Size the estimate fields for `robots` robots with nothing estimated yet, and
+/// clear the observed ids.
+void clear_estimates(std::size_t robots, FrameData* f);
+
+/// POSE_<r> of the robot at `index` in the frame's robot order.
+void set_pose(std::size_t index, const pose_estimate_t& p, FrameData* f);
+
+/// SENSOR_<r>: its observed landmark ids, appended to `observed` (FrameData::observed:
+/// for detection recall).
+void add_observed(const sensor_frame_t& s, std::vector<int>* observed);
+
+/// GLOBAL_MAP: its static landmarks (id, estimate) and moving ids (FrameData's
+/// map_landmarks and map_moving), replacing what the vectors held.
+void read_map(const global_map_t& g, std::vector<std::pair<int, Eigen::Vector2d>>* landmarks, std::vector<int>* moving);
+
+}  // namespace elaslam
