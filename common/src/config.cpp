@@ -274,12 +274,18 @@ void Document::allow(std::initializer_list<const char*> keys) {
   for (const char* k : keys) known_.emplace_back(k);
 }
 
+void Document::allow_sections() {
+  for (const char* k : kSections) known_.emplace_back(k);
+}
+
 void Document::finish() {
   for (const auto& kv : root_) {
     const std::string k = kv.first.as<std::string>();
     if (std::find(known_.begin(), known_.end(), k) == known_.end()) {
       std::string known;
-      for (const auto& s : known_) known += (known.empty() ? "" : ", ") + s;
+      for (std::size_t i = 0; i < known_.size(); ++i)
+        if (std::find(known_.begin(), known_.begin() + static_cast<std::ptrdiff_t>(i), known_[i]) == known_.begin() + static_cast<std::ptrdiff_t>(i))
+          known += (known.empty() ? "" : ", ") + known_[i];
       state_->problems.push_back(k + ": unknown section (known sections: " + known + ")");
     }
   }

@@ -187,7 +187,7 @@ Options load_options(const std::string& yaml_path, std::string* effective_yaml) 
   config::Document doc = config::Document::from_file(yaml_path);
   Options o;
   doc.section("dataset", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow({"robot", "main", "scenario", "lcm", "team"});
+  doc.allow_sections();
   doc.finish();
   if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;

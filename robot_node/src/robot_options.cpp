@@ -76,7 +76,7 @@ RobotOptions load_robot_options(const std::string& path, std::string* effective_
   config::Document doc = config::Document::from_file(path);
   RobotOptions o;
   doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow({"scenario", "main", "lcm", "team", "dataset"});
+  doc.allow_sections();
   doc.finish();
   if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;

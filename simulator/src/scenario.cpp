@@ -187,7 +187,7 @@ void parse(config::Reader& r, ScenarioOptions* o) {
 namespace {
 ScenarioOptions load(config::Document& doc, std::string* effective_yaml = nullptr) {
   ScenarioOptions o;
-  doc.allow({"robot", "main", "lcm", "team"});  // read by the other components
+  doc.allow_sections();
   doc.section("scenario", [&](config::Reader& r) { parse(r, &o); });
   doc.finish();
   if (effective_yaml) *effective_yaml = doc.effective_yaml();

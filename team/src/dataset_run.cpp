@@ -10,7 +10,7 @@ DatasetConfig load_dataset_config(const std::string& path) {
   doc.section("dataset", [&](config::Reader& r) { mrclam::parse(r, &c.dataset); });
   doc.section("robot", [&](config::Reader& r) { parse(r, &c.robot); });
   doc.section("main", [&](config::Reader& r) { parse(r, &c.main); });
-  doc.allow({"lcm", "team"});
+  doc.allow_sections();
   doc.finish();
   // Subjects 1..20 are the ids on the wire (robots 1-5, landmarks 6-20).
   constexpr int kMaxSubject = 20;

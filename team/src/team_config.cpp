@@ -22,7 +22,7 @@ TeamConfig load_team_config(const std::string& path) {
   doc.section("scenario", [&](config::Reader& r) { sim::parse(r, &c.scenario); });
   doc.section("robot", [&](config::Reader& r) { parse(r, &c.robot); });
   doc.section("main", [&](config::Reader& r) { parse(r, &c.main); });
-  doc.allow({"lcm", "team"});
+  doc.allow_sections();
   doc.finish();
   const std::string problem = check_team(c);
   if (!problem.empty()) throw config::ConfigError(path, {problem});

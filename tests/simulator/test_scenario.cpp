@@ -70,10 +70,19 @@ TEST(SimScenario, PaperConfigLoads) {
 
 TEST(SimScenario, BaseLoadsAndOtherSectionsAreAllowed) {
   // GIVEN the sections of the other components WHEN loading THEN they are left alone.
-  const ScenarioOptions o = load_scenario_text(kBase + "robot: {anything: 1}\nmain: {}\nlcm: {url: x}\nteam: {}\n");
+  const ScenarioOptions o = load_scenario_text(kBase + "robot: {anything: 1}\nmain: {}\ndataset: {}\n");
   EXPECT_EQ(o.robots.size(), 2u);
   EXPECT_FALSE(o.robots[1].ccw);
   EXPECT_DOUBLE_EQ(o.robots[1].radius_m, 3.0);
+  // Any other top-level key is a mistake (a typo of a section): refused with the known ones.
+  try {
+    load_scenario_text(kBase + "robto: {}\n");
+    FAIL() << "an unknown section was accepted";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("robto: unknown section (known sections: scenario, dataset, robot, main)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(SimScenario, MovingCountIsRoundedShareOfLandmarks) {

@@ -3,15 +3,19 @@
 // rejected, and the effective configuration recorded as it is read so that it can
 // be printed or echoed into results.
 //
-// Usage, in a component's parse function:
-//   void parse(config::Reader& r, EkfOptions* o) {
-//     r.read("range_sigma_m", &o->range_sigma_m, 1e-6, 100.0);
-//     r.read_enum("mode", &o->mode_name, {"ekf", "gated"});
+// Usage, in a component's parse function (robot_node/src/robot_options.cpp):
+//   void parse(config::Reader& r, RobotOptions* o) {
+//     r.section("filter", [&](config::Reader& f) {
+//       f.read("range_sigma_m", &o->ekf.range_sigma, 1e-6, 100.0);   // required, in range
+//       f.read_optional("joseph", &o->ekf.joseph);                   // documented default
+//     });
+//     r.read_enum("mode", &mode, {"ekf", "gated", "ela", "consensus"});
 //   }
 // and at the top:
 //   config::Document doc = config::Document::from_file(path);   // throws ConfigError
-//   EkfOptions o; doc.section("robot", [&](config::Reader& r){ parse(r, &o); });
-//   doc.finish();                                                  // throws ConfigError
+//   RobotOptions o; doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
+//   doc.allow_sections();                                       // the other components' sections
+//   doc.finish();                                               // throws ConfigError
 #pragma once
 
 #include <functional>
@@ -24,6 +28,11 @@
 #include <yaml-cpp/yaml.h>
 
 namespace elaslam::config {
+
+/// The top-level sections of the one config file, and who reads them: scenario
+/// (simulator), dataset (the MRCLAM importer, in place of scenario), robot (every
+/// robot_node), main (main_robot). Any other top-level key is an error.
+inline constexpr const char* kSections[] = {"scenario", "dataset", "robot", "main"};
 
 /// All problems found in a configuration, one per line, each naming its key path.
 class ConfigError : public std::runtime_error {
@@ -107,6 +116,9 @@ class Document {
   void section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional = false);
   /// Mark top-level keys as known without reading them (read by another component).
   void allow(std::initializer_list<const char*> keys);
+  /// Allow every section of the one config file (kSections) that this reader does
+  /// not read itself: a component ignores the others' sections, and only those.
+  void allow_sections();
   /// Throws ConfigError with every problem found so far (unknown top-level keys too).
   void finish();
 
