@@ -340,23 +340,26 @@ void print_sensor_row(const char* who, const Robust& rg, const Robust& br) {
               br.std_inliers, 100.0 * br.outlier_fraction);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   std::string dataset_dir, robots = "1,2,3,4,5", json_path, config_path;
   double rate = 10.0;
+  double detect_range = 3.5, detect_half_deg = 17.0;
+  std::vector<int> ids;
+};
+
+/// -1 to go on, else the exit code.
+int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam mrclam_stats: sensor and odometry noise of an MRCLAM recording against Vicon"};
   cli::add_version_flag(app, "mrclam_stats");
-  app.add_option("--dataset", dataset_dir, "dataset directory")->required()->check(CLI::ExistingDirectory);
-  app.add_option("--robots", robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
-  app.add_option("--rate", rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
-  app.add_option("--json", json_path, "also write the numbers as JSON");
-  double detect_range = 3.5, detect_half_deg = 17.0;
-  app.add_option("--detect-range", detect_range, "detection statistics: in view within this range [m]")
+  app.add_option("--dataset", a->dataset_dir, "dataset directory")->required()->check(CLI::ExistingDirectory);
+  app.add_option("--robots", a->robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
+  app.add_option("--rate", a->rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--json", a->json_path, "also write the numbers as JSON");
+  app.add_option("--detect-range", a->detect_range, "detection statistics: in view within this range [m]")
       ->capture_default_str()->check(CLI::Range(0.1, 100.0));
-  app.add_option("--detect-half-angle", detect_half_deg, "... and this half-angle of the heading [deg]")
+  app.add_option("--detect-half-angle", a->detect_half_deg, "... and this half-angle of the heading [deg]")
       ->capture_default_str()->check(CLI::Range(1.0, 180.0));
-  app.add_option("--config", config_path,
+  app.add_option("--config", a->config_path,
                  "also measure the residuals of the frames as the filter receives them, imported with this "
                  "config's dataset section (calibration, motion compensation, odometry delay)")
       ->check(CLI::ExistingFile);
@@ -365,157 +368,194 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  std::vector<int> ids;
   std::string why;
-  if (!mrclam::parse_robot_list(robots, &ids, &why)) {
+  if (!mrclam::parse_robot_list(a->robots, &a->ids, &why)) {
     std::fprintf(stderr, "mrclam_stats: --robots: %s\n", why.c_str());
     return 2;
   }
-  json out;
-  out["dataset"] = dataset_dir;
-  out["rate_hz"] = rate;
-  try {
-    const mrclam::Dataset d = mrclam::Dataset::load(dataset_dir, ids);
-    Residuals all;
-    std::vector<OdoNoise> odo;
-    std::vector<double> lags;
-    std::printf("Range / bearing residuals (measured - predicted from Vicon), static landmarks 6-20\n");
-    std::printf("%-8s %7s %9s %9s %9s %8s | %9s %9s %9s %8s\n", "robot", "count", "rng_med", "rng_rsig",
-                "rng_std5", "rng_out", "brg_med", "brg_rsig", "brg_std5", "brg_out");
-    for (int id : ids) {
-      const Residuals r = sensor_residuals(d, d.robot(id));
-      const Robust rg = robust(r.range), br = robust(r.bearing);
-      print_sensor_row(("R" + std::to_string(id)).c_str(), rg, br);
-      out["robots"][std::to_string(id)]["range_m"] = to_json(rg);
-      out["robots"][std::to_string(id)]["bearing_rad"] = to_json(br);
-      all.range.insert(all.range.end(), r.range.begin(), r.range.end());
-      all.bearing.insert(all.bearing.end(), r.bearing.begin(), r.bearing.end());
-      all.measured_range.insert(all.measured_range.end(), r.measured_range.begin(), r.measured_range.end());
-      all.measured_bearing.insert(all.measured_bearing.end(), r.measured_bearing.begin(), r.measured_bearing.end());
-      odo.push_back(odometry_noise(d, id, rate));
-      const double lag = odometry_lag(d.robot(id));
-      lags.push_back(lag);
-      out["robots"][std::to_string(id)]["odometry_lag_s"] = lag;
-      out["robots"][std::to_string(id)]["odometry"] = to_json(odo.back());
-    }
-    const Robust rg = robust(all.range), br = robust(all.bearing);
-    print_sensor_row("all", rg, br);
-    out["overall"]["range_m"] = to_json(rg);
-    out["overall"]["bearing_rad"] = to_json(br);
-    const RangeScale scale = fit_range_scale(all);
-    std::printf("\nRange scale (the camera's range depends on where the barcode is in the image): fit over %ld\n"
-                "measurements, residual = r (k0 + k1 b^2): k0 %.5f, k1 %.5f; range residual std %.4f m before,\n"
-                "%.4f m after dividing each range by 1 + k0 + k1 b^2 (dataset.range_scale)\n",
-                scale.used, scale.k0, scale.k1, scale.std_before, scale.std_after);
-    double lag_mean = 0.0;
-    for (double l : lags) lag_mean += l / static_cast<double>(lags.size());
-    std::printf("\nOdometry lag (commands lead the motion): the command in force at t - d fits Vicon's turn rate at t\n"
-                "best for d =");
-    for (double l : lags) std::printf(" %.2f", l);
-    std::printf(" s (robots in order); mean %.3f s (dataset.odometry_delay_s)\n", lag_mean);
-    out["odometry_lag_s"] = lag_mean;
-    if (!config_path.empty()) {
-      // The frames as the robots get them: observations against the Vicon pose at the
-      // frame time and the landmarks' positions.
-      mrclam::Options fo = mrclam::load_options(config_path);
-      fo.robots = ids;
-      fo.with_robot_barcodes = false;
-      const mrclam::FrameSource src(d, fo);
-      Residuals fr;
-      for (std::size_t i = 0; i < ids.size(); ++i) {
-        for (int k = 0; k < src.num_frames(); ++k) {
-          std::vector<sensor_frame_t> sensors;
-          src.frame(k, nullptr, &sensors);
-          const Pose2& T = src.true_pose(static_cast<int>(i), k);
-          const sensor_frame_t& f = sensors[i];
-          for (int o = 0; o < f.num_obs; ++o) {
-            const auto lm = std::find_if(d.landmarks().begin(), d.landmarks().end(),
-                                         [&](const mrclam::LandmarkTruth& l) { return l.subject == f.obs[o].landmark_id; });
-            if (lm == d.landmarks().end()) continue;
-            const double dx = lm->x - T.x, dy = lm->y - T.y;
-            fr.range.push_back(f.obs[o].range - std::hypot(dx, dy));
-            fr.bearing.push_back(wrap_angle(f.obs[o].bearing - (std::atan2(dy, dx) - T.theta)));
-          }
-        }
-      }
-      const Robust frg = robust(fr.range), fbr = robust(fr.bearing);
-      std::printf("\nResiduals of the frames as imported with %s (against Vicon at the frame time):\n", config_path.c_str());
-      print_sensor_row("frames", frg, fbr);
-      out["frame_residuals"] = {{"config", config_path}, {"range_m", to_json(frg)}, {"bearing_rad", to_json(fbr)}};
-    }
-    const Detection det = detection(d, ids, rate, detect_range, deg2rad(detect_half_deg));
-    const double p_frame = det.in_view > 0 ? static_cast<double>(det.reported) / static_cast<double>(det.in_view) : 0.0;
-    const double p99 = quantile(det.miss_streaks, 0.99), p999 = quantile(det.miss_streaks, 0.999);
-    // The rule sees thousands of miss runs in a run: it should wait longer than all
-    // but 0.1 % of them. The per-frame detection probability for which the rule
-    // (waiting until (1 - p)^n <= 0.01) waits p99.9 frames: (1 - p)^p999 = 0.01.
-    const double p_eff = p999 > 0 ? 1.0 - std::pow(0.01, 1.0 / p999) : 1.0;
-    std::printf("\nDetection (static landmarks within %.1f m and +-%.0f deg of the Vicon pose, %.3g Hz frames):\n"
-                "reported in %.3f of %ld landmark-frames; %zu runs of misses: p50 %.0f, p90 %.0f, p99 %.0f,\n"
-                "p99.9 %.0f, max %.0f frames. Misses come in bursts; the missing rule waits p99.9 frames with a\n"
-                "per-frame detection probability of %.3f (robot.ela.detection_probability)\n",
-                detect_range, detect_half_deg, rate, p_frame, det.in_view, det.miss_streaks.size(),
-                quantile(det.miss_streaks, 0.5), quantile(det.miss_streaks, 0.9), p99, p999,
-                det.miss_streaks.empty() ? 0.0 : *std::max_element(det.miss_streaks.begin(), det.miss_streaks.end()), p_eff);
-    out["detection"] = {{"range_m", detect_range}, {"half_angle_deg", detect_half_deg}, {"reported_fraction", p_frame},
-                        {"landmark_frames", det.in_view}, {"miss_run_p99_frames", p99}, {"miss_run_p999_frames", p999},
-                        {"detection_probability_for_missing_rule", p_eff}};
-    out["range_scale"] = {{"k0", scale.k0}, {"k1", scale.k1}, {"used", scale.used},
-                          {"std_before", scale.std_before}, {"std_after", scale.std_after}};
+  return -1;
+}
 
-    std::printf("\nOdometry (each robot over its own window, frames at %.3g Hz; windows of >= 1 m driven)\n", rate);
-    std::printf("%-6s %8s %9s %9s %6s %7s | %9s %9s %9s | %9s %9s | %9s %9s %9s | %9s %9s\n", "robot", "time_s",
-                "odo_m", "vicon_m", "scale", "windows", "along_mu", "along_var", "along_ms", "cross_var",
-                "cross_ms", "head_mu", "head_var", "head_ms", "fit_rad", "fit_m");
-    double w_sum = 0, trans_ms = 0, trans_var = 0, head_ms = 0, head_var = 0, fit_rad = 0, fit_m = 0;
-    for (std::size_t i = 0; i < ids.size(); ++i) {
-      const OdoNoise& r = odo[i];
-      std::printf("R%-5d %8.1f %9.2f %9.2f %6.3f %7ld | %9.4f %9.5f %9.5f | %9.5f %9.5f | %9.4f %9.5f %9.5f | %9.5f %9.5f\n",
-                  ids[i], r.duration_s, r.odo_path_m, r.vicon_path_m, r.odo_path_m / r.vicon_path_m, r.windows,
-                  r.along_mean, r.along_var_per_m, r.along_ms_per_m, r.across_var_per_m, r.across_ms_per_m,
-                  r.heading_mean, r.heading_var_per_m, r.heading_ms_per_m, r.fit_rot_per_rad, r.fit_rot_per_m);
-      const double w = static_cast<double>(r.windows);
-      w_sum += w;
-      trans_ms += w * 0.5 * (r.along_ms_per_m + r.across_ms_per_m);
-      trans_var += w * 0.5 * (r.along_var_per_m + r.across_var_per_m);
-      head_ms += w * r.heading_ms_per_m;
-      head_var += w * r.heading_var_per_m;
-      fit_rad += w * r.fit_rot_per_rad;
-      fit_m += w * r.fit_rot_per_m;
+/// Per robot and overall: sensor residuals, odometry noise and lag.
+struct PerRobot {
+  Robust range, bearing;  // overall
+  Residuals all;
+  std::vector<OdoNoise> odo;
+  std::vector<double> lags;
+};
+
+PerRobot per_robot(const mrclam::Dataset& d, const Args& a, json* out) {
+  PerRobot p;
+  std::printf("Range / bearing residuals (measured - predicted from Vicon), static landmarks 6-20\n");
+  std::printf("%-8s %7s %9s %9s %9s %8s | %9s %9s %9s %8s\n", "robot", "count", "rng_med", "rng_rsig",
+              "rng_std5", "rng_out", "brg_med", "brg_rsig", "brg_std5", "brg_out");
+  for (int id : a.ids) {
+    const Residuals r = sensor_residuals(d, d.robot(id));
+    const Robust rg = robust(r.range), br = robust(r.bearing);
+    print_sensor_row(("R" + std::to_string(id)).c_str(), rg, br);
+    json& jr = (*out)["robots"][std::to_string(id)];
+    jr["range_m"] = to_json(rg);
+    jr["bearing_rad"] = to_json(br);
+    p.all.range.insert(p.all.range.end(), r.range.begin(), r.range.end());
+    p.all.bearing.insert(p.all.bearing.end(), r.bearing.begin(), r.bearing.end());
+    p.all.measured_range.insert(p.all.measured_range.end(), r.measured_range.begin(), r.measured_range.end());
+    p.all.measured_bearing.insert(p.all.measured_bearing.end(), r.measured_bearing.begin(), r.measured_bearing.end());
+    p.odo.push_back(odometry_noise(d, id, a.rate));
+    p.lags.push_back(odometry_lag(d.robot(id)));
+    jr["odometry_lag_s"] = p.lags.back();
+    jr["odometry"] = to_json(p.odo.back());
+  }
+  p.range = robust(p.all.range);
+  p.bearing = robust(p.all.bearing);
+  print_sensor_row("all", p.range, p.bearing);
+  (*out)["overall"]["range_m"] = to_json(p.range);
+  (*out)["overall"]["bearing_rad"] = to_json(p.bearing);
+  return p;
+}
+
+void report_range_scale_and_lag(const PerRobot& p, json* out) {
+  const RangeScale scale = fit_range_scale(p.all);
+  std::printf("\nRange scale (the camera's range depends on where the barcode is in the image): fit over %ld\n"
+              "measurements, residual = r (k0 + k1 b^2): k0 %.5f, k1 %.5f; range residual std %.4f m before,\n"
+              "%.4f m after dividing each range by 1 + k0 + k1 b^2 (dataset.range_scale)\n",
+              scale.used, scale.k0, scale.k1, scale.std_before, scale.std_after);
+  double lag_mean = 0.0;
+  for (double l : p.lags) lag_mean += l / static_cast<double>(p.lags.size());
+  std::printf("\nOdometry lag (commands lead the motion): the command in force at t - d fits Vicon's turn rate at t\n"
+              "best for d =");
+  for (double l : p.lags) std::printf(" %.2f", l);
+  std::printf(" s (robots in order); mean %.3f s (dataset.odometry_delay_s)\n", lag_mean);
+  (*out)["odometry_lag_s"] = lag_mean;
+  (*out)["range_scale"] = {{"k0", scale.k0}, {"k1", scale.k1}, {"used", scale.used},
+                           {"std_before", scale.std_before}, {"std_after", scale.std_after}};
+}
+
+// The frames as the robots get them (imported with the config's dataset section):
+// observations against the Vicon pose at the frame time and the landmarks' positions.
+void report_frame_residuals(const mrclam::Dataset& d, const Args& a, json* out) {
+  mrclam::Options fo = mrclam::load_options(a.config_path);
+  fo.robots = a.ids;
+  fo.with_robot_barcodes = false;
+  const mrclam::FrameSource src(d, fo);
+  Residuals fr;
+  std::vector<sensor_frame_t> sensors;
+  for (std::size_t i = 0; i < a.ids.size(); ++i) {
+    for (int k = 0; k < src.num_frames(); ++k) {
+      src.frame(k, nullptr, &sensors);
+      const Pose2& T = src.true_pose(static_cast<int>(i), k);
+      const sensor_frame_t& f = sensors[i];
+      for (int o = 0; o < f.num_obs; ++o) {
+        const auto lm = std::find_if(d.landmarks().begin(), d.landmarks().end(),
+                                     [&](const mrclam::LandmarkTruth& l) { return l.subject == f.obs[o].landmark_id; });
+        if (lm == d.landmarks().end()) continue;
+        const double dx = lm->x - T.x, dy = lm->y - T.y;
+        fr.range.push_back(f.obs[o].range - std::hypot(dx, dy));
+        fr.bearing.push_back(wrap_angle(f.obs[o].bearing - (std::atan2(dy, dx) - T.theta)));
+      }
     }
-    if (w_sum > 0) {
-      trans_ms /= w_sum, trans_var /= w_sum, head_ms /= w_sum, head_var /= w_sum, fit_rad /= w_sum, fit_m /= w_sum;
-    }
-    std::printf("\nSuggested (window-weighted over robots):\n");
-    std::printf("  range_sigma_m     %.4f  (std within 5 robust sigmas; robust sigma %.4f)\n", rg.std_inliers,
-                rg.robust_sigma);
-    std::printf("  bearing_sigma_rad %.5f (%.3f deg; robust sigma %.5f)\n", br.std_inliers,
-                br.std_inliers * 180.0 / kPi, br.robust_sigma);
-    std::printf("  odom_var_trans_per_m %.5f  (mean square, along+across / 2; about the mean: %.5f)\n", trans_ms,
-                trans_var);
-    std::printf("  odom_var_rot_per_m   %.5f  (heading mean square per m; about the mean: %.5f)\n", head_ms, head_var);
-    std::printf("  fit heading^2 = %.5f |turned rad| + %.5f |driven m|  (odom_var_rot_per_rad, odom_var_rot_per_m)\n",
-                fit_rad, fit_m);
-    out["suggested"] = {{"range_sigma_m", rg.std_inliers},
-                        {"bearing_sigma_rad", br.std_inliers},
-                        {"odom_var_trans_per_m", trans_ms},
-                        {"odom_var_trans_per_m_about_mean", trans_var},
-                        {"odom_var_rot_per_m", head_ms},
-                        {"odom_var_rot_per_m_about_mean", head_var},
-                        {"fit_odom_var_rot_per_rad", fit_rad},
-                        {"fit_odom_var_rot_per_m", fit_m}};
+  }
+  const Robust frg = robust(fr.range), fbr = robust(fr.bearing);
+  std::printf("\nResiduals of the frames as imported with %s (against Vicon at the frame time):\n", a.config_path.c_str());
+  print_sensor_row("frames", frg, fbr);
+  (*out)["frame_residuals"] = {{"config", a.config_path}, {"range_m", to_json(frg)}, {"bearing_rad", to_json(fbr)}};
+}
+
+void report_detection(const mrclam::Dataset& d, const Args& a, json* out) {
+  const Detection det = detection(d, a.ids, a.rate, a.detect_range, deg2rad(a.detect_half_deg));
+  const double p_frame = det.in_view > 0 ? static_cast<double>(det.reported) / static_cast<double>(det.in_view) : 0.0;
+  const double p99 = quantile(det.miss_streaks, 0.99), p999 = quantile(det.miss_streaks, 0.999);
+  // The rule sees thousands of miss runs in a run: it should wait longer than all
+  // but 0.1 % of them. The per-frame detection probability for which the rule
+  // (waiting until (1 - p)^n <= 0.01) waits p99.9 frames: (1 - p)^p999 = 0.01.
+  const double p_eff = p999 > 0 ? 1.0 - std::pow(0.01, 1.0 / p999) : 1.0;
+  std::printf("\nDetection (static landmarks within %.1f m and +-%.0f deg of the Vicon pose, %.3g Hz frames):\n"
+              "reported in %.3f of %ld landmark-frames; %zu runs of misses: p50 %.0f, p90 %.0f, p99 %.0f,\n"
+              "p99.9 %.0f, max %.0f frames. Misses come in bursts; the missing rule waits p99.9 frames with a\n"
+              "per-frame detection probability of %.3f (robot.ela.detection_probability)\n",
+              a.detect_range, a.detect_half_deg, a.rate, p_frame, det.in_view, det.miss_streaks.size(),
+              quantile(det.miss_streaks, 0.5), quantile(det.miss_streaks, 0.9), p99, p999,
+              det.miss_streaks.empty() ? 0.0 : *std::max_element(det.miss_streaks.begin(), det.miss_streaks.end()), p_eff);
+  (*out)["detection"] = {{"range_m", a.detect_range}, {"half_angle_deg", a.detect_half_deg},
+                         {"reported_fraction", p_frame}, {"landmark_frames", det.in_view},
+                         {"miss_run_p99_frames", p99}, {"miss_run_p999_frames", p999},
+                         {"detection_probability_for_missing_rule", p_eff}};
+}
+
+// The odometry table, and the noise values suggested for the config (window-weighted).
+void report_odometry(const PerRobot& p, const Args& a, json* out) {
+  std::printf("\nOdometry (each robot over its own window, frames at %.3g Hz; windows of >= 1 m driven)\n", a.rate);
+  std::printf("%-6s %8s %9s %9s %6s %7s | %9s %9s %9s | %9s %9s | %9s %9s %9s | %9s %9s\n", "robot", "time_s",
+              "odo_m", "vicon_m", "scale", "windows", "along_mu", "along_var", "along_ms", "cross_var",
+              "cross_ms", "head_mu", "head_var", "head_ms", "fit_rad", "fit_m");
+  double w_sum = 0, trans_ms = 0, trans_var = 0, head_ms = 0, head_var = 0, fit_rad = 0, fit_m = 0;
+  for (std::size_t i = 0; i < a.ids.size(); ++i) {
+    const OdoNoise& r = p.odo[i];
+    std::printf("R%-5d %8.1f %9.2f %9.2f %6.3f %7ld | %9.4f %9.5f %9.5f | %9.5f %9.5f | %9.4f %9.5f %9.5f | %9.5f %9.5f\n",
+                a.ids[i], r.duration_s, r.odo_path_m, r.vicon_path_m, r.odo_path_m / r.vicon_path_m, r.windows,
+                r.along_mean, r.along_var_per_m, r.along_ms_per_m, r.across_var_per_m, r.across_ms_per_m,
+                r.heading_mean, r.heading_var_per_m, r.heading_ms_per_m, r.fit_rot_per_rad, r.fit_rot_per_m);
+    const double w = static_cast<double>(r.windows);
+    w_sum += w;
+    trans_ms += w * 0.5 * (r.along_ms_per_m + r.across_ms_per_m);
+    trans_var += w * 0.5 * (r.along_var_per_m + r.across_var_per_m);
+    head_ms += w * r.heading_ms_per_m;
+    head_var += w * r.heading_var_per_m;
+    fit_rad += w * r.fit_rot_per_rad;
+    fit_m += w * r.fit_rot_per_m;
+  }
+  if (w_sum > 0) {
+    trans_ms /= w_sum, trans_var /= w_sum, head_ms /= w_sum, head_var /= w_sum, fit_rad /= w_sum, fit_m /= w_sum;
+  }
+  std::printf("\nSuggested (window-weighted over robots):\n");
+  std::printf("  range_sigma_m     %.4f  (std within 5 robust sigmas; robust sigma %.4f)\n", p.range.std_inliers,
+              p.range.robust_sigma);
+  std::printf("  bearing_sigma_rad %.5f (%.3f deg; robust sigma %.5f)\n", p.bearing.std_inliers,
+              p.bearing.std_inliers * 180.0 / kPi, p.bearing.robust_sigma);
+  std::printf("  odom_var_trans_per_m %.5f  (mean square, along+across / 2; about the mean: %.5f)\n", trans_ms,
+              trans_var);
+  std::printf("  odom_var_rot_per_m   %.5f  (heading mean square per m; about the mean: %.5f)\n", head_ms, head_var);
+  std::printf("  fit heading^2 = %.5f |turned rad| + %.5f |driven m|  (odom_var_rot_per_rad, odom_var_rot_per_m)\n",
+              fit_rad, fit_m);
+  (*out)["suggested"] = {{"range_sigma_m", p.range.std_inliers},
+                         {"bearing_sigma_rad", p.bearing.std_inliers},
+                         {"odom_var_trans_per_m", trans_ms},
+                         {"odom_var_trans_per_m_about_mean", trans_var},
+                         {"odom_var_rot_per_m", head_ms},
+                         {"odom_var_rot_per_m_about_mean", head_var},
+                         {"fit_odom_var_rot_per_rad", fit_rad},
+                         {"fit_odom_var_rot_per_m", fit_m}};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  json out;
+  out["dataset"] = a.dataset_dir;
+  out["rate_hz"] = a.rate;
+  try {
+    const mrclam::Dataset d = mrclam::Dataset::load(a.dataset_dir, a.ids);
+    const PerRobot p = per_robot(d, a, &out);
+    report_range_scale_and_lag(p, &out);
+    if (!a.config_path.empty()) report_frame_residuals(d, a, &out);
+    report_detection(d, a, &out);
+    report_odometry(p, a, &out);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
     return 1;
+  } catch (const config::ConfigError& e) {  // --config
+    std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
+    return 2;
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
     return 2;
   }
-  if (!json_path.empty()) {
-    std::ofstream f(json_path);
+  if (!a.json_path.empty()) {
+    std::ofstream f(a.json_path);
     f << out.dump(2) << "\n";
     if (!f) {
-      std::fprintf(stderr, "mrclam_stats: cannot write %s\n", json_path.c_str());
+      std::fprintf(stderr, "mrclam_stats: cannot write %s\n", a.json_path.c_str());
       return 1;
     }
   }

@@ -114,79 +114,162 @@ void write_report(const std::string& path, const mrclam::FrameSource& src, const
   out << avail << ".\n";
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   std::string dataset_dir, config_path, mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
   bool barcodes = false, report = false, no_plots = false;
   double rate = -1.0, start = -1.0, duration = -1.0;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+};
+
+/// -1 to go on, else the exit code.
+int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam run_dataset: the team on a recorded MRCLAM dataset, against Vicon ground truth"};
-  app.add_option("--dataset", dataset_dir, "MRCLAM dataset directory (e.g. ../shared/data/mrclam/dataset6)")
+  app.add_option("--dataset", a->dataset_dir, "MRCLAM dataset directory (e.g. ../shared/data/mrclam/dataset6)")
       ->required()->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "run_dataset");
-  app.add_option("--config", config_path, "YAML config: dataset, robot, main sections (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
-  app.add_option("--mode", mode, "ekf, gated, ela or consensus (default: robot.mode)")
+  app.add_option("--config", a->config_path, "YAML config: dataset, robot, main sections (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
+  app.add_option("--mode", a->mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
-  app.add_flag("--with-robot-barcodes", barcodes, "keep other robots' barcodes (moving landmarks)");
-  app.add_option("--robots", robots_text, "robots to use, e.g. 1,2,3,4,5 (default: dataset.robots)");
-  app.add_option("--rate", rate, "frames per second")->check(CLI::Range(0.1, 1000.0));
-  app.add_option("--start", start, "first frame this many seconds after the common start")->check(CLI::Range(0.0, 1e6));
-  app.add_option("--duration", duration, "seconds to run (0: to the end)")->check(CLI::Range(0.0, 1e6));
-  app.add_flag("--report", report, "every mode without and with robot barcodes, and report.md");
-  app.add_option("--modes", modes_text, "modes for --report");
-  app.add_option("--jobs", jobs, "parallel runs for --report")->check(CLI::Range(1, 256));
-  app.add_option("--out", out_dir, "output directory")->required();
-  app.add_flag("--no-plots", no_plots, "do not call tools/plot_dataset.py (paths.png per run)");
+  app.add_flag("--with-robot-barcodes", a->barcodes, "keep other robots' barcodes (moving landmarks)");
+  app.add_option("--robots", a->robots_text, "robots to use, e.g. 1,2,3,4,5 (default: dataset.robots)");
+  app.add_option("--rate", a->rate, "frames per second")->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--start", a->start, "first frame this many seconds after the common start")->check(CLI::Range(0.0, 1e6));
+  app.add_option("--duration", a->duration, "seconds to run (0: to the end)")->check(CLI::Range(0.0, 1e6));
+  app.add_flag("--report", a->report, "every mode without and with robot barcodes, and report.md");
+  app.add_option("--modes", a->modes_text, "modes for --report");
+  app.add_option("--jobs", a->jobs, "parallel runs for --report")->check(CLI::Range(1, 256));
+  app.add_option("--out", a->out_dir, "output directory")->required();
+  app.add_flag("--no-plots", a->no_plots, "do not call tools/plot_dataset.py (paths.png per run)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  DatasetConfig cfg;
+  return -1;
+}
+
+/// The config with the command line's dataset overrides, and the modes to run.
+/// False (the reason printed) on a bad config or argument.
+bool configure(Args* a, DatasetConfig* cfg, std::vector<std::string>* modes) {
   try {
-    config_path = cli::find_config(config_path, "mrclam.yaml").path;
-    cfg = load_dataset_config(config_path);
+    a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
+    *cfg = load_dataset_config(a->config_path);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return 2;
+    return false;
   }
-  mrclam::Options& o = cfg.dataset;
-  if (!robots_text.empty()) {
-    std::string why;
-    if (!mrclam::parse_robot_list(robots_text, &o.robots, &why)) {
-      std::fprintf(stderr, "run_dataset: --robots: %s\n", why.c_str());
-      return 2;
+  mrclam::Options& o = cfg->dataset;
+  std::string why;
+  if (!a->robots_text.empty() && !mrclam::parse_robot_list(a->robots_text, &o.robots, &why)) {
+    std::fprintf(stderr, "run_dataset: --robots: %s\n", why.c_str());
+    return false;
+  }
+  if (a->rate > 0.0) o.rate_hz = a->rate;
+  if (a->start >= 0.0) o.start_s = a->start;
+  if (a->duration >= 0.0) o.duration_s = a->duration;
+  if (!a->report) {
+    modes->push_back(a->mode.empty() ? to_string(cfg->robot.mode) : a->mode);
+    return true;
+  }
+  std::stringstream ss(a->modes_text);
+  for (std::string m; std::getline(ss, m, ',');) {
+    Mode parsed;
+    if (!parse_mode(m, &parsed)) {
+      std::fprintf(stderr, "run_dataset: --modes: unknown mode '%s' (ekf, gated, ela, consensus)\n", m.c_str());
+      return false;
     }
+    modes->push_back(m);
   }
-  if (rate > 0.0) o.rate_hz = rate;
-  if (start >= 0.0) o.start_s = start;
-  if (duration >= 0.0) o.duration_s = duration;
-  std::vector<std::string> modes;
-  if (report) {
-    std::stringstream ss(modes_text);
-    for (std::string m; std::getline(ss, m, ',');) {
-      Mode parsed;
-      if (!parse_mode(m, &parsed)) {
-        std::fprintf(stderr, "run_dataset: --modes: unknown mode '%s' (ekf, gated, ela, consensus)\n", m.c_str());
-        return 2;
-      }
-      modes.push_back(m);
-    }
-  } else {
-    modes.push_back(mode.empty() ? to_string(cfg.robot.mode) : mode);
-  }
+  return true;
+}
 
-  // Load once; one frame source per barcode setting.
+/// The recording, loaded once, and a frame source per barcode setting.
+struct Sources {
   std::unique_ptr<mrclam::Dataset> data;
   std::unique_ptr<mrclam::FrameSource> without, with;
+  const mrclam::FrameSource& any() const { return without ? *without : *with; }
+};
+
+void run_all(const DatasetConfig& cfg, const Sources& src, int jobs, std::vector<DatasetRun>* runs) {
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i; (i = next++) < runs->size();) {
+      DatasetRun& run = (*runs)[i];
+      RobotOptions ro = cfg.robot;
+      parse_mode(run.mode, &ro.mode);
+      DatasetFrames frames(run.barcodes ? *src.with : *src.without);
+      run.result = run_team(ro, cfg.main, frames);
+      run.robot_corrections = robot_corrections(run.result);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::min<int>(jobs, static_cast<int>(runs->size())); ++t) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+}
+
+/// Every run's output files (a directory per run with --report), the summaries, and
+/// report.md / report.json. Returns the run directories.
+std::vector<std::string> write_runs(const Args& a, const DatasetConfig& cfg, const Sources& src,
+                                    const std::vector<DeadReckoning>& dr, const std::vector<DatasetRun>& runs,
+                                    const std::string& command) {
+  std::vector<std::string> dirs;
+  nlohmann::json all = nlohmann::json::array();
+  for (const auto& run : runs) {
+    mrclam::Options so = cfg.dataset;
+    so.with_robot_barcodes = run.barcodes;
+    RunInfo info{run.mode, 0.0, 0.0, 0, a.config_path, cfg.effective_yaml, command};
+    nlohmann::json j = metrics_json(info, run.result);
+    j["dataset"] = dataset_json(run.barcodes ? *src.with : *src.without, so, a.dataset_dir, dr);
+    j["robot_barcode_corrections"] = run.robot_corrections;
+    const std::string dir = a.report ? a.out_dir + "/" + run.mode + (run.barcodes ? "_barcodes" : "") : a.out_dir;
+    write_outputs(dir, j, run.result);
+    dirs.push_back(dir);
+    all.push_back(j);
+    std::cout << "== " << run.mode << (run.barcodes ? ", robot barcodes kept" : ", robot barcodes removed") << '\n';
+    print_summary(std::cout, info, run.result);
+    std::cout << "  dead reckoning RMS:";
+    for (const auto& d : dr) std::cout << " robot " << d.id << ' ' << f3(d.error_rms);
+    std::cout << "\n  robot-barcode observations that corrected a pose: " << run.robot_corrections << "\n";
+  }
+  if (a.report) {
+    write_report(a.out_dir + "/report.md", src.any(), dr, runs, command);
+    std::ofstream(a.out_dir + "/report.json") << all.dump(1) << '\n';
+    std::cout << "wrote " << a.out_dir << "/report.md\n";
+  }
+  return dirs;
+}
+
+// A plot per run: every robot's true and estimated path with the landmarks.
+void plot(const std::vector<std::string>& dirs) {
+  const std::string script = cli::python_tool("plot_dataset.py");
+  std::fflush(stdout);
+  if (!std::filesystem::exists(script)) {
+    std::fprintf(stderr, "run_dataset: no %s: no plots\n", script.c_str());
+    return;
+  }
+  for (const auto& dir : dirs) {
+    const std::string cmd = "'" + script + "' '" + dir + "' > /dev/null";
+    if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "run_dataset: plotting failed (%s)\n", cmd.c_str());
+  }
+  std::printf("plots: <run dir>/paths.png\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  DatasetConfig cfg;
+  std::vector<std::string> modes;
+  if (!configure(&a, &cfg, &modes)) return 2;
+  Sources src;
   try {
-    data = std::make_unique<mrclam::Dataset>(mrclam::Dataset::load(dataset_dir, o.robots));
-    mrclam::Options a = o, b = o;
-    a.with_robot_barcodes = false;
-    b.with_robot_barcodes = true;
-    if (report || !barcodes) without = std::make_unique<mrclam::FrameSource>(*data, a);
-    if (report || barcodes) with = std::make_unique<mrclam::FrameSource>(*data, b);
+    src.data = std::make_unique<mrclam::Dataset>(mrclam::Dataset::load(a.dataset_dir, cfg.dataset.robots));
+    mrclam::Options without = cfg.dataset, with = cfg.dataset;
+    without.with_robot_barcodes = false;
+    with.with_robot_barcodes = true;
+    if (a.report || !a.barcodes) src.without = std::make_unique<mrclam::FrameSource>(*src.data, without);
+    if (a.report || a.barcodes) src.with = std::make_unique<mrclam::FrameSource>(*src.data, with);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
     return 1;
@@ -194,74 +277,22 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
     return 2;
   }
-  const mrclam::FrameSource& any = without ? *without : *with;
-  const std::vector<DeadReckoning> dr = dead_reckoning(any);
-
+  const std::vector<DeadReckoning> dr = dead_reckoning(src.any());
   std::vector<DatasetRun> runs;
   for (const auto& m : modes) {
-    if (report || !barcodes) runs.push_back({m, false, {}, 0});
-    if (report || barcodes) runs.push_back({m, true, {}, 0});
+    if (a.report || !a.barcodes) runs.push_back({m, false, {}, 0});
+    if (a.report || a.barcodes) runs.push_back({m, true, {}, 0});
   }
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t i; (i = next++) < runs.size();) {
-      DatasetRun& run = runs[i];
-      RobotOptions ro = cfg.robot;
-      parse_mode(run.mode, &ro.mode);
-      DatasetFrames frames(run.barcodes ? *with : *without);
-      run.result = run_team(ro, cfg.main, frames);
-      run.robot_corrections = robot_corrections(run.result);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::min<int>(jobs, static_cast<int>(runs.size())); ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
-
-  std::string command;
+  run_all(cfg, src, a.jobs, &runs);
+  std::string command;  // the report's command, with the program as the README names it
   for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(i == 0 ? "build/bin/run_dataset" : argv[i]);
-  std::vector<std::string> plot_dirs;
+  std::vector<std::string> dirs;
   try {
-    nlohmann::json all = nlohmann::json::array();
-    for (const auto& run : runs) {
-      const mrclam::FrameSource& src = run.barcodes ? *with : *without;
-      mrclam::Options so = o;
-      so.with_robot_barcodes = run.barcodes;
-      RunInfo info{run.mode, 0.0, 0.0, 0, config_path, cfg.effective_yaml, command};
-      nlohmann::json j = metrics_json(info, run.result);
-      j["dataset"] = dataset_json(src, so, dataset_dir, dr);
-      j["robot_barcode_corrections"] = run.robot_corrections;
-      const std::string dir = report ? out_dir + "/" + run.mode + (run.barcodes ? "_barcodes" : "") : out_dir;
-      write_outputs(dir, j, run.result);
-      plot_dirs.push_back(dir);
-      all.push_back(j);
-      std::cout << "== " << run.mode << (run.barcodes ? ", robot barcodes kept" : ", robot barcodes removed") << '\n';
-      print_summary(std::cout, info, run.result);
-      std::cout << "  dead reckoning RMS:";
-      for (const auto& d : dr) std::cout << " robot " << d.id << ' ' << f3(d.error_rms);
-      std::cout << "\n  robot-barcode observations that corrected a pose: " << run.robot_corrections << "\n";
-    }
-    if (report) {
-      write_report(out_dir + "/report.md", any, dr, runs, command);
-      std::ofstream(out_dir + "/report.json") << all.dump(1) << '\n';
-      std::cout << "wrote " << out_dir << "/report.md\n";
-    }
+    dirs = write_runs(a, cfg, src, dr, runs, command);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
     return 1;
   }
-  // A plot per run: every robot's true and estimated path with the landmarks.
-  const std::string script = cli::python_tool("plot_dataset.py");
-  if (!no_plots) {
-    std::fflush(stdout);
-    if (std::filesystem::exists(script)) {
-      for (const auto& dir : plot_dirs) {
-        const std::string cmd = "'" + script + "' '" + dir + "' > /dev/null";
-        if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "run_dataset: plotting failed (%s)\n", cmd.c_str());
-      }
-      std::printf("plots: <run dir>/paths.png\n");
-    } else {
-      std::fprintf(stderr, "run_dataset: no %s: no plots\n", script.c_str());
-    }
-  }
+  if (!a.no_plots) plot(dirs);
   return 0;
 }

@@ -68,7 +68,7 @@ void GlobalMap::fuse(GlobalEntry& g) const {
   g.fused = g.fused_cov * eta;
 }
 
-void GlobalMap::set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed) {
+void GlobalMap::remove_as_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed) {
   GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
   if (g.status == GlobalStatus::kMoving) {  // already known: idempotent, no second notice
     if (!unconfirmed && g.moving_unconfirmed) g.moving_unconfirmed = false;
@@ -100,7 +100,7 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
 
   GlobalEntry& g = entries_[static_cast<std::size_t>(e.landmark_id)];
   if (e.kind == landmark_event_t::MOVING) {
-    set_moving(e.landmark_id, e.robot_id, e.frame, notices);
+    remove_as_moving(e.landmark_id, e.robot_id, e.frame, notices);
   } else {
     RobotEstimate& est = g.by_robot[static_cast<std::size_t>(e.robot_id - 1)];
     est = {true, e.position, e.cov, e.frame};
@@ -136,11 +136,11 @@ void GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame,
       if (g.by_robot[r].valid || (g.status == GlobalStatus::kStatic && !g.history_unknown && g.moving_by == 0)) {
         // r held it here and now lists it as moving, or it has never moved as far as
         // this map knows (events or the state file): r's MOVING event was lost.
-        set_moving(id, robot_id, frame, notices);
+        remove_as_moving(id, robot_id, frame, notices);
       } else if (g.contributors() == 0) {
         // r's opinion of unknown age, about a landmark no robot holds here (also one
         // this map has not seen: its ADD was lost too, as after a restart).
-        set_moving(id, robot_id, frame, notices, /*unconfirmed=*/true);
+        remove_as_moving(id, robot_id, frame, notices, /*unconfirmed=*/true);
       }
       // Else another robot holds it static: r's listing may be stale (a robot lists
       // a landmark as moving until it sees it again, after others took it back).

@@ -115,7 +115,10 @@ class GlobalMap {
 
  private:
   void fuse(GlobalEntry& g) const;
-  void set_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed = false);
+  /// Delete landmark `id` from the map as moving (every robot's estimate of it is
+  /// dropped), record who found it, and queue a notice unless `unconfirmed` (a
+  /// snapshot's opinion of unknown age). Idempotent.
+  void remove_as_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed = false);
 
   GlobalMapOptions options_;
   std::vector<GlobalEntry> entries_;
