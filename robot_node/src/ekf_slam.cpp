@@ -1,4 +1,6 @@
-// Fixed-memory planar EKF-SLAM (DESIGN.md section 4; paper eqs 3-15).
+// Fixed-memory planar EKF-SLAM (DESIGN.md section 4): prediction (paper eqs 3-6),
+// correction (eqs 7-13), augmentation (eq 15) and mean(diag(P)) (eq 19) on the
+// state of eqs 1-2; ekf_slam.hpp lists where the other equations live.
 //
 // Cost per call, n = state dimension: predict O(n), update O(n^2) (the rank-2/4
 // covariance downdate on the lower triangle; everything else is O(n)), add and
@@ -25,7 +27,12 @@ namespace elaslam {
 
 namespace {
 
-using Matrix5 = Eigen::Matrix<double, 5, 5>;
+// Dimensions of the state layout's blocks, for fixed-size block expressions.
+constexpr int kR = StateLayout::kPoseDim;      // the robot R = (x, y, theta)
+constexpr int kL = StateLayout::kLandmarkDim;  // one landmark l = (x, y)
+constexpr int kObs = 2;                        // one observation (range, bearing)
+
+using Matrix5 = Eigen::Matrix<double, kR + kL, kR + kL>;  // robot and one landmark
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -55,12 +62,12 @@ EkfStatus innovate(const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off
   const Pose2 pose{x(L::kX), x(L::kY), x(L::kTheta)};
   Eigen::Matrix<double, 2, 3> H_x;
   Eigen::Matrix2d H_l;
-  const RangeBearing h = observe(pose, x.segment<2>(off), &H_x, &H_l);  // eq 7
+  const RangeBearing h = observe(pose, x.segment<kL>(off), &H_x, &H_l);  // eq 7
   out->H << H_x, H_l;
   out->nu << y.range - h.range, wrap_angle(y.bearing - h.bearing);  // eq 8
   Matrix5 P5;
-  const Eigen::Matrix<double, 2, 3> P_lR = P.block<2, 3>(off, 0);  // lower storage
-  P5 << P.topLeftCorner<3, 3>(), P_lR.transpose(),  //
+  const Eigen::Matrix<double, 2, 3> P_lR = P.block<kL, kR>(off, 0);  // lower storage
+  P5 << P.topLeftCorner<kR, kR>(), P_lR.transpose(),  //
       P_lR, diagonal_block(P, off);
   const Eigen::Matrix2d Z = out->H * P5 * out->H.transpose() + W;
   // 2x2 Cholesky by hand: the comparisons also reject NaN.
@@ -133,10 +140,10 @@ EkfSlam::EkfSlam(const EkfOptions& options) : options_(options) {
   P_ = Eigen::MatrixXd::Zero(n_max, n_max);
   id_to_slot_.assign(static_cast<std::size_t>(options.max_landmark_id), -1);
   slot_to_id_.assign(static_cast<std::size_t>(options.capacity), -1);
-  PHt_ = Eigen::MatrixXd::Zero(n_max, 2);
-  K_ = Eigen::MatrixXd::Zero(n_max, 2);
+  PHt_ = Eigen::MatrixXd::Zero(n_max, kObs);
+  K_ = Eigen::MatrixXd::Zero(n_max, kObs);
   tmp_rows_ = Eigen::MatrixXd::Zero(Layout::kPoseDim, n_max);
-  lm_cols_ = Eigen::MatrixXd::Zero(n_max, 2);
+  lm_cols_ = Eigen::MatrixXd::Zero(n_max, kL);
   reset(Pose2{}, Eigen::Matrix3d::Zero());
 }
 
@@ -150,8 +157,8 @@ void EkfSlam::reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov) {
   }
   num_landmarks_ = 0;
   x_.setZero();
-  x_.head<3>() << pose.x, pose.y, wrap_angle(pose.theta);
-  P_.topLeftCorner<3, 3>() = 0.5 * (pose_cov + pose_cov.transpose());
+  x_.head<kR>() << pose.x, pose.y, wrap_angle(pose.theta);
+  P_.topLeftCorner<kR, kR>() = 0.5 * (pose_cov + pose_cov.transpose());
   upper_stale_ = false;
 }
 
@@ -172,7 +179,7 @@ EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
   const Index m = state_dim() - Layout::kPoseDim;             // landmark part of X
 
   // Compute into temporaries, commit only when healthy.
-  Eigen::Matrix3d P_RR = F_x * P_.topLeftCorner<3, 3>() * F_x.transpose() +
+  Eigen::Matrix3d P_RR = F_x * P_.topLeftCorner<kR, kR>() * F_x.transpose() +
                          F_u * U * F_u.transpose();  // eq 5, robot block
   P_RR = 0.5 * (P_RR + P_RR.transpose()).eval();
   // eq 5, cross terms: landmarks do not move, so P_LR <- P_LR F_x^T and no more.
@@ -184,8 +191,8 @@ EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
     return EkfStatus::kCovarianceFault;
   }
 
-  x_.head<3>() << next.x, next.y, next.theta;  // theta wrapped by compose()
-  P_.topLeftCorner<3, 3>() = P_RR;
+  x_.head<kR>() << next.x, next.y, next.theta;  // theta wrapped by compose()
+  P_.topLeftCorner<kR, kR>() = P_RR;
   P_.block(Layout::kPoseDim, 0, m, Layout::kPoseDim) = P_LR_new_T.transpose();
   upper_stale_ = upper_stale_ || m > 0;
   return EkfStatus::kOk;
@@ -241,26 +248,26 @@ UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   // P H^T (n x 2) from the robot columns (complete) and the landmark's columns.
   load_landmark_columns(off);
   auto PHt = PHt_.topRows(n);
-  PHt.noalias() = P_.leftCols<3>().topRows(n) * inn.H.leftCols<3>().transpose();
-  PHt.noalias() += lm_cols_.topRows(n) * inn.H.rightCols<2>().transpose();
+  PHt.noalias() = P_.leftCols<kR>().topRows(n) * inn.H.leftCols<kR>().transpose();
+  PHt.noalias() += lm_cols_.topRows(n) * inn.H.rightCols<kL>().transpose();
   // K_l = (P H^T)_l Z^-1 with Z = L L^T.
   const Eigen::Matrix2d Z = inn.L * inn.L.transpose();
-  const Eigen::Matrix2d K_l = PHt.middleRows<2>(off) * Z.inverse();
-  Eigen::Matrix2d P_ll = P_.block<2, 2>(off, off).selfadjointView<Eigen::Lower>();
+  const Eigen::Matrix2d K_l = PHt.middleRows<kL>(off) * Z.inverse();
+  Eigen::Matrix2d P_ll = P_.block<kL, kL>(off, off).selfadjointView<Eigen::Lower>();
   P_ll -= K_l * Z * K_l.transpose();
   P_ll = 0.5 * (P_ll + P_ll.transpose()).eval();
-  const Eigen::Vector2d x_l = x_.segment<2>(off) + K_l * inn.nu;
+  const Eigen::Vector2d x_l = x_.segment<kL>(off) + K_l * inn.nu;
   if (!x_l.allFinite() || !P_ll.allFinite() || (P_ll.diagonal().array() < 0.0).any()) {
     report.status = EkfStatus::kCovarianceFault;
     return report;
   }
   // Row block l in lower storage: columns before it along its rows, rows after it
   // down its columns.
-  P_.block(off, 0, 2, off).noalias() -= K_l * PHt.topRows(off).transpose();
-  const Index below = n - off - 2;
-  if (below > 0) P_.block(off + 2, off, below, 2).noalias() -= PHt.bottomRows(below) * K_l.transpose();
-  P_.block<2, 2>(off, off) = P_ll;
-  x_.segment<2>(off) = x_l;
+  P_.block(off, 0, kL, off).noalias() -= K_l * PHt.topRows(off).transpose();
+  const Index below = n - off - kL;
+  if (below > 0) P_.block(off + kL, off, below, kL).noalias() -= PHt.bottomRows(below) * K_l.transpose();
+  P_.block<kL, kL>(off, off) = P_ll;
+  x_.segment<kL>(off) = x_l;
   upper_stale_ = true;
   return report;
 }
@@ -289,11 +296,11 @@ void EkfSlam::compute_gain(Index off, const Matrix25& H, const Eigen::Matrix2d& 
   const GainCoefficients c = gain_coefficients(H, L);
   // Robot columns 0..2 of P are complete (the robot block is kept full).
   if (options_.joseph) {
-    gain_rows_joseph(c, n, P_.col(0).data(), P_.col(1).data(), P_.col(2).data(),
+    gain_rows_joseph(c, n, P_.col(Layout::kX).data(), P_.col(Layout::kY).data(), P_.col(Layout::kTheta).data(),
                      lm_cols_.col(0).data(), lm_cols_.col(1).data(), K_.col(0).data(),
                      K_.col(1).data(), PHt_.col(0).data(), PHt_.col(1).data());
   } else {
-    gain_rows_standard(c, n, P_.col(0).data(), P_.col(1).data(), P_.col(2).data(),
+    gain_rows_standard(c, n, P_.col(Layout::kX).data(), P_.col(Layout::kY).data(), P_.col(Layout::kTheta).data(),
                        lm_cols_.col(0).data(), lm_cols_.col(1).data(), K_.col(0).data(),
                        K_.col(1).data());
   }
@@ -328,9 +335,9 @@ void EkfSlam::apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d&
   }
   x_(Layout::kTheta) = wrap_angle(x_(Layout::kTheta));
   // Keep the robot block full: columns 0..2 of P stay complete.
-  P_(0, 1) = P_(1, 0);
-  P_(0, 2) = P_(2, 0);
-  P_(1, 2) = P_(2, 1);
+  P_(Layout::kX, Layout::kY) = P_(Layout::kY, Layout::kX);
+  P_(Layout::kX, Layout::kTheta) = P_(Layout::kTheta, Layout::kX);
+  P_(Layout::kY, Layout::kTheta) = P_(Layout::kTheta, Layout::kY);
   upper_stale_ = true;
 }
 
@@ -354,21 +361,21 @@ EkfStatus EkfSlam::add_landmark(int id, const RangeBearing& z) {
   const int slot = num_landmarks_;
   const Index off = Layout::landmark_offset(slot);
   const Index n = state_dim();
-  Eigen::Matrix2d P_ll = G_x * P_.topLeftCorner<3, 3>() * G_x.transpose() +
+  Eigen::Matrix2d P_ll = G_x * P_.topLeftCorner<kR, kR>() * G_x.transpose() +
                          G_z * W_ * G_z.transpose();
   P_ll = 0.5 * (P_ll + P_ll.transpose()).eval();
   // The new rows lie outside the active block: writing them first leaves the
   // filter's state untouched if the result is refused below. P_RX^T is the
   // (complete) robot columns 0..2.
   auto P_lX = P_.block(off, 0, Layout::kLandmarkDim, n);
-  P_lX.noalias() = G_x * P_.leftCols<3>().topRows(n).transpose();
+  P_lX.noalias() = G_x * P_.leftCols<kR>().topRows(n).transpose();
   if (!p_LinW.allFinite() || !P_ll.allFinite() || (P_ll.diagonal().array() < 0.0).any() ||
       !P_lX.allFinite()) {
     P_lX.setZero();  // outside the active block P_ stays zero
     return EkfStatus::kCovarianceFault;
   }
-  P_.block<2, 2>(off, off) = P_ll;
-  x_.segment<2>(off) = p_LinW;
+  P_.block<kL, kL>(off, off) = P_ll;
+  x_.segment<kL>(off) = p_LinW;
   id_to_slot_[static_cast<std::size_t>(id)] = slot;
   slot_to_id_[static_cast<std::size_t>(slot)] = id;
   ++num_landmarks_;
@@ -385,7 +392,6 @@ EkfStatus EkfSlam::remove_landmark(int id) {
   if (hole < 0) return EkfStatus::kUnknownLandmark;
   const int last = num_landmarks_ - 1;
   const Index oh = Layout::landmark_offset(hole), ol = Layout::landmark_offset(last);
-  constexpr Index kL = Layout::kLandmarkDim;
   if (hole != last) {
     const int moved_id = slot_to_id_[static_cast<std::size_t>(last)];
     // Robot and the slots before the hole: along the rows.
@@ -393,15 +399,15 @@ EkfStatus EkfSlam::remove_landmark(int id) {
     // Slots between hole and last: P(s, hole) = P(last, s)^T.
     const Index between = ol - (oh + kL);
     P_.block(oh + kL, oh, between, kL) = P_.block(ol, oh + kL, kL, between).transpose();
-    P_.block<2, 2>(oh, oh) = P_.block<2, 2>(ol, ol);
-    x_.segment<2>(oh) = x_.segment<2>(ol);
+    P_.block<kL, kL>(oh, oh) = P_.block<kL, kL>(ol, ol);
+    x_.segment<kL>(oh) = x_.segment<kL>(ol);
     id_to_slot_[static_cast<std::size_t>(moved_id)] = hole;
     slot_to_id_[static_cast<std::size_t>(hole)] = moved_id;
   }
   // Clear the vacated slot so that the inactive part of P stays zero.
   P_.block(0, ol, ol + kL, kL).setZero();
   P_.block(ol, 0, kL, ol + kL).setZero();
-  x_.segment<2>(ol).setZero();
+  x_.segment<kL>(ol).setZero();
   id_to_slot_[static_cast<std::size_t>(id)] = -1;
   slot_to_id_[static_cast<std::size_t>(last)] = -1;
   --num_landmarks_;
@@ -419,13 +425,13 @@ int EkfSlam::slot_of(int id) const {
 
 Pose2 EkfSlam::pose() const { return {x_(Layout::kX), x_(Layout::kY), x_(Layout::kTheta)}; }
 
-Eigen::Matrix3d EkfSlam::pose_cov() const { return P_.topLeftCorner<3, 3>(); }
+Eigen::Matrix3d EkfSlam::pose_cov() const { return P_.topLeftCorner<kR, kR>(); }
 
 // Unmapped ids give NaN rather than a throw: library code never throws per frame.
 Eigen::Vector2d EkfSlam::landmark(int id) const {
   const int slot = slot_of(id);
   if (slot < 0) return Eigen::Vector2d::Constant(kNaN);
-  return x_.segment<2>(Layout::landmark_offset(slot));
+  return x_.segment<kL>(Layout::landmark_offset(slot));
 }
 
 Eigen::Matrix2d EkfSlam::landmark_cov(int id) const {
@@ -439,14 +445,14 @@ Eigen::Matrix2d EkfSlam::landmark_cross_cov(int id_i, int id_j) const {
   if (si < 0 || sj < 0) return Eigen::Matrix2d::Constant(kNaN);
   const Index oi = Layout::landmark_offset(si), oj = Layout::landmark_offset(sj);
   if (si == sj) return diagonal_block(P_, oi);
-  return si > sj ? Eigen::Matrix2d(P_.block<2, 2>(oi, oj))
-                 : Eigen::Matrix2d(P_.block<2, 2>(oj, oi).transpose());
+  return si > sj ? Eigen::Matrix2d(P_.block<kL, kL>(oi, oj))
+                 : Eigen::Matrix2d(P_.block<kL, kL>(oj, oi).transpose());
 }
 
 Eigen::Matrix<double, 3, 2> EkfSlam::pose_landmark_cov(int id) const {
   const int slot = slot_of(id);
   if (slot < 0) return Eigen::Matrix<double, 3, 2>::Constant(kNaN);
-  return P_.block<2, 3>(Layout::landmark_offset(slot), 0).transpose();
+  return P_.block<kL, kR>(Layout::landmark_offset(slot), 0).transpose();
 }
 
 double EkfSlam::mean_diag() const { return P_.diagonal().head(state_dim()).mean(); }  // eq 19

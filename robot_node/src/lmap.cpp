@@ -1,6 +1,7 @@
 #include "elaslam/robot_node/lmap.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace elaslam {
 
@@ -14,19 +15,142 @@ const char* to_string(LandmarkStatus s) {
   return "?";
 }
 
-LMap::LMap(int max_landmark_id) : entries_(static_cast<std::size_t>(std::max(max_landmark_id, 0))) {}
+LifecycleRules lifecycle_rules(const RobotOptions& o) {
+  LifecycleRules r;
+  r.confirm_frames = o.confirm_frames;
+  r.return_frames = o.return_frames;
+  r.return_backoff = o.return_backoff;
+  r.moving_after = o.moving_after;
+  // A sensor that misses landmarks (detection_probability < 1) must miss one n
+  // frames in a row before it counts: (1 - p_d)^n <= 1 - the ELA gate probability.
+  r.missing_needed = o.missing_frames;
+  if (o.detection_probability < 1.0 && o.missing_frames > 0) {
+    const double n = std::log(1.0 - o.ela_gate_probability) / std::log(1.0 - o.detection_probability);
+    r.missing_needed = std::max(r.missing_needed, static_cast<int>(std::ceil(n)));
+  }
+  return r;
+}
+
+LMap::LMap(int max_landmark_id, const LifecycleRules& rules)
+    : rules_(rules), entries_(static_cast<std::size_t>(std::max(max_landmark_id, 0))) {}
 
 void LMap::clear() { std::fill(entries_.begin(), entries_.end(), LMapEntry{}); }
-
-void LMap::set_status(int id, LandmarkStatus s, int frame) {
-  LMapEntry& e = (*this)[id];
-  if (e.status != s) e.status_frame = frame;
-  e.status = s;
-}
 
 int LMap::count(LandmarkStatus s) const {
   return static_cast<int>(std::count_if(entries_.begin(), entries_.end(),
                                         [s](const LMapEntry& e) { return e.status == s; }));
+}
+
+void LMap::set_status(int id, LandmarkStatus s, int frame) {
+  LMapEntry& e = at(id);
+  if (e.status != s) e.status_frame = frame;
+  e.status = s;
+}
+
+void LMap::restart_streak(LMapEntry* e, int sightings) {
+  e->consistent_sightings = sightings;
+  e->innovation_sum.setZero();
+  e->innovations = 0;
+}
+
+// The one step every way of becoming moving shares (a STATIC landmark out of its ELA
+// or missing, a candidate inconsistent moving_after times, a dynamic notice): from
+// now on it needs return_frames consistent sightings to come back, and coming back
+// is a RETURN.
+void LMap::become_moving(LMapEntry* e) {
+  e->was_moving = e->reported_moving = true;
+  ++e->times_moving;
+}
+
+// Sightings a candidate needs: confirm_frames when new; return_frames after it
+// has moved, doubled for every further time it was found moving when
+// return_backoff is on (a landmark that stops and goes again and again, such as a
+// robot, earns less trust each time).
+int LMap::sightings_to_confirm(const LMapEntry& e) const {
+  if (!e.was_moving) return rules_.confirm_frames;
+  if (!rules_.return_backoff) return rules_.return_frames;
+  return rules_.return_frames << std::min(std::max(e.times_moving - 1, 0), 10);
+}
+
+void LMap::record_sighting(int id, const Eigen::Vector2d& p_LinW, const Eigen::Matrix2d& cov) {
+  LMapEntry& e = at(id);
+  e.position = p_LinW;
+  e.cov = cov;
+}
+
+void LMap::anchor_candidate(int id, int frame) {
+  set_status(id, LandmarkStatus::kCandidate, frame);
+  restart_streak(&at(id), 1);
+}
+
+bool LMap::candidate_consistent(int id) {
+  LMapEntry& e = at(id);
+  e.outside_streak = 0;
+  return ++e.consistent_sightings >= sightings_to_confirm(e);
+}
+
+bool LMap::candidate_inconsistent(int id) {
+  LMapEntry& e = at(id);
+  if (++e.outside_streak < rules_.moving_after || e.reported_moving) return false;
+  become_moving(&e);
+  return true;
+}
+
+void LMap::drop_candidate(int id) { restart_streak(&at(id), 0); }
+
+bool LMap::confirm(int id, int frame) {
+  set_status(id, LandmarkStatus::kStatic, frame);
+  LMapEntry& e = at(id);
+  e.missing_frames = 0;
+  e.drift.setZero();
+  e.reported_moving = false;
+  e.outside_streak = 0;
+  return e.was_moving;
+}
+
+const LMapEntry& LMap::add_innovation(int id, const Eigen::Vector2d& whitened) {
+  LMapEntry& e = at(id);
+  e.innovation_sum = e.innovation_sum + whitened;
+  e.innovations = e.innovations + 1;
+  return e;
+}
+
+bool LMap::missed(int id, bool expected) {
+  LMapEntry& e = at(id);
+  if (!expected) {
+    e.missing_frames = 0;
+    return false;
+  }
+  return ++e.missing_frames >= rules_.missing_needed;
+}
+
+const Eigen::Vector2d& LMap::add_drift(int id, double lambda, const Eigen::Vector2d& whitened) {
+  LMapEntry& e = at(id);
+  e.drift = lambda * e.drift + whitened;
+  return e.drift;
+}
+
+void LMap::found_moving(int id, int frame, bool reanchored) {
+  LMapEntry& e = at(id);
+  become_moving(&e);
+  e.missing_frames = 0;
+  e.outside_streak = 0;
+  e.moved_frame = frame;
+  if (reanchored) {
+    anchor_candidate(id, frame);
+  } else {
+    set_status(id, LandmarkStatus::kMoving, frame);
+  }
+}
+
+void LMap::told_moving(int id, int frame, bool left_filter) {
+  LMapEntry& e = at(id);
+  become_moving(&e);
+  if (!left_filter) return;
+  set_status(id, LandmarkStatus::kMoving, frame);
+  restart_streak(&e, 0);
+  e.missing_frames = 0;
+  e.outside_streak = 0;
 }
 
 }  // namespace elaslam

@@ -1,8 +1,8 @@
 // Proof that the filter's frame path allocates nothing after construction
 // (DESIGN.md section 4). Two independent guards watch the region:
-//  - Eigen's EIGEN_RUNTIME_NO_MALLOC: every Eigen heap allocation asserts (this
-//    target defines it and turns asserts on, and compiles ekf_slam.cpp and
-//    models.cpp itself so the guard covers the filter code);
+//  - Eigen's EIGEN_RUNTIME_NO_MALLOC: every Eigen heap allocation asserts (the
+//    filter's code is linked from elaslam_robot_no_malloc, the library's sources
+//    built with the guard and asserts on; this target inherits both);
 //  - a replaced global operator new that counts calls made inside the region.
 #include <algorithm>
 #include <array>

@@ -2,7 +2,7 @@
 // under dynamism, notices between robots, determinism.
 #include <gtest/gtest.h>
 
-#include "../robot_logic/scene.hpp"
+#include "../robot_node/scene.hpp"
 #include "elaslam/common/version.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"

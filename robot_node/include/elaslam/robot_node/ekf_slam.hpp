@@ -1,4 +1,8 @@
-// Fixed-memory planar EKF-SLAM (DESIGN.md section 4; paper eqs 1-15).
+// Fixed-memory planar EKF-SLAM (DESIGN.md section 4). Paper equations held here:
+// the state X = [R; M] (eqs 1-2), prediction (eqs 3-6, with the models of
+// models.hpp), correction (eqs 7-13), augmentation by the inverse observation
+// (eq 15) and the uncertainty mean(diag(P)) (eq 19). Not here: eq 14 (landmark
+// speed, the simulator), eq 16 (the ELA, ela_gate), eqs 17-18 (team/'s metrics).
 //
 // State X = [R; M]: R = (x, y, theta) of the robot in W, M = landmark positions in
 // W, one 2-vector per occupied slot. Mean, covariance and the id-to-slot tables are

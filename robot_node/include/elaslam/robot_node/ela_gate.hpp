@@ -1,5 +1,7 @@
 // The expected landmark area (ELA) gate (paper section 3.3, eq 16; DESIGN.md
 // section 5) and the pairwise relative-vector test that `consensus` mode builds on.
+// ElaGate decides, per frame, one verdict for every mapped landmark in view and for
+// every candidate sighting, and keeps one record of the test that decided it.
 //
 // Everything is computed in the robot frame B: a landmark's local position m_i
 // comes straight from its range and bearing, and the map's relative vector
@@ -8,10 +10,14 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <Eigen/Core>
 
+#include "elaslam/robot_node/consensus.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/lmap.hpp"
+#include "elaslam/robot_node/robot_options.hpp"
 
 namespace elaslam {
 
@@ -26,23 +32,35 @@ struct InView {
 /// Fill m and M of an InView from its measurement and the measurement noise W.
 void set_local(InView* v, const Eigen::Matrix2d& W);
 
-/// Which test judged an observation.
+/// Which test decided an observation's verdict.
 enum class GateKind : std::uint8_t {
-  kNone = 0,    // not tested (mode ekf)
-  kInnovation,  // innovation chi-square test against the EKF prior (gated mode, single ELA)
-  kMulti,       // eq 16: fused ELA from the other landmarks in view
-  kConsensus,   // largest mutually consistent set
-  kCandidate,   // candidate re-sighting consistency
+  kNone = 0,        // not tested (mode ekf)
+  kInnovation,      // innovation chi-square test against the EKF prior (gated mode, single ELA)
+  kMulti,           // eq 16: fused ELA from the other landmarks in view
+  kConsensus,       // in the largest mutually consistent set (d2 0), or re-tested against it by eq 16
+  kCandidate,       // candidate re-sighting consistency (innovation against the candidate's anchor)
+  kDrift,           // STATIC landmark's drift test: |s|^2 (1 - lambda^2), s its weighted innovation sum
+  kCandidateDrift,  // candidate's drift test: |sum|^2 / n over its consistent sightings
 };
 const char* to_string(GateKind k);
 
-/// The numbers behind one verdict, kept for every tested observation.
+/// The numbers behind one verdict, kept for every tested observation: the test that
+/// decided it, its statistic and its threshold, so that inside == (d2 <= threshold)
+/// for every kind but kNone. Outputs for tests and diagnostics; no decision reads them.
 struct GateRecord {
   int landmark_id = -1;
   GateKind kind = GateKind::kNone;
-  double d2 = 0.0;         // Mahalanobis distance squared
+  double d2 = 0.0;         // the test's statistic (a Mahalanobis distance squared)
   double threshold = 0.0;  // chi-square quantile it was compared with
   bool inside = true;      // verdict
+};
+
+/// The verdict on a mapped landmark in view.
+struct ElaVerdict {
+  bool inside = true;  // inside its ELA: it corrects the filter
+  /// Judged by the single-landmark test (nothing in view agreed to compare it with):
+  /// it cannot tell its own motion from the robot's pose error (`lone_verdicts`).
+  bool alone = false;
 };
 
 /// A Gaussian prediction of where a landmark should appear in the robot frame.
@@ -67,5 +85,61 @@ double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j);
 /// predictions share l_i, the heading and correlated map errors), so that a static
 /// landmark fails at the gate's nominal rate. O(n^2) per landmark.
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active = nullptr);
+
+/// Steps 2-3 of DESIGN.md section 5 for one frame: which observations are inside
+/// their ELA. Every mapped landmark in view is judged against the same prior (the
+/// filter before this frame's corrections) by eq 16 (modes ela), the consensus
+/// clique (mode consensus) or, with no other landmark to compare with, the
+/// single-landmark test; then by the drift test. Candidates are judged one by one,
+/// each against the filter as the frame has left it so far. Fixed memory after
+/// construction.
+class ElaGate {
+ public:
+  explicit ElaGate(const RobotOptions& options);
+
+  /// Start a frame: no landmark in view, no records.
+  void clear();
+  /// A STATIC landmark observed in this frame (in observation order).
+  void add_to_view(int id, const RangeBearing& z);
+  /// Judge every landmark in view against the filter's prior. Updates the L-map's
+  /// drift sums of the landmarks that passed (drift_memory > 0).
+  void judge_view(const EkfSlam& ekf, LMap* lmap);
+  int view_size() const { return static_cast<int>(view_.size()); }
+  const InView& in_view(int k) const { return view_[static_cast<std::size_t>(k)]; }
+  ElaVerdict verdict(int k) const { return verdicts_[static_cast<std::size_t>(k)]; }
+
+  /// A candidate's re-sighting, `r` its innovation against the filter now: true when
+  /// consistent. With candidate_drift_test, a consistent sighting also adds to the
+  /// L-map's innovation sum of the candidate, whose test must pass too.
+  bool judge_candidate(int id, const UpdateReport& r, LMap* lmap);
+
+  /// Modes ekf and gated: the filter's own gate decided (EkfSlam::update).
+  void record(const GateRecord& g) { records_.push_back(g); }
+  /// This frame's records: the landmarks in view first (view order), then the rest.
+  const std::vector<GateRecord>& records() const { return records_; }
+
+ private:
+  void judge_eq16(const EkfSlam& ekf);
+  void judge_consensus(const EkfSlam& ekf);
+  void judge_drift(LMap* lmap);
+  void decide(int k, const GateRecord& g, bool alone);
+  void decide_alone(int k);
+  double prior_d2(int k) const;
+
+  Mode mode_;
+  double ela_threshold_;    // chi2(ela_gate_probability, 2 dof): eq 16, pairs, single, candidates
+  double drift_lambda_;     // drift_memory (0: no drift test)
+  double drift_scale_;      // 1 - lambda^2: the covariance of the sum is I / (1 - lambda^2)
+  double drift_threshold_;  // chi2(drift_gate_probability, 2 dof)
+  bool candidate_drift_;
+  ConsensusSolver solver_;
+  // Per frame, reserved at construction (one entry per landmark in view).
+  std::vector<InView> view_;
+  std::vector<UpdateReport> prior_;  // innovation against this frame's prior
+  std::vector<double> d2_;           // eq 16 d2
+  std::vector<std::uint8_t> mask_;   // who shapes the others' ELAs (eq 16 survivors / the clique)
+  std::vector<ElaVerdict> verdicts_;
+  std::vector<GateRecord> records_;  // view first, then candidates / classic observations
+};
 
 }  // namespace elaslam

@@ -1,6 +1,7 @@
 // Motion and observation models of the planar EKF-SLAM, as pure functions that
 // return a value and, only when asked, fixed-size Jacobians (GTSAM style).
-// Frames: W world, B robot body. Paper eqs 3-15.
+// Frames: W world, B robot body. Paper eqs 3 and 6 (motion), 7 and 13 (observation),
+// 15 (inverse observation).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,9 +1,11 @@
-// One frame of Algorithm 1 (paper section 3.3) end to end, for every mode:
-// predict from the odometer increment, classify every observation (new, candidate,
-// static inside / outside its ELA, expected but missing), correct the filter with
-// the accepted ones, add confirmed candidates, remove moving ones, apply dynamic
-// notices, and produce the outgoing map events. No I/O; fixed memory after
-// construction (tests/robot_node/test_robot_no_alloc.cpp).
+// One frame of Algorithm 1 (paper section 3.3) end to end, for every mode: predict
+// from the odometer increment, judge the mapped landmarks in view (ElaGate), correct
+// the filter with the accepted ones, move each landmark along its lifecycle (LMap):
+// candidates confirmed or re-anchored, moving ones removed, expected-but-missing
+// ones found moving; apply dynamic notices; produce the outgoing map events. Robot
+// only orders the steps and pairs each L-map transition with its filter operation
+// (EkfSlam). No I/O; fixed memory after construction
+// (tests/robot_node/test_frame_no_alloc.cpp).
 #pragma once
 
 #include <array>
@@ -11,7 +13,6 @@
 #include <vector>
 
 #include "elaslam/common/contract.hpp"
-#include "elaslam/robot_node/consensus.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 #include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/lmap.hpp"
@@ -75,7 +76,7 @@ class Robot {
 
   // ---- outputs of the last frame ----------------------------------------------
   const std::vector<MapEvent>& events() const { return events_; }
-  const std::vector<GateRecord>& gate_records() const { return gates_; }
+  const std::vector<GateRecord>& gate_records() const { return gate_.records(); }
 
   // ---- state ------------------------------------------------------------------
   const EkfSlam& filter() const { return ekf_; }
@@ -92,44 +93,27 @@ class Robot {
   void predict(const FrameInput& in, FrameSummary* s);
   void process_classic(const FrameInput& in, FrameSummary* s);
   void process_ela(const FrameInput& in, FrameSummary* s);
-  void gate_view(FrameSummary* s);
-  void gate_view_consensus();
+  void correct(int id, const RangeBearing& z, FrameSummary* s);
   void handle_candidates(const FrameInput& in, FrameSummary* s);
-  void check_missing(FrameSummary* s);
-  void drift_test();
-  double prior_d2(int i) const;
-  int sightings_to_confirm(const LMapEntry& e) const;
   void confirm(int id, const RangeBearing& z, FrameSummary* s);
   void drop_unseen_candidates();
+  void check_missing(FrameSummary* s);
+  bool expected_in_view(int id, const Pose2& pose) const;
+  void mark_moving(int id, const RangeBearing* seen, FrameSummary* s);
   void record_sighting(int id, const RangeBearing& z);
-  void mark_moving(int id, const Observation* seen, FrameSummary* s);
   void emit(EventKind kind, int id);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
 
   RobotOptions options_;
   int robot_id_;
-  EkfSlam ekf_;
-  LMap lmap_;
-  ConsensusSolver solver_;
-  double ela_threshold_;      // chi2(ela_gate_probability, 2 dof)
-  double candidate_threshold_;
-  double drift_threshold_ = 0.0;
-  int missing_needed_ = 0;  // expected-but-unseen frames before MOVING (check_missing)
+  EkfSlam ekf_;   // sole owner of the mean and covariance
+  LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
+  ElaGate gate_;  // this frame's verdicts and gate records
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;
-
-  // Per-frame scratch, reserved at construction.
-  std::vector<InView> view_;
-  std::vector<int> view_obs_;        // index into FrameInput::obs of view_[k]
-  std::vector<std::uint8_t> inside_; // verdict per view_ entry
-  std::vector<UpdateReport> prior_;   // innovation per view_ entry against this frame's prior
-  std::vector<double> d2_;           // ELA d2 per view_ entry
-  std::vector<int> out_count_;       // per id: consecutive out-of-ELA sightings
-  std::vector<int> updated_;         // ids corrected this frame
-  std::vector<int> handled_;         // per id: frame at which the id was already handled
-  std::vector<MapEvent> events_;
-  std::vector<GateRecord> gates_;
+  std::vector<int> updated_;      // ids corrected this frame (reserved: one per observation)
+  std::vector<MapEvent> events_;  // this frame's events (reserved at construction)
   int events_dropped_ = 0;
 };
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 
+#include "elaslam/common/stats.hpp"
 #include "scene.hpp"
 
 namespace elaslam {
@@ -217,6 +218,33 @@ TEST(DriftTest, CatchesASlowMoverThatSingleTestsLetThrough) {
   RecordProperty("with_drift", with_drift);
   // Measured: single tests only after 44 frames (0.13 m); the drift test after 21.
   EXPECT_TRUE(single_only < 0 || with_drift * 2 <= single_only) << single_only << " vs " << with_drift;
+}
+
+// The record of a sighting rejected by the drift test is the drift test's (its
+// statistic |s|^2 (1 - lambda^2) and threshold), not the eq 16 test it passed.
+TEST(DriftTest, ARejectionByTheDriftTestIsRecordedAsSuch) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.drift_memory = 0.9;
+  o.candidate_drift_test = true;
+  o.missing_frames = 0;
+  Robot r(o, 1);
+  std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  std::mt19937_64 rng(11);
+  const Pose2 pose{0.0, 0.0, 0.0};
+  const Eigen::Vector2d tangent = Eigen::Vector2d(-lms[2].y(), lms[2].x()).normalized();
+  int drift_records = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    if (frame >= 10) lms[2] += 0.003 * tangent;
+    r.process(test::frame_from(frame, pose, pose, lms, test::all_ids(6), &rng));
+    for (const GateRecord& g : r.gate_records()) {
+      EXPECT_EQ(g.inside, g.d2 <= g.threshold) << to_string(g.kind) << " frame " << frame;
+      if (g.kind != GateKind::kDrift) continue;
+      ++drift_records;
+      EXPECT_EQ(g.landmark_id, 2);
+      EXPECT_DOUBLE_EQ(g.threshold, chi2_quantile(o.drift_gate_probability, 2));
+    }
+  }
+  EXPECT_GT(drift_records, 0);
 }
 
 TEST(DriftTest, StaticLandmarksAreNotFlaggedByTheDriftTest) {

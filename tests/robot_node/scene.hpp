@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/robot.hpp"
 
 namespace elaslam::test {
@@ -78,6 +79,22 @@ inline FrameInput frame_from(int frame, const Pose2& truth, const Pose2& odomete
 inline std::vector<int> all_ids(std::size_t n) {
   std::vector<int> v;
   for (std::size_t i = 0; i < n; ++i) v.push_back(static_cast<int>(i));
+  return v;
+}
+
+/// The landmarks `lms` (ids 0..n-1) as seen from `truth`, as ElaGate's view holds
+/// them (local position and its covariance from the filter's measurement noise).
+inline std::vector<InView> view_of(const EkfSlam& ekf, const Pose2& truth, const std::vector<Eigen::Vector2d>& lms,
+                                   std::mt19937_64* rng) {
+  const FrameInput in = frame_from(0, truth, truth, lms, all_ids(lms.size()), rng);
+  std::vector<InView> v;
+  for (int k = 0; k < in.num_obs; ++k) {
+    InView x;
+    x.id = in.obs[static_cast<std::size_t>(k)].landmark_id;
+    x.z = in.obs[static_cast<std::size_t>(k)].z;
+    set_local(&x, ekf.measurement_cov());
+    v.push_back(x);
+  }
   return v;
 }
 

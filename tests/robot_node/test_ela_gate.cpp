@@ -1,0 +1,242 @@
+// The ELA gate: eq 16 and the pairwise relative test on constructed scenes, and
+// ElaGate's verdicts and records (one per landmark, naming the test that decided).
+#include "elaslam/robot_node/ela_gate.hpp"
+
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "elaslam/common/stats.hpp"
+#include "scene.hpp"
+
+namespace elaslam {
+namespace {
+
+using test::view_of;
+
+const double kThreshold = chi2_quantile(0.99, 2);
+
+TEST(ElaGate, LandmarkDisplacedBySeveralSigmaIsFlaggedOthersAreNot) {
+  // GIVEN a map of 8 landmarks 4 m away (position sigma ~5 cm), observed noise-free
+  const Pose2 pose{0.0, 0.0, 0.3};
+  auto lms = test::ring(8, 4.0);
+  const EkfSlam ekf = test::mapped_filter(pose, lms);
+  // WHEN landmark 2 has moved by 0.5 m (about 7 sigma of the relative vectors)
+  lms[2] += Eigen::Vector2d(0.5, 0.0);
+  const auto view = view_of(ekf, pose, lms, nullptr);
+  // THEN its ELA test fails and every other landmark's passes
+  for (int i = 0; i < 8; ++i) {
+    const double d2 = ela_multi_d2(ekf, view.data(), 8, i);
+    if (i == 2)
+      EXPECT_GT(d2, 4 * kThreshold) << i;
+    else
+      EXPECT_LT(d2, kThreshold) << i;
+  }
+}
+
+// Draw a true world from the filter's own distribution (mean + chol(P) n), then
+// noisy observations: the gates should fire at about their nominal rate.
+TEST(ElaGate, StaticLandmarksFlaggedAtAboutTheGateRate) {
+  const Pose2 pose{1.0, -0.5, -0.4};
+  const auto lms = test::ring(6, 3.5);
+  EkfSlam ekf = test::mapped_filter(pose, lms);
+  // Some odometry so that the robot's own uncertainty matters too.
+  ekf.predict({0.5, 0.0, 0.05}, Eigen::Vector3d(4e-4, 4e-4, 1e-4).asDiagonal());
+  const Eigen::MatrixXd P = ekf.covariance();
+  const Eigen::VectorXd mean = ekf.mean();
+  const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(P).matrixL();
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n01;
+  int single_flags = 0, multi_flags = 0, tests = 0;
+  const int draws = 4000;
+  for (int d = 0; d < draws; ++d) {
+    Eigen::VectorXd n(mean.size());
+    for (Eigen::Index i = 0; i < n.size(); ++i) n[i] = n01(rng);
+    const Eigen::VectorXd x = mean + L * n;
+    const Pose2 truth{x[0], x[1], x[2]};
+    std::vector<Eigen::Vector2d> true_lms;
+    for (int i = 0; i < 6; ++i) true_lms.push_back(x.segment<2>(StateLayout::landmark_offset(ekf.slot_of(i))));
+    const auto view = view_of(ekf, truth, true_lms, &rng);
+    for (int i = 0; i < 6; ++i, ++tests) {
+      single_flags += ekf.check(view[static_cast<std::size_t>(i)].id, view[static_cast<std::size_t>(i)].z).d2 > kThreshold;
+      multi_flags += ela_multi_d2(ekf, view.data(), 6, i) > kThreshold;
+    }
+  }
+  const double single_rate = static_cast<double>(single_flags) / tests;
+  const double multi_rate = static_cast<double>(multi_flags) / tests;
+  // Both tests are exact for a linear-Gaussian world: 1 % +- 4 binomial sigma. For
+  // eq 16 this holds because the residual's covariance is computed from its parts
+  // (ela_gate.cpp); with the naive product-of-Gaussians covariance the rate was 5 %.
+  const double tol = 4.0 * std::sqrt(0.01 * 0.99 / tests);
+  EXPECT_NEAR(single_rate, 0.01, tol);
+  EXPECT_NEAR(multi_rate, 0.01, tol);
+  RecordProperty("single_rate", std::to_string(single_rate));
+  RecordProperty("multi_rate", std::to_string(multi_rate));
+}
+
+TEST(ElaGate, RobotPositionErrorCancelsInTheMultiLandmarkElaOnly) {
+  // GIVEN a map built at the true pose
+  const Pose2 truth{0.0, 0.0, 0.0};
+  const auto lms = test::ring(7, 4.0);
+  EkfSlam ekf = test::mapped_filter(truth, lms);
+  // WHEN the filter believes (confidently) it moved 1 m while it did not
+  ekf.predict({1.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-8);
+  std::mt19937_64 rng(3);
+  const auto view = view_of(ekf, truth, lms, &rng);
+  // THEN every single-landmark test fails, and no multi-landmark ELA test does
+  for (int i = 0; i < 7; ++i) {
+    EXPECT_GT(ekf.check(view[static_cast<std::size_t>(i)].id, view[static_cast<std::size_t>(i)].z).d2, kThreshold);
+    EXPECT_LT(ela_multi_d2(ekf, view.data(), 7, i), kThreshold);
+  }
+}
+
+TEST(ElaGate, PairTestIsSymmetricAndDetectsRelativeMotion) {
+  const Pose2 pose{0.5, 0.5, 1.0};
+  auto lms = test::ring(4, 3.0);
+  const EkfSlam ekf = test::mapped_filter(pose, lms);
+  auto view = view_of(ekf, pose, lms, nullptr);
+  EXPECT_NEAR(pair_d2(ekf, view[0], view[1]), pair_d2(ekf, view[1], view[0]), 1e-9);
+  EXPECT_LT(pair_d2(ekf, view[0], view[1]), 1e-6);
+  lms[1] += Eigen::Vector2d(0.0, 0.4);
+  view = view_of(ekf, pose, lms, nullptr);
+  EXPECT_GT(pair_d2(ekf, view[0], view[1]), kThreshold);
+  EXPECT_LT(pair_d2(ekf, view[0], view[2]), 1e-6);
+}
+
+// ---- ElaGate: one verdict and one record per landmark in view -----------------------
+
+// Every record names the test that decided and carries that test's own numbers.
+void expect_consistent(const GateRecord& g) {
+  EXPECT_EQ(g.inside, g.d2 <= g.threshold) << to_string(g.kind) << " " << g.landmark_id;
+}
+
+void judge(ElaGate* gate, LMap* lmap, const EkfSlam& ekf, const Pose2& truth,
+           const std::vector<Eigen::Vector2d>& lms, const std::vector<int>& ids) {
+  gate->clear();
+  for (int id : ids) gate->add_to_view(id, observe(truth, lms[static_cast<std::size_t>(id)]));
+  gate->judge_view(ekf, lmap);
+}
+
+TEST(ElaGateFrame, OneVerdictAndOneRecordPerLandmarkInViewEq16) {
+  const Pose2 pose{0.0, 0.0, 0.3};
+  auto lms = test::ring(8, 4.0);
+  const EkfSlam ekf = test::mapped_filter(pose, lms);
+  lms[2] += Eigen::Vector2d(0.5, 0.0);
+  ElaGate gate(test::robot_options(Mode::kEla));
+  LMap lmap(64);
+  judge(&gate, &lmap, ekf, pose, lms, test::all_ids(8));
+  ASSERT_EQ(gate.view_size(), 8);
+  ASSERT_EQ(gate.records().size(), 8u);
+  for (int k = 0; k < 8; ++k) {
+    const GateRecord& g = gate.records()[static_cast<std::size_t>(k)];
+    EXPECT_EQ(g.landmark_id, k);
+    EXPECT_EQ(g.kind, GateKind::kMulti);
+    EXPECT_EQ(gate.verdict(k).inside, k != 2) << k;
+    EXPECT_EQ(gate.verdict(k).inside, g.inside);
+    EXPECT_FALSE(gate.verdict(k).alone);
+    expect_consistent(g);
+  }
+}
+
+TEST(ElaGateFrame, ALoneLandmarkIsJudgedByItsPriorInnovation) {
+  const Pose2 pose{0.0, 0.0, 0.0};
+  auto lms = test::ring(4, 3.0);
+  const EkfSlam ekf = test::mapped_filter(pose, lms);
+  lms[1] += Eigen::Vector2d(0.0, 0.6);
+  for (Mode mode : {Mode::kEla, Mode::kConsensus}) {
+    ElaGate gate(test::robot_options(mode));
+    LMap lmap(64);
+    judge(&gate, &lmap, ekf, pose, lms, {1});
+    ASSERT_EQ(gate.records().size(), 1u);
+    EXPECT_EQ(gate.records()[0].kind, GateKind::kInnovation);
+    EXPECT_FALSE(gate.verdict(0).inside);
+    EXPECT_TRUE(gate.verdict(0).alone);
+    EXPECT_DOUBLE_EQ(gate.records()[0].d2, ekf.check(1, observe(pose, lms[1])).d2);
+    expect_consistent(gate.records()[0]);
+  }
+}
+
+TEST(ElaGateFrame, ConsensusRecordsTheCliqueAndTheReTest) {
+  const Pose2 pose{0.0, 0.0, 0.2};
+  auto lms = test::ring(8, 4.0);
+  const EkfSlam ekf = test::mapped_filter(pose, lms);
+  lms[5] += Eigen::Vector2d(0.0, 0.7);
+  ElaGate gate(test::robot_options(Mode::kConsensus));
+  LMap lmap(64);
+  judge(&gate, &lmap, ekf, pose, lms, test::all_ids(8));
+  ASSERT_EQ(gate.records().size(), 8u);
+  for (int k = 0; k < 8; ++k) {
+    const GateRecord& g = gate.records()[static_cast<std::size_t>(k)];
+    EXPECT_EQ(g.kind, GateKind::kConsensus);
+    EXPECT_EQ(g.inside, k != 5) << k;
+    if (k == 5) {
+      EXPECT_GT(g.d2, g.threshold);  // re-tested against the clique by eq 16
+    }
+    expect_consistent(g);
+  }
+}
+
+TEST(ElaGateFrame, ADriftRejectionRecordsTheDriftTestWithItsOwnNumbers) {
+  // GIVEN landmark 3's drift sum already far out (a slow mover), landmark 4's near 0
+  const Pose2 pose{0.0, 0.0, 0.0};
+  const auto lms = test::ring(6, 3.0);
+  const EkfSlam ekf = test::mapped_filter(pose, lms);
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.drift_memory = 0.9;
+  ElaGate gate(o);
+  LMap lmap(64);
+  lmap.add_drift(3, 0.9, Eigen::Vector2d(20.0, 0.0));
+  // WHEN every landmark passes eq 16
+  judge(&gate, &lmap, ekf, pose, lms, test::all_ids(6));
+  // THEN landmark 3 is rejected by the drift test, and its record says so
+  const GateRecord& g = gate.records()[3];
+  EXPECT_FALSE(gate.verdict(3).inside);
+  EXPECT_EQ(g.kind, GateKind::kDrift);
+  EXPECT_DOUBLE_EQ(g.d2, lmap[3].drift.squaredNorm() * (1.0 - 0.9 * 0.9));
+  EXPECT_DOUBLE_EQ(g.threshold, chi2_quantile(o.drift_gate_probability, 2));
+  for (int k = 0; k < 6; ++k) {
+    expect_consistent(gate.records()[static_cast<std::size_t>(k)]);
+    if (k == 3) continue;
+    EXPECT_EQ(gate.records()[static_cast<std::size_t>(k)].kind, GateKind::kMulti);
+    EXPECT_TRUE(gate.verdict(k).inside);
+  }
+  // s <- lambda s + w, w ~ 0 here (noise-free sightings from the mapping pose)
+  EXPECT_NEAR(lmap[3].drift.x(), 18.0, 1e-6);
+}
+
+TEST(ElaGateFrame, CandidateVerdictsAndTheirRecords) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.candidate_drift_test = true;
+  ElaGate gate(o);
+  LMap lmap(64);
+  gate.clear();
+  UpdateReport ok;
+  ok.d2 = 1.0;
+  ok.whitened = Eigen::Vector2d(1.0, 0.0);
+  EXPECT_TRUE(gate.judge_candidate(7, ok, &lmap));  // |sum|^2 / n = 1
+  UpdateReport far = ok;
+  far.d2 = 50.0;
+  EXPECT_FALSE(gate.judge_candidate(7, far, &lmap));
+  UpdateReport failed;
+  failed.status = EkfStatus::kSingular;
+  EXPECT_FALSE(gate.judge_candidate(7, failed, &lmap));
+  // Consistent sightings that all lean the same way: the sum's test decides.
+  UpdateReport leaning = ok;
+  leaning.d2 = 8.0;
+  leaning.whitened = Eigen::Vector2d(2.8, 0.0);
+  EXPECT_TRUE(gate.judge_candidate(8, leaning, &lmap));   // |2.8|^2 / 1 = 7.8
+  EXPECT_FALSE(gate.judge_candidate(8, leaning, &lmap));  // |5.6|^2 / 2 = 15.7
+  const auto& r = gate.records();
+  ASSERT_EQ(r.size(), 5u);
+  EXPECT_EQ(r[0].kind, GateKind::kCandidate);
+  EXPECT_EQ(r[1].kind, GateKind::kCandidate);
+  EXPECT_EQ(r[2].kind, GateKind::kCandidate);
+  EXPECT_EQ(r[2].d2, std::numeric_limits<double>::infinity());  // no innovation: outside
+  EXPECT_EQ(r[3].kind, GateKind::kCandidate);
+  EXPECT_EQ(r[4].kind, GateKind::kCandidateDrift);
+  EXPECT_NEAR(r[4].d2, 5.6 * 5.6 / 2, 1e-12);
+  for (const GateRecord& g : r) expect_consistent(g);
+}
+
+}  // namespace
+}  // namespace elaslam
