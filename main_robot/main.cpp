@@ -1,36 +1,32 @@
 // main_robot: the team's global map, as its own process on LCM.
-//   main_robot [--config FILE] [--state PATH] [--lcm-url URL]
+//   main_robot [--config FILE] [--state PATH] [--lcm-url URL] [--channel-suffix S]
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
 // the installed default (common/cli.hpp).
-// Subscribes LMAP_EVENT, LMAP_SNAPSHOT; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
-// STATUS_MAIN. The map is saved to --state atomically (write, then rename) on change
-// at a bounded rate and at shutdown, and reloaded at start.
+// Subscribes LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r>; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
+// STATUS_MAIN. A thin shell: MainNode on the node shell (MainPorts, main_node.hpp),
+// exactly as the in-process team run runs it. The map is saved to --state atomically
+// (write, then rename) on change at a bounded rate and at shutdown, and reloaded at start.
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
-#include <vector>
+#include <string>
 
 #include <CLI/CLI.hpp>
-#include <lcm/lcm-cpp.hpp>
 
-#include "elaslam/common/channels.hpp"
 #include "elaslam/common/cli.hpp"
-#include "elaslam/common/lcm_util.hpp"
 #include "elaslam/main_robot/main_node.hpp"
-#include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/transport/node_shell.hpp"
+#include "elaslam/transport/process.hpp"
 
 namespace elaslam {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 struct Args {
   std::string config;
   std::string state;
-  std::string lcm_url;
-  std::string suffix;
-  int queue = 10000;
+  transport::TransportArgs transport;
+  MainQueues queues;
   bool check = false;
 };
 
@@ -38,89 +34,46 @@ GlobalMapOptions load_options(const std::string& path) {
   config::Document doc = config::Document::from_file(path);
   GlobalMapOptions o;
   doc.section("main", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow({"scenario", "robot", "lcm", "team", "dataset"});
+  doc.allow_sections();
   doc.finish();
   return o;
 }
 
-bool save_state(const GlobalMap& map, const std::string& path) {
+/// Write, then rename: a reader never sees half a file. Says so when it failed.
+void save_state(const GlobalMap& map, const std::string& path) {
   const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    if (!out) return false;
-    out << map.to_json();
-    out.flush();
-    if (!out) return false;
-  }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
+  std::ofstream out(tmp, std::ios::trunc);
+  out << map.to_json();
+  out.close();  // fails (and says so below) when the file could not be opened or written
+  if (out && std::rename(tmp.c_str(), path.c_str()) == 0) return;
+  std::fprintf(stderr, "main_robot: cannot save %s\n", path.c_str());
 }
 
-class Shell {
- public:
-  Shell(const Args& a, const GlobalMapOptions& o, lcm::LCM* lc) : args_(a), node_(o), lc_(lc) {}
-
-  bool subscribe() {
-    auto* e = subscribe_raw<Shell, &Shell::on_event>(*lc_, channels::lmap_event(args_.suffix), this);
-    auto* s = subscribe_raw<Shell, &Shell::on_snapshot>(*lc_, channels::lmap_snapshot(args_.suffix), this);
-    // Every robot's POSE marks the end of its frame: GLOBAL_MAP for frame k goes out
-    // as soon as every robot seen so far has finished k (plus a periodic one).
-    auto* p = subscribe_raw<Shell, &Shell::on_pose>(*lc_, "POSE_[0-9]+" + args_.suffix, this);
-    if (!e || !s || !p) return false;
-    p->setQueueCapacity(1000);
-    // Events come in bursts (one per observed landmark per robot per frame): a deep
-    // queue, on purpose; losses show up as seq gaps and are repaired by snapshots.
-    e->setQueueCapacity(args_.queue);
-    s->setQueueCapacity(100);
-    return true;
+/// The saved map, when --state names a file that exists; false (said why) when it cannot be read.
+bool resume(const std::string& path, GlobalMap* map) {
+  std::ifstream in;
+  if (path.empty() || (in.open(path), !in)) return true;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string why;
+  if (!map->from_json(ss.str(), &why)) {
+    std::fprintf(stderr, "main_robot: cannot load state %s: %s\n", path.c_str(), why.c_str());
+    return false;
   }
+  std::fprintf(stderr, "main_robot: resumed from %s (version %lld, %d static, %d moving)\n", path.c_str(),
+               (long long)map->version(), map->count(GlobalStatus::kStatic), map->count(GlobalStatus::kMoving));
+  return true;
+}
 
-  void on_event(const lcm::ReceiveBuffer* rb, const std::string&) {
-    landmark_event_t m;
-    if (m.decode(rb->data, 0, static_cast<int>(rb->data_size)) < 0) return decode_error("landmark_event_t");
-    std::string why;
-    if (!node_.on_event(m, &why)) warn("event refused: " + why);
-    send_notices();
-  }
-
-  void on_snapshot(const lcm::ReceiveBuffer* rb, const std::string&) {
-    lmap_snapshot_t m;
-    if (m.decode(rb->data, 0, static_cast<int>(rb->data_size)) < 0) return decode_error("lmap_snapshot_t");
-    std::string why;
-    if (!node_.on_snapshot(m, &why)) warn("snapshot refused: " + why);
-    send_notices();
-  }
-
-  void on_pose(const lcm::ReceiveBuffer* rb, const std::string&) {
-    pose_estimate_t m;
-    if (m.decode(rb->data, 0, static_cast<int>(rb->data_size)) < 0) return decode_error("pose_estimate_t");
-    const int done = node_.on_robot_frame(m.robot_id, m.frame);
-    if (done >= 0)
-      publish_msg(*lc_, channels::global_map(args_.suffix), node_.global_map_msg(now_utime(), done), &buf_);
-  }
-
-  void publish_map() { publish_msg(*lc_, channels::global_map(args_.suffix), node_.global_map_msg(now_utime()), &buf_); }
-  void publish_status() { publish_msg(*lc_, channels::status_main(args_.suffix), node_.status_msg(now_utime()), &buf_); }
-  MainNode& node() { return node_; }
-
- private:
-  void send_notices() {
-    for (const auto& n : node_.take_notices(now_utime())) publish_msg(*lc_, channels::dynamic_notice(args_.suffix), n, &buf_);
-  }
-  void decode_error(const char* type) {
-    node_.count_decode_error();
-    warn(std::string("cannot decode a ") + type);
-  }
-  void warn(const std::string& what) {
-    if (++warnings_ <= 20 || warnings_ % 1000 == 0)
-      std::fprintf(stderr, "main_robot: %s (warning %lld)\n", what.c_str(), (long long)warnings_);
-  }
-
-  Args args_;
-  MainNode node_;
-  lcm::LCM* lc_;
-  std::vector<std::uint8_t> buf_;
-  std::int64_t warnings_ = 0;
-};
+void final_line(const MainNode& node) {
+  const auto& c = node.counters();
+  std::fprintf(stderr, "main_robot: events=%lld snapshots=%lld duplicates=%lld gaps=%lld rejected=%lld "
+               "decode_errors=%lld notices=%lld static=%d moving=%d version=%lld\n",
+               (long long)c.events, (long long)c.snapshots, (long long)c.duplicates, (long long)c.gaps,
+               (long long)c.rejected_inputs, (long long)c.decode_errors, (long long)c.notices_sent,
+               node.map().count(GlobalStatus::kStatic), node.map().count(GlobalStatus::kMoving),
+               (long long)node.map().version());
+}
 
 int run(const Args& a) {
   GlobalMapOptions o;
@@ -136,64 +89,37 @@ int run(const Args& a) {
     std::printf("main_robot: %s (%s): valid\n", cfg.path.c_str(), cfg.origin.c_str());
     return 0;
   }
-  lcm::LCM lc(a.lcm_url);
-  if (!lc.good()) {
-    std::fprintf(stderr, "main_robot: cannot open LCM (%s). Multicast on loopback needs a route: "
-                 "ip route add 224.0.0.0/4 dev lo (see tools/netns_run.sh)\n", describe_lcm_url(a.lcm_url).c_str());
-    return 1;
-  }
-  Shell shell(a, o, &lc);
-  if (!a.state.empty()) {
-    std::ifstream in(a.state);
-    if (in) {
-      std::stringstream ss;
-      ss << in.rdbuf();
-      std::string why;
-      if (!shell.node().map().from_json(ss.str(), &why)) {
-        std::fprintf(stderr, "main_robot: cannot load state %s: %s\n", a.state.c_str(), why.c_str());
-        return 2;
-      }
-      std::fprintf(stderr, "main_robot: resumed from %s (version %lld, %d static, %d moving)\n", a.state.c_str(),
-                   (long long)shell.node().map().version(), shell.node().map().count(GlobalStatus::kStatic),
-                   shell.node().map().count(GlobalStatus::kMoving));
-    }
-  }
-  if (!shell.subscribe()) {
-    std::fprintf(stderr, "main_robot: cannot subscribe\n");
+  const auto lcm = transport::open_lcm(a.transport.lcm_url, "main_robot");
+  if (!lcm) return 1;
+  transport::NodeShell shell(*lcm, transport::ShellOptions("main_robot", a.transport.channel_suffix));
+  MainNode node(o);
+  MainPorts<transport::NodeShell> ports(shell, node);
+  if (!resume(a.state, &node.map())) return 2;
+  if (!ports.open(a.queues)) {
+    shell.say("cannot subscribe");
     return 1;
   }
   std::fprintf(stderr, "main_robot: %s, config %s (%s), lcm=%s\n", cli::version_line("main_robot").c_str(),
-               cfg.path.c_str(), cfg.origin.c_str(), describe_lcm_url(a.lcm_url).c_str());
-  install_stop_handlers();
-  const auto map_period = std::chrono::microseconds(static_cast<std::int64_t>(1e6 / o.publish_rate_hz));
+               cfg.path.c_str(), cfg.origin.c_str(), transport::describe_url(a.transport.lcm_url).c_str());
+  transport::install_stop_handlers();
+  using Clock = transport::NodeShell::Clock;
+  shell.every(std::chrono::microseconds(static_cast<std::int64_t>(1e6 / o.publish_rate_hz)), [&] { ports.publish_map(); });
+  shell.every(std::chrono::seconds(1), [&] { ports.publish_status(); });
   const auto save_period = std::chrono::milliseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1000));
-  auto next_map = Clock::now(), next_status = Clock::now(), next_save = Clock::now();
-  std::int64_t saved_version = shell.node().map().version();
-  while (!stop_requested().load()) {
-    if (lc.handleTimeout(5) < 0 && !stop_requested().load()) {  // < 0 also on EINTR from our signal
-      std::fprintf(stderr, "main_robot: LCM handle error\n");
-      break;
-    }
+  auto next_save = Clock::now();
+  std::int64_t saved_version = node.map().version();
+  shell.every(Clock::duration::zero(), [&] {  // each turn: saved on change, at most once a save_period
     const auto now = Clock::now();
-    if (now >= next_map) shell.publish_map(), next_map += map_period;
-    if (now >= next_status) shell.publish_status(), next_status += std::chrono::seconds(1);
-    if (!a.state.empty() && now >= next_save && shell.node().map().version() != saved_version) {
-      if (!save_state(shell.node().map(), a.state)) std::fprintf(stderr, "main_robot: cannot save %s\n", a.state.c_str());
-      saved_version = shell.node().map().version();
-      next_save = now + save_period;
-    }
-  }
-  shell.publish_map();
-  shell.publish_status();
-  if (!a.state.empty() && !save_state(shell.node().map(), a.state))
-    std::fprintf(stderr, "main_robot: cannot save %s\n", a.state.c_str());
-  const auto& c = shell.node().counters();
-  std::fprintf(stderr, "main_robot: events=%lld snapshots=%lld duplicates=%lld gaps=%lld rejected=%lld "
-               "decode_errors=%lld notices=%lld static=%d moving=%d version=%lld\n",
-               (long long)c.events, (long long)c.snapshots, (long long)c.duplicates, (long long)c.gaps,
-               (long long)c.rejected_inputs, (long long)c.decode_errors, (long long)c.notices_sent,
-               shell.node().map().count(GlobalStatus::kStatic), shell.node().map().count(GlobalStatus::kMoving),
-               (long long)shell.node().map().version());
+    if (a.state.empty() || now < next_save || node.map().version() == saved_version) return;
+    save_state(node.map(), a.state);
+    saved_version = node.map().version();
+    next_save = now + save_period;
+  });
+  shell.spin(5);  // a transport failure is logged; the map is still published and saved
+  ports.publish_map();
+  ports.publish_status();
+  if (!a.state.empty()) save_state(node.map(), a.state);
+  final_line(node);
   return 0;
 }
 
@@ -208,9 +134,8 @@ int main(int argc, char** argv) {
                  "YAML config file, its main: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
                  "else the installed paper.yaml)");
   app.add_option("--state", a.state, "file to persist the global map in (reloaded at start)");
-  app.add_option("--lcm-url", a.lcm_url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
-  app.add_option("--channel-suffix", a.suffix, "suffix appended to every channel name");
-  app.add_option("--event-queue", a.queue, "LMAP_EVENT subscription queue capacity")->check(CLI::Range(1, 1000000));
+  elaslam::transport::add_transport_options(app, &a.transport);
+  app.add_option("--event-queue", a.queues.event, "LMAP_EVENT subscription queue capacity")->check(CLI::Range(1, 1000000));
   app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
   try {
     app.parse(argc, argv);

@@ -2,7 +2,7 @@
 // lcm-logger) against its ground truth, with the same definitions and output files
 // as run_scenario, plus latency and frame accounting.
 //   evaluate --log FILE [--out DIR] [--config FILE] [--baseline MODE] [--quiet]
-//            [--mode M] [--dynamism P] [--speed V] [--seed S]
+//            [--channel-suffix S] [--mode M] [--dynamism P] [--speed V] [--seed S]
 //
 // What the run was comes from the log: RUN_INFO (the frame source's scenario, seed,
 // dynamism, speed, rate, frames, effective config) and the robots' STATUS (their
@@ -33,6 +33,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/channels.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
 #include "elaslam/common/quantile.hpp"
@@ -105,42 +106,44 @@ void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   d->first_map_receive.emplace(g.frame, received);
 }
 
-int robot_of(const std::string& channel, const std::string& prefix) {
-  if (channel.rfind(prefix, 0) != 0) return -1;
-  try {
-    return std::stoi(channel.substr(prefix.size()));
-  } catch (const std::exception&) {
+/// The robot id of a per-robot channel "<prefix><id><suffix>" (channels.hpp), -1 when
+/// `channel` is not one.
+int robot_of(const std::string& channel, const std::string& prefix, const std::string& suffix) {
+  if (channel.size() <= prefix.size() + suffix.size() || channel.rfind(prefix, 0) != 0 ||
+      channel.compare(channel.size() - suffix.size(), suffix.size(), suffix) != 0)
     return -1;
-  }
+  const std::string id = channel.substr(prefix.size(), channel.size() - prefix.size() - suffix.size());
+  if (id.size() > 6 || id.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::stoi(id);
 }
 
-// One event of the log: our channels are decoded (an undecodable one is counted),
-// others ignored.
-void on_event(const LogEvent& ev, LogData* d) {
+// One event of the log: the team's channels (with its suffix) are decoded (an
+// undecodable one is counted), others ignored.
+void on_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
   const std::string& ch = ev.channel;
-  if (ch == "GROUND_TRUTH") {
+  if (ch == channels::ground_truth(sfx)) {
     ground_truth_t m;
     if (!decode(ev, &m, d)) return;
     FrameData& f = d->truth[m.frame];
     set_truth(m, &f);
     f.time_s = static_cast<double>(m.utime) * 1e-6;
-  } else if (ch == "GLOBAL_MAP") {
+  } else if (ch == channels::global_map(sfx)) {
     global_map_t m;
     if (decode(ev, &m, d)) on_map(m, ev.timestamp, d);
-  } else if (robot_of(ch, "POSE_") > 0) {
+  } else if (robot_of(ch, "POSE_", sfx) > 0) {
     pose_estimate_t m;
     if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev.timestamp};
-  } else if (ch == "RUN_INFO") {
+  } else if (ch == channels::run_info(sfx)) {
     run_info_t m;
     if (decode(ev, &m, d)) d->run_info = m;
-  } else if (robot_of(ch, "SENSOR_") > 0) {
+  } else if (robot_of(ch, "SENSOR_", sfx) > 0) {
     sensor_frame_t m;
     if (!decode(ev, &m, d)) return;
     d->sensor_frames[m.robot_id].push_back(m.frame);
     auto& t = d->sensor_utime[m.frame];
     t = std::max(t, m.utime);
     add_observed(m, &d->observed[m.frame]);
-  } else if (robot_of(ch, "STATUS_ROBOT_") > 0) {
+  } else if (robot_of(ch, "STATUS_ROBOT_", sfx) > 0) {
     node_status_t m;
     if (!decode(ev, &m, d)) return;
     d->status[m.node_id].push_back({m.frame, m.frames, m.frames_dropped});
@@ -150,7 +153,7 @@ void on_event(const LogEvent& ev, LogData* d) {
 
 // A damaged log (stray bytes, a truncated tail) is read as far as it holds whole
 // events (team/log_reader.hpp); what was skipped is counted.
-bool read_log(const std::string& path, LogData* d, std::string* why) {
+bool read_log(const std::string& path, const std::string& suffix, LogData* d, std::string* why) {
   std::optional<LogReader> log;
   try {
     log.emplace(path);
@@ -161,12 +164,12 @@ bool read_log(const std::string& path, LogData* d, std::string* why) {
   LogEvent ev;
   while (log->next(&ev)) {
     ++d->events;
-    on_event(ev, d);
+    on_event(ev, suffix, d);
   }
   d->bytes_skipped = log->skipped();
   d->complete = log->complete();
   if (d->truth.empty()) {
-    *why = "no GROUND_TRUTH in " + path + " (was the simulator's channel recorded?)";
+    *why = "no " + channels::ground_truth(suffix) + " in " + path + " (was the simulator's channel recorded?)";
     return false;
   }
   return true;
@@ -285,7 +288,7 @@ nlohmann::json run_info_json(const run_info_t& m) {
 }
 
 struct Args {
-  std::string log_path, out_dir, config, baseline, mode;
+  std::string log_path, out_dir, config, baseline, mode, channel_suffix;
   bool quiet = false;
   double dynamism = -1.0, speed = -1.0;
   long long seed = -1;
@@ -429,6 +432,7 @@ int parse_args(int argc, char** argv, Args* a) {
                                             "(needs --config)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--quiet", a->quiet, "no summary on stdout");
+  app.add_option("--channel-suffix", a->channel_suffix, "the team's channel suffix (its processes' --channel-suffix)");
   // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed).
   app.add_option("--mode", a->mode, "mode to record when the robots' STATUS does not say");
   app.add_option("--dynamism", a->dynamism, "dynamism [%] to record when the log has no RUN_INFO "
@@ -456,7 +460,7 @@ int main(int argc, char** argv) {
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
   LogData d;
   std::string why;
-  if (!read_log(a.log_path, &d, &why)) {
+  if (!read_log(a.log_path, a.channel_suffix, &d, &why)) {
     std::fprintf(stderr, "evaluate: %s\n", why.c_str());
     return 2;
   }

@@ -1,40 +1,23 @@
 #include "elaslam/team/team_run.hpp"
 
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
 
+#include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/world.hpp"
 #include "elaslam/team/frame_data.hpp"
+#include "elaslam/transport/inprocess_transport.hpp"
+#include "elaslam/transport/node_shell.hpp"
 
 namespace elaslam {
 namespace {
-
-// The in-process bus: every message crosses it encoded, exactly as on LCM, so the
-// in-process run exercises the message contract the live team uses.
-class Bus {
- public:
-  template <typename Msg>
-  Msg carry(const Msg& m) {
-    const int size = m.getEncodedSize();
-    if (buf_.size() < static_cast<std::size_t>(size)) buf_.resize(static_cast<std::size_t>(size));
-    Msg out;
-    if (m.encode(buf_.data(), 0, size) != size || out.decode(buf_.data(), 0, size) != size)
-      throw std::logic_error(std::string("in-process bus: cannot encode/decode ") + Msg::getTypeName());
-    ++messages_;
-    return out;
-  }
-  long long messages() const { return messages_; }
-
- private:
-  std::vector<std::uint8_t> buf_;
-  long long messages_ = 0;
-};
 
 // The oracle: observations of truly moving landmarks never reach the robots.
 void remove_moving(const FrameData& f, sensor_frame_t* s) {
@@ -129,79 +112,166 @@ RunResult run_team(const TeamConfig& config) {
   return run_team(config.robot, config.main, frames, config.oracle);
 }
 
-RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& main_options, FrameProvider& frames,
-                   bool oracle) {
-  const int R = frames.num_robots();
-  std::vector<RobotNode> robots;
-  robots.reserve(static_cast<std::size_t>(R));
-  for (int i = 0; i < R; ++i) robots.emplace_back(robot_options, frames.robot_id(i));
-  MainNode main(main_options);
-  Bus bus;
-  MetricsAccumulator acc;
-  RunResult out;
-  out.estimated.resize(static_cast<std::size_t>(R));
-  out.truth.resize(static_cast<std::size_t>(R));
-  out.corrections_by_landmark.assign(static_cast<std::size_t>(robot_options.ekf.max_landmark_id), 0);
+namespace {
 
-  FrameData f;
-  ground_truth_t gt_in;
-  std::vector<sensor_frame_t> sensors;
-  std::int64_t first_utime = 0;
-  for (int k = 0; k < frames.num_frames(); ++k) {
-    frames.frame(k, &gt_in, &sensors);
-    const ground_truth_t gt = bus.carry(gt_in);
-    const std::int64_t utime = gt.utime;
-    if (k == 0) first_utime = utime;
-    const double t = static_cast<double>(utime - first_utime) * 1e-6;
-    set_truth(gt, &f);
-    f.frame = k;
-    f.time_s = t;
-    clear_estimates(static_cast<std::size_t>(R), &f);
-    // Sensors of frame k -> robots -> main_robot.
-    for (int i = 0; i < R; ++i) {
-      sensor_frame_t s = bus.carry(sensors[static_cast<std::size_t>(i)]);
-      if (oracle) remove_moving(f, &s);
-      add_observed(s, &f.observed);
-      RobotNode& node = robots[static_cast<std::size_t>(i)];
-      if (node.on_sensor(s, utime) != RobotNode::Verdict::kProcessed) continue;
-      for (const GateRecord& g : node.robot().gate_records())
-        if (g.inside && g.kind != GateKind::kCandidate && g.landmark_id >= 0 &&
-            g.landmark_id < static_cast<int>(out.corrections_by_landmark.size()))
-          ++out.corrections_by_landmark[static_cast<std::size_t>(g.landmark_id)];
-      const pose_estimate_t p = bus.carry(node.pose_msg());
-      set_pose(static_cast<std::size_t>(i), p, &f);
-      out.estimated[static_cast<std::size_t>(i)].push_back({t, {p.x, p.y, p.theta}});
-      if (static_cast<std::size_t>(i) < f.true_poses.size())
-        out.truth[static_cast<std::size_t>(i)].push_back({t, f.true_poses[static_cast<std::size_t>(i)]});
-      for (const auto& ev : node.event_msgs()) main.on_event(bus.carry(ev));
-      if (node.snapshot_ready()) main.on_snapshot(bus.carry(node.snapshot_msg()));
-      main.on_robot_frame(p.robot_id, p.frame);  // as main_robot does on each POSE
-    }
-    // -> notices, before frame k + 1.
-    for (const auto& n : main.take_notices(utime)) {
-      const dynamic_notice_t msg = bus.carry(n);
-      for (auto& node : robots) node.on_notice(msg);
-    }
-    read_map(bus.carry(main.global_map_msg(utime, k)), &f.map_landmarks, &f.map_moving);
-    acc.add(f);
+using transport::NodeShell;
+
+// The team on the in-process transport: main_robot and every robot node on node
+// shells with the ports their processes use (MainPorts, RobotPorts), so the live and
+// in-process paths share the code from the decoded message to the published one.
+// This class plays the rest of the live system: the simulator (GROUND_TRUTH, then
+// every robot's SENSOR of the frame, as the simulator publishes them) and the
+// recorder (GROUND_TRUTH, POSE_<r> and GLOBAL_MAP into the metrics' frame data, read
+// as evaluate reads a recording: frame_data.hpp). Every message crosses the transport
+// encoded. The one queue dispatches in publication order, which gives each node the
+// order of a lockstep team: robot i gets SENSOR_i of frame k after every notice of
+// frame k - 1; main_robot gets robot 1's events, snapshot and POSE of frame k, then
+// robot 2's, ...; the notices of frame k reach the robots after their frame k and
+// before k + 1; then the GLOBAL_MAP of frame k.
+class InProcessTeam {
+ public:
+  InProcessTeam(const RobotOptions& robot_options, const GlobalMapOptions& main_options, FrameProvider& frames,
+                bool oracle);
+  void run_frame(int k);
+  RunResult finish();
+
+ private:
+  NodeShell::Handler<ground_truth_t> on_truth();
+  NodeShell::Handler<pose_estimate_t> on_pose();
+  transport::ShellOptions quiet(const std::string& name) {  // no log: refusals are counted only
+    transport::ShellOptions o(name, "", nullptr);
+    o.clock = [this] { return now_utime_; };
+    return o;
   }
-  out.metrics = acc.finish();
-  out.frames = acc.frames();
-  out.robot_ids = acc.robot_ids();
-  for (int id = 0; id < main.map().max_landmark_id(); ++id) {
-    const GlobalEntry& g = main.map().entry(id);
+
+  FrameProvider& frames_;
+  const bool oracle_;
+  const int num_robots_;
+  transport::InProcessTransport bus_;
+  std::int64_t now_utime_ = 0;  // message time: the frame's (runs are reproducible)
+  NodeShell main_shell_;
+  MainNode main_;
+  MainPorts<NodeShell> main_ports_;
+  std::vector<std::unique_ptr<NodeShell>> robot_shells_;
+  std::vector<RobotNode> robots_;  // reserved: the ports hold references
+  std::vector<std::unique_ptr<RobotPorts<NodeShell>>> robot_ports_;
+  NodeShell world_;  // the frame source and the recorder
+  int frame_ = 0;
+  std::int64_t first_utime_ = 0;
+  double time_s_ = 0.0;
+  FrameData f_;
+  ground_truth_t gt_in_;
+  std::vector<sensor_frame_t> sensors_;
+  sensor_frame_t sensor_;
+  MetricsAccumulator acc_;
+  RunResult out_;
+};
+
+InProcessTeam::InProcessTeam(const RobotOptions& robot_options, const GlobalMapOptions& main_options,
+                             FrameProvider& frames, bool oracle)
+    : frames_(frames),
+      oracle_(oracle),
+      num_robots_(frames.num_robots()),
+      main_shell_(bus_, quiet("main_robot")),
+      main_(main_options),
+      main_ports_(main_shell_, main_),
+      world_(bus_, quiet("team")) {
+  const auto R = static_cast<std::size_t>(num_robots_);
+  out_.estimated.resize(R);
+  out_.truth.resize(R);
+  out_.corrections_by_landmark.assign(static_cast<std::size_t>(robot_options.ekf.max_landmark_id), 0);
+  // Subscription order is dispatch order for a message with several subscribers:
+  // main_robot, the robots in order (DYNAMIC_NOTICE), the recorder.
+  main_ports_.open();
+  robots_.reserve(R);
+  for (int i = 0; i < num_robots_; ++i) {
+    const int id = frames.robot_id(i);
+    robot_shells_.push_back(std::make_unique<NodeShell>(bus_, quiet("robot_node " + std::to_string(id))));
+    RobotNode& node = robots_.emplace_back(robot_options, id);
+    auto& ports = *robot_ports_.emplace_back(std::make_unique<RobotPorts<NodeShell>>(*robot_shells_.back(), node));
+    ports.open();
+    ports.after_frame([this](const RobotNode& n) {  // observations that corrected the pose, by landmark
+      for (const GateRecord& g : n.robot().gate_records())
+        if (g.inside && g.kind != GateKind::kCandidate && g.landmark_id >= 0 &&
+            g.landmark_id < static_cast<int>(out_.corrections_by_landmark.size()))
+          ++out_.corrections_by_landmark[static_cast<std::size_t>(g.landmark_id)];
+    });
+  }
+  world_.subscribe<ground_truth_t>(channels::ground_truth(), on_truth(), transport::kUnboundedQueue);
+  world_.subscribe<pose_estimate_t>("POSE_[0-9]+", on_pose(), transport::kUnboundedQueue);
+  world_.subscribe<global_map_t>(
+      channels::global_map(), [this](const global_map_t& g, const std::string&) { read_map(g, &f_.map_landmarks, &f_.map_moving); },
+      transport::kUnboundedQueue);
+}
+
+NodeShell::Handler<ground_truth_t> InProcessTeam::on_truth() {
+  return [this](const ground_truth_t& gt, const std::string&) {
+    if (frame_ == 0) first_utime_ = gt.utime;
+    time_s_ = static_cast<double>(gt.utime - first_utime_) * 1e-6;
+    set_truth(gt, &f_);
+    f_.frame = frame_;
+    f_.time_s = time_s_;
+    clear_estimates(static_cast<std::size_t>(num_robots_), &f_);
+  };
+}
+
+NodeShell::Handler<pose_estimate_t> InProcessTeam::on_pose() {
+  return [this](const pose_estimate_t& p, const std::string&) {
+    for (std::size_t i = 0; i < robots_.size(); ++i) {
+      if (robots_[i].robot_id() != p.robot_id) continue;
+      set_pose(i, p, &f_);
+      out_.estimated[i].push_back({time_s_, {p.x, p.y, p.theta}});
+      if (i < f_.true_poses.size()) out_.truth[i].push_back({time_s_, f_.true_poses[i]});
+    }
+  };
+}
+
+void InProcessTeam::run_frame(int k) {
+  frame_ = k;
+  frames_.frame(k, &gt_in_, &sensors_);
+  now_utime_ = gt_in_.utime;
+  world_.publish(channels::ground_truth(), gt_in_);
+  bus_.dispatch_all();  // the frame's truth first: the oracle reads it
+  for (int i = 0; i < num_robots_; ++i) {
+    sensor_ = sensors_[static_cast<std::size_t>(i)];
+    if (oracle_) remove_moving(f_, &sensor_);
+    add_observed(sensor_, &f_.observed);
+    world_.publish(channels::sensor(frames_.robot_id(i)), sensor_);
+  }
+  bus_.dispatch_all();  // robots -> main_robot -> notices -> robots
+  main_ports_.publish_map(k);
+  bus_.dispatch_all();  // -> the recorder
+  acc_.add(f_);
+}
+
+RunResult InProcessTeam::finish() {
+  RunResult out = std::move(out_);
+  out.metrics = acc_.finish();
+  out.frames = acc_.frames();
+  out.robot_ids = acc_.robot_ids();
+  for (int id = 0; id < main_.map().max_landmark_id(); ++id) {
+    const GlobalEntry& g = main_.map().entry(id);
     if (g.status == GlobalStatus::kStatic) out.final_map.push_back({id, g.fused, g.fused_cov});
     if (g.status == GlobalStatus::kMoving) out.final_moving.push_back(id);
   }
-  out.final_truth = f.true_landmarks;
-  out.truly_moving = f.truly_moving;
-  out.truth_present.assign(f.true_landmarks.size(), 0);
-  for (int i = 0; i < gt_in.num_landmarks; ++i) {
-    const int id = gt_in.landmarks[i].id;
+  out.final_truth = f_.true_landmarks;
+  out.truly_moving = f_.truly_moving;
+  out.truth_present.assign(f_.true_landmarks.size(), 0);
+  for (int i = 0; i < gt_in_.num_landmarks; ++i) {
+    const int id = gt_in_.landmarks[i].id;
     if (id >= 0 && id < static_cast<int>(out.truth_present.size())) out.truth_present[static_cast<std::size_t>(id)] = 1;
   }
-  out.bus_messages = bus.messages();
+  out.bus_messages = bus_.published();
   return out;
+}
+
+}  // namespace
+
+RunResult run_team(const RobotOptions& robot_options, const GlobalMapOptions& main_options, FrameProvider& frames,
+                   bool oracle) {
+  InProcessTeam team(robot_options, main_options, frames, oracle);
+  for (int k = 0; k < frames.num_frames(); ++k) team.run_frame(k);
+  return team.finish();
 }
 
 }  // namespace elaslam

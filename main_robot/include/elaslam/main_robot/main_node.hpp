@@ -1,6 +1,7 @@
 // main_robot's message layer, without I/O: validates LMAP_EVENT / LMAP_SNAPSHOT,
 // applies them to the GlobalMap, and fills GLOBAL_MAP, DYNAMIC_NOTICE and
-// STATUS_MAIN. The main_robot process and the in-process team run share it.
+// STATUS_MAIN. The main_robot process and the in-process team run share it, and
+// both wire it to the message layer with MainPorts (below).
 #pragma once
 
 #include <array>
@@ -8,12 +9,14 @@
 #include <string>
 #include <vector>
 
+#include "elaslam/common/channels.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/node_status_t.hpp"
+#include "elaslam/pose_estimate_t.hpp"
 
 namespace elaslam {
 
@@ -70,6 +73,74 @@ class MainNode {
   global_map_t msg_{};
   std::vector<std::pair<int, RobotEstimate>> snap_lms_;
   std::vector<int> snap_moving_;
+};
+
+/// Receive queue bounds of main_robot's inputs (LCM's default of 30 drops silently:
+/// LCM.md). Events come in bursts (one per observed landmark per robot per frame): a
+/// deep queue, on purpose; losses show up as seq gaps and snapshots repair them.
+struct MainQueues {
+  int event = 10000;
+  int snapshot = 100;
+  int pose = 1000;
+};
+
+/// A MainNode on the message layer (transport/node_shell.hpp): receives LMAP_EVENT,
+/// LMAP_SNAPSHOT and every robot's POSE_<r>; publishes DYNAMIC_NOTICE as soon as an
+/// event or snapshot produces one, GLOBAL_MAP for frame k as soon as every robot seen
+/// so far has finished k (its POSE marks the end of its frame: it publishes its events
+/// before it), and GLOBAL_MAP / STATUS_MAIN on request. The main_robot process and
+/// the in-process team run both run this. A template on the shell only so that this
+/// library builds without the transport; Shell is NodeShell.
+template <class Shell>
+class MainPorts {
+ public:
+  MainPorts(Shell& shell, MainNode& node)
+      : shell_(shell),
+        node_(node),
+        map_(channels::global_map(shell.suffix())),
+        notice_(channels::dynamic_notice(shell.suffix())),
+        status_(channels::status_main(shell.suffix())) {}
+
+  /// Subscribe the inputs; false when the transport refused.
+  bool open(const MainQueues& queues = {}) {
+    shell_.on_decode_error([this] { node_.count_decode_error(); });
+    const std::string& sfx = shell_.suffix();
+    const int e = shell_.template subscribe<landmark_event_t>(
+        channels::lmap_event(sfx), [this](const landmark_event_t& m, const std::string&) { on_event(m); }, queues.event);
+    const int s = shell_.template subscribe<lmap_snapshot_t>(
+        channels::lmap_snapshot(sfx), [this](const lmap_snapshot_t& m, const std::string&) { on_snapshot(m); },
+        queues.snapshot);
+    const int p = shell_.template subscribe<pose_estimate_t>(
+        "POSE_[0-9]+" + sfx, [this](const pose_estimate_t& m, const std::string&) { on_pose(m); }, queues.pose);
+    return e > 0 && s > 0 && p > 0;
+  }
+
+  /// GLOBAL_MAP now, stamped `frame` (default: the newest frame every robot has finished).
+  void publish_map(int frame = -1) { shell_.publish(map_, node_.global_map_msg(shell_.now_utime(), frame)); }
+  void publish_status() { shell_.publish(status_, node_.status_msg(shell_.now_utime())); }
+
+ private:
+  void on_event(const landmark_event_t& m) {
+    std::string why;
+    if (!node_.on_event(m, &why)) shell_.refuse("event refused: " + why);
+    send_notices();
+  }
+  void on_snapshot(const lmap_snapshot_t& m) {
+    std::string why;
+    if (!node_.on_snapshot(m, &why)) shell_.refuse("snapshot refused: " + why);
+    send_notices();
+  }
+  void on_pose(const pose_estimate_t& m) {
+    const int done = node_.on_robot_frame(m.robot_id, m.frame);
+    if (done >= 0) publish_map(done);
+  }
+  void send_notices() {
+    for (const auto& n : node_.take_notices(shell_.now_utime())) shell_.publish(notice_, n);
+  }
+
+  Shell& shell_;
+  MainNode& node_;
+  const std::string map_, notice_, status_;  // channel names, built once
 };
 
 }  // namespace elaslam

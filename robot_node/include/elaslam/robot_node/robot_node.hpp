@@ -1,13 +1,16 @@
 // The robot node's message layer, without I/O: validates incoming messages, keeps
 // frame order, runs the Robot, and fills the outgoing messages (POSE, LMAP_EVENT
 // with a per-robot seq, LMAP_SNAPSHOT, STATUS_ROBOT). The robot_node process and
-// the in-process team run both drive this class, so both behave the same.
+// the in-process team run both drive this class, so both behave the same; both wire
+// it to the message layer with RobotPorts (below).
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
+#include "elaslam/common/channels.hpp"
 #include "elaslam/common/histogram.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
@@ -93,6 +96,82 @@ class RobotNode {
   bool snapshot_ready_ = false;
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
   std::vector<dynamic_notice_t> held_;  // notices for frames not processed yet (fixed capacity)
+};
+
+/// Receive queue bounds of the robot's inputs. LCM's default of 30 drops silently
+/// (LCM.md): both sized on purpose. Lost sensor frames show up as frame gaps, lost
+/// notices as seq gaps (RobotNodeCounters::queue_drops).
+struct RobotQueues {
+  int sensor = 200;
+  int notice = 1000;
+};
+
+/// A RobotNode on the message layer (transport/node_shell.hpp): receives SENSOR_<r>
+/// and DYNAMIC_NOTICE; for every processed frame publishes its LMAP_EVENTs, its
+/// LMAP_SNAPSHOT when one is due, then POSE_<r> (the end of the robot's frame for
+/// main_robot); STATUS_ROBOT_<r> on request. The robot_node process and the
+/// in-process team run both run this, so the live and in-process paths share it.
+/// A template on the shell only so that this library builds without the transport
+/// (the no-allocation test compiles its sources alone); Shell is NodeShell.
+template <class Shell>
+class RobotPorts {
+ public:
+  RobotPorts(Shell& shell, RobotNode& node)
+      : shell_(shell),
+        node_(node),
+        event_(channels::lmap_event(shell.suffix())),
+        snapshot_(channels::lmap_snapshot(shell.suffix())),
+        pose_(channels::pose(node.robot_id(), shell.suffix())),
+        status_(channels::status_robot(node.robot_id(), shell.suffix())) {}
+
+  /// Subscribe the inputs; false when the transport refused.
+  bool open(const RobotQueues& queues = {}) {
+    shell_.on_decode_error([this] { node_.count_decode_error(); });
+    const int sensor = shell_.template subscribe<sensor_frame_t>(
+        channels::sensor(node_.robot_id(), shell_.suffix()),
+        [this](const sensor_frame_t& m, const std::string&) { on_sensor(m); }, queues.sensor);
+    const int notice = shell_.template subscribe<dynamic_notice_t>(
+        channels::dynamic_notice(shell_.suffix()), [this](const dynamic_notice_t& m, const std::string&) { on_notice(m); },
+        queues.notice);
+    return sensor > 0 && notice > 0;
+  }
+
+  void publish_status() { shell_.publish(status_, node_.status_msg(shell_.now_utime())); }
+
+  /// Called after every processed frame, before its messages go out (the in-process
+  /// run reads the frame's gate records there).
+  void after_frame(std::function<void(const RobotNode&)> fn) { after_frame_ = std::move(fn); }
+
+ private:
+  void on_sensor(const sensor_frame_t& msg) {
+    std::string why;
+    const auto v = node_.on_sensor(msg, shell_.now_utime(), &why);
+    if (v == RobotNode::Verdict::kInvalid) shell_.refuse("sensor frame refused: " + why);
+    if (v != RobotNode::Verdict::kProcessed) return;
+    if (after_frame_) after_frame_(node_);
+    const std::int64_t now = shell_.now_utime();
+    for (auto ev : node_.event_msgs()) {
+      ev.utime = now;
+      shell_.publish(event_, ev);
+    }
+    if (node_.snapshot_ready()) shell_.publish(snapshot_, node_.snapshot_msg());
+    pose_estimate_t pose = node_.pose_msg();
+    pose.utime = shell_.now_utime();
+    shell_.publish(pose_, pose);
+  }
+
+  void on_notice(const dynamic_notice_t& msg) {
+    const std::int64_t lost = notice_seq_.observe(msg.seq);
+    if (lost > 0) node_.count_queue_drops(lost);
+    std::string why;
+    if (!node_.on_notice(msg, &why)) shell_.refuse("dynamic notice refused: " + why);
+  }
+
+  Shell& shell_;
+  RobotNode& node_;
+  const std::string event_, snapshot_, pose_, status_;  // channel names, built once
+  typename Shell::SequenceGaps notice_seq_;            // DYNAMIC_NOTICE's seq: lost notices
+  std::function<void(const RobotNode&)> after_frame_;
 };
 
 }  // namespace elaslam

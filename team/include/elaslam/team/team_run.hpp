@@ -1,7 +1,9 @@
 // The whole team in one process, in lockstep (DESIGN.md section 1, way 2):
-// simulator + every robot node + main_robot, frame by frame, through an in-process
-// bus that carries the same encoded LCM messages as the live system. Order per
-// frame: sensors of frame k -> robots -> main_robot -> notices, before frame k+1.
+// simulator + every robot node + main_robot, frame by frame, over the in-process
+// transport (transport/inprocess_transport.hpp), each node on the node shell with the
+// ports its process uses (RobotPorts, MainPorts): the live and in-process paths share
+// the code, and every message crosses encoded as on LCM. Order per frame: sensors of
+// frame k -> robots -> main_robot -> notices, before frame k+1; then GLOBAL_MAP.
 // Deterministic: the same config gives the same result (timing aside).
 #pragma once
 
@@ -53,7 +55,7 @@ struct RunResult {
   std::vector<Eigen::Vector2d> final_truth;  // true landmark positions at the last frame
   std::vector<std::uint8_t> truly_moving;
   std::vector<std::uint8_t> truth_present;  // ids with ground truth (empty: all of final_truth)
-  long long bus_messages = 0;  // messages carried by the in-process bus
+  long long bus_messages = 0;  // messages published on the in-process transport
   // Observations that corrected a robot's pose (all robots), by landmark id.
   std::vector<long> corrections_by_landmark;
 };

@@ -1,0 +1,157 @@
+#include "elaslam/simulator/sim_node.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "elaslam/common/channels.hpp"
+#include "elaslam/node_status_t.hpp"
+#include "elaslam/simulator/lockstep.hpp"
+#include "elaslam/simulator/messages.hpp"
+#include "elaslam/simulator/scheduler.hpp"
+#include "elaslam/simulator/world.hpp"
+
+namespace elaslam::sim {
+namespace {
+
+constexpr std::int64_t kTimeoutsReported = 10;
+constexpr std::int64_t kLateReported = 10;
+
+class SimNode {
+ public:
+  SimNode(transport::NodeShell& shell, const ScenarioOptions& o, const SimRunOptions& r)
+      : shell_(shell), o_(o), r_(r), world_(o), sensor_msgs_(o.robots.size()),
+        truth_(std::make_unique<ground_truth_t>()),  // ~10 KB: off the stack
+        info_(to_run_info(o, r.config_path, r.effective_yaml, r.team_mode, shell.now_utime())) {}
+
+  int run();
+
+ private:
+  void publish_info(int frame) {
+    info_.utime = shell_.now_utime();
+    info_.frame = frame;
+    shell_.publish(channels::run_info(shell_.suffix()), info_);
+  }
+  void publish_status(int frame);
+  bool publish_frame(int k, const FrameSchedule& schedule);
+  void say_summary() const;
+
+  transport::NodeShell& shell_;
+  const ScenarioOptions& o_;
+  const SimRunOptions& r_;
+  World world_;
+  std::optional<LockstepWaiter> waiter_;
+  ScheduleStats stats_;
+  std::int64_t lockstep_timeouts_ = 0, publish_errors_ = 0;
+  std::vector<sensor_frame_t> sensor_msgs_;
+  std::unique_ptr<ground_truth_t> truth_;
+  run_info_t info_;
+};
+
+int SimNode::run() {
+  publish_info(-1);  // a recorder that is already listening knows the run before the team starts
+  if (r_.wait_for_nodes > 0 && !wait_for_nodes(shell_, r_.wait_for_nodes, r_.wait_timeout_ms)) return 1;
+  publish_info(-1);
+  if (r_.lockstep) {
+    std::vector<int> ids;
+    for (const auto& robot : o_.robots) ids.push_back(robot.id);
+    waiter_.emplace(shell_, ids);
+  }
+  const FrameSchedule schedule(o_.rate_hz, mono_ns() + r_.start_delay_ms * kNsPerMs);
+  std::int64_t next_status = schedule.deadline_ns(0);
+  for (int k = 0; k < o_.frames && !shell_.stop_requested(); ++k) {
+    if (!publish_frame(k, schedule)) break;
+    if (waiter_ && !waiter_->wait(k, r_.lockstep_timeout_ms) && !shell_.stop_requested()) {
+      if (++lockstep_timeouts_ <= kTimeoutsReported)  // the first few; the summary has the total
+        shell_.say("lockstep: not every robot's POSE for frame " + std::to_string(k) + " within " +
+                   std::to_string(r_.lockstep_timeout_ms) + " ms, going on" +
+                   (lockstep_timeouts_ == kTimeoutsReported ? " (no more reported)" : ""));
+    }
+    if (mono_ns() >= next_status) {
+      publish_status(k);
+      publish_info(k);
+      next_status += 1000 * kNsPerMs;  // ~1 Hz; after a stall, restart the phase instead of bursting
+      if (next_status <= mono_ns()) next_status = mono_ns() + 1000 * kNsPerMs;
+    }
+  }
+  publish_status(stats_.last_frame);
+  if (shell_.stop_requested()) shell_.say("stopped by signal");
+  say_summary();
+  return 0;
+}
+
+void SimNode::publish_status(int frame) {
+  node_status_t m{};
+  m.utime = shell_.now_utime();
+  m.frame = frame;
+  m.node_kind = node_status_t::SIMULATOR;
+  m.node_id = 0;
+  m.frames = stats_.published;
+  m.frames_dropped = publish_errors_;  // the simulator loses a frame only if publish fails
+  m.rejected_inputs = waiter_ ? waiter_->rejected() : 0;
+  m.decode_errors = waiter_ ? waiter_->decode_errors() : 0;
+  m.processing_us_p50 = static_cast<std::int32_t>(stats_.processing.quantile(0.50));
+  m.processing_us_p99 = static_cast<std::int32_t>(stats_.processing.quantile(0.99));
+  m.processing_us_max = static_cast<std::int32_t>(std::min<std::int64_t>(stats_.processing.max(), INT32_MAX));
+  shell_.publish(channels::status_sim(shell_.suffix()), m);
+}
+
+/// Advance the world to frame k and build its messages ahead of the deadline (the
+/// measured processing time), then publish them at the deadline. False on a stop.
+bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
+  const std::int64_t t_work = mono_ns();
+  if (k > 0) world_.step();
+  for (int r = 0; r < world_.num_robots(); ++r)
+    sensor_msgs_[static_cast<std::size_t>(r)] = to_message(world_.sensor_frame(r), 0);
+  *truth_ = to_message(world_, 0);
+  stats_.processing.add((mono_ns() - t_work) / 1000);
+  const std::int64_t deadline = schedule.deadline_ns(k);
+  if (!sleep_until(deadline, shell_.stop())) return false;
+
+  const std::int64_t t_pub = mono_ns();
+  const std::int64_t utime = shell_.now_utime();  // one stamp for the whole frame
+  for (auto& m : sensor_msgs_) {
+    m.utime = utime;
+    if (!shell_.publish(channels::sensor(m.robot_id, shell_.suffix()), m)) ++publish_errors_;
+  }
+  truth_->utime = utime;
+  if (!shell_.publish(channels::ground_truth(shell_.suffix()), *truth_)) ++publish_errors_;
+  const std::int64_t late_ns = stats_.record(k, t_pub, deadline, schedule.period_ns());
+  if (late_ns > ScheduleStats::kLateNs && stats_.late <= kLateReported) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "frame %d published %.3f ms after its deadline%s", k, late_ns * 1e-6,
+                  stats_.late == kLateReported ? " (no more reported)" : "");
+    shell_.say(buf);
+  }
+  return true;
+}
+
+void SimNode::say_summary() const {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "done: %lld frames published, achieved %.3f Hz (target %.3f Hz), late frames (>1 ms) %lld, "
+                "overruns %lld, max lateness %.3f ms, lockstep timeouts %lld, publish errors %lld, "
+                "truncated observations %lld, processing p50 %lld us p99 %lld us max %lld us",
+                static_cast<long long>(stats_.published), stats_.achieved_hz(), o_.rate_hz,
+                static_cast<long long>(stats_.late), static_cast<long long>(stats_.overruns),
+                static_cast<double>(stats_.max_late_ns) * 1e-6, static_cast<long long>(lockstep_timeouts_),
+                static_cast<long long>(publish_errors_), static_cast<long long>(world_.counters().truncated_obs),
+                static_cast<long long>(stats_.processing.quantile(0.5)),
+                static_cast<long long>(stats_.processing.quantile(0.99)),
+                static_cast<long long>(stats_.processing.max()));
+  shell_.say(buf);
+  if (waiter_)
+    shell_.say("POSE inputs rejected " + std::to_string(waiter_->rejected()) + ", decode errors " +
+               std::to_string(waiter_->decode_errors()) + ", LCM errors " + std::to_string(waiter_->transport_errors()));
+}
+
+}  // namespace
+
+int run_simulator(transport::NodeShell& shell, const ScenarioOptions& o, const SimRunOptions& r) {
+  return SimNode(shell, o, r).run();
+}
+
+}  // namespace elaslam::sim

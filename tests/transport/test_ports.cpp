@@ -1,0 +1,252 @@
+// The nodes on the message layer, over the in-process transport: RobotPorts and
+// MainPorts (what robot_node, main_robot and the in-process team run all run), the
+// channel suffix, and the simulator's lockstep waits.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "elaslam/common/channels.hpp"
+#include "elaslam/global_map_t.hpp"
+#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/simulator/lockstep.hpp"
+#include "elaslam/simulator/messages.hpp"
+#include "elaslam/simulator/scenario.hpp"
+#include "elaslam/simulator/world.hpp"
+#include "elaslam/transport/inprocess_transport.hpp"
+#include "elaslam/transport/node_shell.hpp"
+
+namespace elaslam {
+namespace {
+
+using transport::InProcessTransport;
+using transport::NodeShell;
+using transport::ShellOptions;
+
+const std::string kConfig = std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml";
+
+/// Everything published on a team's channels, in dispatch order: "<channel> <frame>".
+class Observer {
+ public:
+  Observer(InProcessTransport& bus, const std::string& suffix) : shell_(bus, ShellOptions("observer", suffix, nullptr)) {
+    watch<pose_estimate_t>("POSE_[0-9]+" + suffix);
+    watch<landmark_event_t>(channels::lmap_event(suffix));
+    watch<lmap_snapshot_t>(channels::lmap_snapshot(suffix));
+    watch<global_map_t>(channels::global_map(suffix));
+    watch<dynamic_notice_t>(channels::dynamic_notice(suffix));
+  }
+  NodeShell& shell() { return shell_; }
+  std::vector<std::string> seen;
+
+ private:
+  template <class Msg>
+  void watch(const std::string& pattern) {
+    shell_.subscribe<Msg>(pattern, [this](const Msg& m, const std::string& ch) {
+      seen.push_back(ch + " " + std::to_string(m.frame));
+    }, transport::kUnboundedQueue);
+  }
+  NodeShell shell_;
+};
+
+/// Robot 1's sensor frames of the paper's scenario at 50 % dynamism.
+std::vector<sensor_frame_t> robot1_frames(int n) {
+  sim::ScenarioOptions o = sim::load_scenario(kConfig);
+  o.dynamism_percent = 50.0;
+  sim::World world(o);
+  std::vector<sensor_frame_t> out;
+  for (int k = 0; k < n; ++k) {
+    if (k > 0) world.step();
+    out.push_back(sim::to_message(world.sensor_frame(0), 1000 + k));
+  }
+  return out;
+}
+
+TEST(RobotPorts, EachFrameGoesOutAsItsEventsThenItsPose) {
+  InProcessTransport bus;
+  NodeShell shell(bus, ShellOptions("robot_node 1", "", nullptr));
+  RobotNode node(load_robot_options(kConfig), 1);
+  RobotPorts<NodeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  int after_frame = 0;
+  ports.after_frame([&](const RobotNode& n) {
+    EXPECT_EQ(&n, &node);
+    ++after_frame;
+  });
+  Observer obs(bus, "");
+  for (const auto& f : robot1_frames(12)) {
+    obs.shell().publish(channels::sensor(1), f);
+    bus.dispatch_all();
+  }
+  EXPECT_EQ(after_frame, 12);
+  // Per frame: its events, a snapshot every 10 frames, then the POSE (the frame's end).
+  int frame = 0, events = 0, snapshots = 0;
+  for (const std::string& s : obs.seen) {
+    const std::string channel = s.substr(0, s.find(' '));
+    if (channel != "POSE_1") {
+      EXPECT_EQ(s, channel + " " + std::to_string(frame)) << "an output of the frame before its POSE";
+      ++(channel == "LMAP_EVENT" ? events : snapshots);
+    } else {
+      EXPECT_EQ(s, "POSE_1 " + std::to_string(frame++));
+    }
+  }
+  EXPECT_EQ(frame, 12);
+  EXPECT_GT(events, 0);
+  EXPECT_EQ(snapshots, 2);  // frames 0 and 10
+  EXPECT_EQ(static_cast<int>(node.counters().events_sent), events);
+}
+
+TEST(RobotPorts, BadInputIsCountedByTheNodeAndLoggedByTheShell) {
+  InProcessTransport bus;
+  std::FILE* log = std::tmpfile();
+  NodeShell shell(bus, ShellOptions("robot_node 1", "", log));
+  RobotNode node(load_robot_options(kConfig), 1);
+  RobotPorts<NodeShell> ports(shell, node);
+  ports.open();
+  NodeShell other(bus, ShellOptions("other", "", nullptr));
+  sensor_frame_t wrong = robot1_frames(1).front();
+  wrong.robot_id = 2;  // another robot's frame on our channel
+  other.publish(channels::sensor(1), wrong);
+  const std::uint8_t garbage[3] = {1, 2, 3};
+  bus.publish(channels::sensor(1), garbage, sizeof garbage);
+  dynamic_notice_t n{};
+  n.landmark_id = 5;
+  n.detected_by = 2;
+  for (std::int64_t seq : {1, 2, 5}) {  // 3 and 4 lost
+    n.seq = seq;
+    other.publish(channels::dynamic_notice(), n);
+  }
+  bus.dispatch_all();
+  EXPECT_EQ(node.counters().rejected_inputs, 1);
+  EXPECT_EQ(node.counters().decode_errors, 1);
+  EXPECT_EQ(node.counters().queue_drops, 2);
+  EXPECT_EQ(shell.counters().inputs.refused, 1);
+  std::rewind(log);
+  char line[512];
+  ASSERT_NE(std::fgets(line, sizeof line, log), nullptr);
+  EXPECT_STREQ(line, "robot_node 1: sensor frame refused: robot_id is not this robot's (got 2) (warning 1)\n");
+  ASSERT_NE(std::fgets(line, sizeof line, log), nullptr);
+  EXPECT_STREQ(line, "robot_node 1: cannot decode a sensor_frame_t (warning 2)\n");
+  std::fclose(log);
+}
+
+landmark_event_t event(int robot, std::int64_t seq, int frame, int kind, int id) {
+  landmark_event_t e{};
+  e.robot_id = static_cast<int16_t>(robot);
+  e.seq = seq;
+  e.frame = frame;
+  e.kind = static_cast<int8_t>(kind);
+  e.landmark_id = id;
+  e.x = id;
+  e.cov[0][0] = e.cov[1][1] = 0.01;
+  return e;
+}
+
+pose_estimate_t pose(int robot, int frame) {
+  pose_estimate_t p{};
+  p.robot_id = static_cast<int16_t>(robot);
+  p.frame = frame;
+  return p;
+}
+
+TEST(MainPorts, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
+  InProcessTransport bus;
+  NodeShell shell(bus, ShellOptions("main_robot", "", nullptr));
+  MainNode node{GlobalMapOptions{}};
+  MainPorts<NodeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  Observer obs(bus, "");
+  NodeShell& robots = obs.shell();
+  robots.publish(channels::lmap_event(), event(1, 1, 0, landmark_event_t::ADD, 4));
+  robots.publish(channels::pose(1), pose(1, 0));  // the only robot seen so far: frame 0 is done
+  robots.publish(channels::lmap_event(), event(2, 1, 0, landmark_event_t::ADD, 4));
+  robots.publish(channels::pose(2), pose(2, 0));
+  robots.publish(channels::pose(1), pose(1, 1));
+  robots.publish(channels::lmap_event(), event(2, 2, 1, landmark_event_t::MOVING, 4));
+  robots.publish(channels::pose(2), pose(2, 1));
+  bus.dispatch_all();
+  ports.publish_map(1);
+  bus.dispatch_all();
+  const std::vector<std::string> expected = {
+      "LMAP_EVENT 0", "POSE_1 0", "LMAP_EVENT 0", "POSE_2 0", "POSE_1 1", "LMAP_EVENT 1", "POSE_2 1",
+      "GLOBAL_MAP 0",      // after POSE_1 0 (queued behind what was queued then)
+      "DYNAMIC_NOTICE 1",  // robot 2's MOVING
+      "GLOBAL_MAP 1",      // after POSE_2 1
+      "GLOBAL_MAP 1"};     // on request
+  EXPECT_EQ(obs.seen, expected);
+  EXPECT_EQ(node.counters().events, 3);
+  EXPECT_EQ(node.counters().notices_sent, 1);
+}
+
+TEST(Ports, TheChannelSuffixIsInEveryName) {
+  InProcessTransport bus;
+  NodeShell main_shell(bus, ShellOptions("main_robot", "_T", nullptr));
+  MainNode main{GlobalMapOptions{}};
+  MainPorts<NodeShell> main_ports(main_shell, main);
+  main_ports.open();
+  NodeShell robot_shell(bus, ShellOptions("robot_node 1", "_T", nullptr));
+  RobotNode robot(load_robot_options(kConfig), 1);
+  RobotPorts<NodeShell> robot_ports(robot_shell, robot);
+  robot_ports.open();
+  Observer plain(bus, ""), suffixed(bus, "_T");
+  const auto frames = robot1_frames(2);
+  plain.shell().publish(channels::sensor(1), frames[0]);  // not this team's
+  bus.dispatch_all();
+  EXPECT_EQ(robot.counters().frames, 0);
+  plain.shell().publish(channels::sensor(1, "_T"), frames[0]);
+  bus.dispatch_all();
+  robot_ports.publish_status();
+  main_ports.publish_status();
+  bus.dispatch_all();
+  EXPECT_EQ(robot.counters().frames, 1);
+  EXPECT_TRUE(plain.seen.empty());
+  ASSERT_FALSE(suffixed.seen.empty());
+  EXPECT_EQ(suffixed.seen.back(), "GLOBAL_MAP_T 0");  // after POSE_1_T 0
+  EXPECT_EQ(bus.dropped(), 3) << "SENSOR_1 and both STATUS had no subscriber here";
+}
+
+TEST(Lockstep, WaitsForEveryRobotsPoseAndRefusesAnotherRobots) {
+  InProcessTransport bus;
+  std::atomic<bool> stop{false};
+  ShellOptions o("simulator", "", nullptr);
+  o.stop = &stop;
+  NodeShell shell(bus, o);
+  sim::LockstepWaiter waiter(shell, {1, 2});
+  NodeShell robots(bus, ShellOptions("robots", "", nullptr));
+  robots.publish(channels::pose(1), pose(1, 0));
+  EXPECT_FALSE(waiter.wait(0, 5)) << "robot 2 has not answered";
+  robots.publish(channels::pose(2), pose(1, 0));  // robot 1's pose on POSE_2
+  EXPECT_FALSE(waiter.wait(0, 5));
+  EXPECT_EQ(waiter.rejected(), 1);
+  robots.publish(channels::pose(2), pose(2, 3));
+  EXPECT_TRUE(waiter.wait(0, 1000));
+  stop = true;
+  EXPECT_FALSE(waiter.wait(1, 100000)) << "a stop ends the wait";
+}
+
+TEST(Lockstep, WaitForNodesCountsDistinctStatusChannels) {
+  InProcessTransport bus;
+  NodeShell shell(bus, ShellOptions("simulator", "", nullptr));
+  NodeShell nodes(bus, ShellOptions("nodes", "", nullptr));
+  node_status_t s{};
+  // Published before the wait subscribes: dropped (no subscriber yet), as on LCM.
+  nodes.publish(channels::status_main(), s);
+  EXPECT_FALSE(sim::wait_for_nodes(shell, 1, 5));
+  // A node announcing itself from inside the wait: the transport's first message
+  // subscribes a helper that publishes (in one thread, a handler is the only way).
+  int calls = 0;
+  nodes.subscribe<node_status_t>("STATUS_SIM", [&](const node_status_t&, const std::string&) {
+    ++calls;
+    nodes.publish(channels::status_robot(1), s);
+    nodes.publish(channels::status_robot(1), s);
+    nodes.publish(channels::status_main(), s);
+  }, transport::kUnboundedQueue);
+  nodes.publish(channels::status_sim(), s);
+  EXPECT_TRUE(sim::wait_for_nodes(shell, 2, 1000));
+  EXPECT_EQ(calls, 1);
+}
+
+}  // namespace
+}  // namespace elaslam
