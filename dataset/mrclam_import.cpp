@@ -86,84 +86,107 @@ run_info_t run_info(const mrclam::FrameSource& src, const mrclam::Options& o, co
   return m;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct Args {
   std::string dataset_dir, config_path, robots, out_path;
   double rate = -1.0, start = -1.0, duration = -1.0;
   bool with_robot_barcodes = false;
+};
+
+/// -1 to go on, else the exit code.
+int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam mrclam_import: a UTIAS MRCLAM recording as an LCM log (SENSOR_<id>, GROUND_TRUTH)"};
-  app.add_option("--dataset", dataset_dir, "dataset directory (RobotN_*.dat, Barcodes.dat, ...)")
+  app.add_option("--dataset", a->dataset_dir, "dataset directory (RobotN_*.dat, Barcodes.dat, ...)")
       ->required()
       ->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "mrclam_import");
-  app.add_option("--config", config_path, "YAML config with a dataset: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
-  app.add_option("--rate", rate, "frames per second (default dataset.rate_hz)")->check(CLI::Range(0.1, 1000.0));
-  app.add_option("--robots", robots, "robots to import, e.g. 1,2,3,4,5 (default dataset.robots)");
-  app.add_flag("--with-robot-barcodes", with_robot_barcodes, "keep other robots' barcodes as moving landmarks");
-  app.add_option("--start", start, "[s] first frame after the common start (default dataset.start_s)")
+  app.add_option("--config", a->config_path, "YAML config with a dataset: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
+  app.add_option("--rate", a->rate, "frames per second (default dataset.rate_hz)")->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--robots", a->robots, "robots to import, e.g. 1,2,3,4,5 (default dataset.robots)");
+  app.add_flag("--with-robot-barcodes", a->with_robot_barcodes, "keep other robots' barcodes as moving landmarks");
+  app.add_option("--start", a->start, "[s] first frame after the common start (default dataset.start_s)")
       ->check(CLI::Range(0.0, 1e5));
-  app.add_option("--duration", duration, "[s] length, 0 = to the common end (default dataset.duration_s)")
+  app.add_option("--duration", a->duration, "[s] length, 0 = to the common end (default dataset.duration_s)")
       ->check(CLI::Range(0.0, 1e5));
-  app.add_option("--out", out_path, "output LCM log")->required();
+  app.add_option("--out", a->out_path, "output LCM log")->required();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  return -1;
+}
 
-  mrclam::Options o;
-  std::string effective_yaml;
+/// The config's dataset section with the command line's overrides; false (the
+/// reason printed) on a bad config or argument.
+bool options(Args* a, mrclam::Options* o, std::string* effective_yaml) {
   try {
-    config_path = cli::find_config(config_path, "mrclam.yaml").path;
-    o = mrclam::load_options(config_path, &effective_yaml);
+    a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
+    *o = mrclam::load_options(a->config_path, effective_yaml);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "mrclam_import: %s\n", e.what());
-    return 2;
+    return false;
   }
-  if (rate > 0.0) o.rate_hz = rate;
-  if (start >= 0.0) o.start_s = start;
-  if (duration >= 0.0) o.duration_s = duration;
-  if (with_robot_barcodes) o.with_robot_barcodes = true;
+  if (a->rate > 0.0) o->rate_hz = a->rate;
+  if (a->start >= 0.0) o->start_s = a->start;
+  if (a->duration >= 0.0) o->duration_s = a->duration;
+  if (a->with_robot_barcodes) o->with_robot_barcodes = true;
   std::string why;
-  if (!robots.empty() && !mrclam::parse_robot_list(robots, &o.robots, &why)) {
+  if (!a->robots.empty() && !mrclam::parse_robot_list(a->robots, &o->robots, &why)) {
     std::fprintf(stderr, "mrclam_import: --robots: %s\n", why.c_str());
-    return 2;
+    return false;
   }
+  return true;
+}
 
+/// Every frame into the log: RUN_INFO about once a second of log time (before the
+/// frame's messages, as the simulator does), GROUND_TRUTH, SENSOR_<r>. False when a
+/// write failed (the frame named).
+bool write_log(const mrclam::FrameSource& src, const run_info_t& info0, double rate_hz, lcm::LogFile* log,
+               const std::string& out_path) {
+  ground_truth_t gt{};
+  std::vector<sensor_frame_t> sensors;
+  std::vector<std::uint8_t> buf;
+  std::vector<std::string> sensor_channels;
+  for (int id : src.robot_ids()) sensor_channels.push_back(channels::sensor(id));
+  run_info_t info = info0;
+  const int info_period = std::max(1, static_cast<int>(rate_hz));
+  for (int k = 0; k < src.num_frames(); ++k) {
+    src.frame(k, &gt, &sensors);
+    bool ok = true;
+    if (k % info_period == 0) {
+      info.utime = gt.utime;
+      info.frame = k - 1;
+      ok = write(log, channels::run_info(), info.utime, info, &buf);
+    }
+    ok = ok && write(log, channels::ground_truth(), gt.utime, gt, &buf);
+    for (std::size_t i = 0; i < sensors.size(); ++i)
+      ok = ok && write(log, sensor_channels[i], sensors[i].utime, sensors[i], &buf);
+    if (!ok) {
+      std::fprintf(stderr, "mrclam_import: writing %s failed at frame %d (disk full?)\n", out_path.c_str(), k);
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  mrclam::Options o;
+  std::string effective_yaml;
+  if (!options(&a, &o, &effective_yaml)) return 2;
   try {
-    const mrclam::Dataset d = mrclam::Dataset::load(dataset_dir, o.robots);
+    const mrclam::Dataset d = mrclam::Dataset::load(a.dataset_dir, o.robots);
     const mrclam::FrameSource src(d, o);
-    lcm::LogFile log(out_path, "w");
+    lcm::LogFile log(a.out_path, "w");
     if (!log.good()) {
-      std::fprintf(stderr, "mrclam_import: cannot open %s for writing\n", out_path.c_str());
+      std::fprintf(stderr, "mrclam_import: cannot open %s for writing\n", a.out_path.c_str());
       return 1;
     }
-    ground_truth_t gt{};
-    std::vector<sensor_frame_t> sensors;
-    std::vector<std::uint8_t> buf;
-    const std::string gt_channel = channels::ground_truth();
-    std::vector<std::string> sensor_channels;
-    for (int id : src.robot_ids()) sensor_channels.push_back(channels::sensor(id));
-    run_info_t info = run_info(src, o, dataset_dir, effective_yaml);
-    const int info_period = std::max(1, static_cast<int>(o.rate_hz));  // about once a second of log time
-    for (int k = 0; k < src.num_frames(); ++k) {
-      src.frame(k, &gt, &sensors);
-      bool ok = true;
-      if (k % info_period == 0) {  // before the frame's messages, as the simulator does
-        info.utime = gt.utime;
-        info.frame = k - 1;
-        ok = write(&log, channels::run_info(), info.utime, info, &buf);
-      }
-      ok = ok && write(&log, gt_channel, gt.utime, gt, &buf);
-      for (std::size_t i = 0; i < sensors.size(); ++i)
-        ok = ok && write(&log, sensor_channels[i], sensors[i].utime, sensors[i], &buf);
-      if (!ok) {
-        std::fprintf(stderr, "mrclam_import: writing %s failed at frame %d (disk full?)\n", out_path.c_str(), k);
-        return 1;
-      }
-    }
-    std::cout << "mrclam_import: " << dataset_dir << " -> " << out_path << "\n";
+    if (!write_log(src, run_info(src, o, a.dataset_dir, effective_yaml), o.rate_hz, &log, a.out_path)) return 1;
+    std::cout << "mrclam_import: " << a.dataset_dir << " -> " << a.out_path << "\n";
     print_stats(std::cout, src.stats(), o.rate_hz);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "mrclam_import: %s\n", e.what());

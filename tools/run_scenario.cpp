@@ -14,89 +14,108 @@
 #include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
 
-int main(int argc, char** argv) {
-  using namespace elaslam;
+namespace {
+
+using namespace elaslam;
+
+struct Args {
   std::string config_path, mode, baseline, out_dir;
   double dynamism = -1.0, speed = -1.0, rate = -1.0;
   long long seed = -1;
   int frames = -1;
+  bool oracle = false;
+};
+
+/// -1 to go on, else the exit code.
+int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam run_scenario: one in-process team run and its metrics"};
   cli::add_version_flag(app, "run_scenario");
-  app.add_option("--config", config_path,
+  app.add_option("--config", a->config_path,
                  "YAML config: scenario, robot, main sections (default: $ELASLAM_CONFIG, else "
                  "/etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
-  app.add_option("--mode", mode, "ekf, gated, ela or consensus (default: robot.mode)")
+  app.add_option("--mode", a->mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
-  app.add_option("--dynamism", dynamism, "percent of landmarks that move")->check(CLI::Range(0.0, 100.0));
-  app.add_option("--speed", speed, "landmark speed [m/s]")->check(CLI::Range(0.0, 100.0));
-  app.add_option("--seed", seed, "master seed")->check(CLI::Range(0LL, 2147483647LL));
-  app.add_option("--rate", rate, "frames per second (scenario.rate_hz; motion per frame changes with it)")
+  app.add_option("--dynamism", a->dynamism, "percent of landmarks that move")->check(CLI::Range(0.0, 100.0));
+  app.add_option("--speed", a->speed, "landmark speed [m/s]")->check(CLI::Range(0.0, 100.0));
+  app.add_option("--seed", a->seed, "master seed")->check(CLI::Range(0LL, 2147483647LL));
+  app.add_option("--rate", a->rate, "frames per second (scenario.rate_hz; motion per frame changes with it)")
       ->check(CLI::Range(1e-3, 100000.0));
-  app.add_option("--frames", frames, "frames to run (scenario.frames)")->check(CLI::Range(1, 100000000));
-  app.add_option("--baseline", baseline, "also run this mode on the same scenario and seed, and compare")
+  app.add_option("--frames", a->frames, "frames to run (scenario.frames)")->check(CLI::Range(1, 100000000));
+  app.add_option("--baseline", a->baseline, "also run this mode on the same scenario and seed, and compare")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
-  app.add_option("--out", out_dir, "directory for metrics.json, frames.csv, trajectories/");
-  bool oracle = false;
-  app.add_flag("--oracle", oracle,
+  app.add_option("--out", a->out_dir, "directory for metrics.json, frames.csv, trajectories/");
+  app.add_flag("--oracle", a->oracle,
                "evaluation bound: observations of truly moving landmarks are removed before the robots see them");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  TeamConfig cfg;
+  return -1;
+}
+
+/// The config with the overrides; false (the reason printed) when it cannot run.
+bool configure(Args* a, TeamConfig* cfg) {
   try {
-    config_path = cli::find_config(config_path).path;
-    cfg = load_team_config(config_path);
+    a->config_path = cli::find_config(a->config_path).path;
+    *cfg = load_team_config(a->config_path);
     RunOverrides ov;
     Mode m;
-    if (!mode.empty() && parse_mode(mode, &m)) ov.mode = m;
-    if (dynamism >= 0.0) ov.dynamism_percent = dynamism;
-    if (speed >= 0.0) ov.landmark_speed_mps = speed;
-    if (seed >= 0) ov.seed = static_cast<int>(seed);
-    if (rate > 0.0) ov.rate_hz = rate;
-    if (frames > 0) ov.frames = frames;
-    cfg = apply_overrides(cfg, ov);
+    if (!a->mode.empty() && parse_mode(a->mode, &m)) ov.mode = m;
+    if (a->dynamism >= 0.0) ov.dynamism_percent = a->dynamism;
+    if (a->speed >= 0.0) ov.landmark_speed_mps = a->speed;
+    if (a->seed >= 0) ov.seed = static_cast<int>(a->seed);
+    if (a->rate > 0.0) ov.rate_hz = a->rate;
+    if (a->frames > 0) ov.frames = a->frames;
+    *cfg = apply_overrides(*cfg, ov);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "run_scenario: %s\n", e.what());
-    return 2;
+    return false;
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "run_scenario: %s\n", e.what());
-    return 2;
+    return false;
   }
-  cfg.oracle = oracle;
+  cfg->oracle = a->oracle;
+  return true;
+}
 
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  TeamConfig cfg;
+  if (!configure(&a, &cfg)) return 2;
   const auto t0 = std::chrono::steady_clock::now();
   const RunResult r = run_team(cfg);
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
   const std::string command = cli::command_line(argc, argv);
   const RunInfo info{to_string(cfg.robot.mode), cfg.scenario.dynamism_percent, cfg.scenario.landmark_speed_mps,
-                     cfg.scenario.seed,         config_path,                    cfg.effective_yaml,
+                     cfg.scenario.seed,         a.config_path,                  cfg.effective_yaml,
                      command};
   print_summary(std::cout, info, r);
   std::cout << "  run time: " << ms << " ms (" << r.bus_messages << " messages on the in-process bus)\n";
   nlohmann::json metrics = metrics_json(info, r);
-  if (!baseline.empty()) {
-    Mode bm = Mode::kEkf;
-    parse_mode(baseline, &bm);
+  if (!a.baseline.empty()) {  // the same scenario and seed with the baseline's mode
     RunOverrides bo;
-    bo.mode = bm;
+    bo.mode = Mode::kEkf;
+    parse_mode(a.baseline, &*bo.mode);
     const TeamConfig bc = apply_overrides(cfg, bo);
     const RunResult br = run_team(bc);
-    const RunInfo binfo{baseline, info.dynamism_percent, info.speed_mps, info.seed, config_path, bc.effective_yaml,
-                        command};
+    const RunInfo binfo{a.baseline, info.dynamism_percent, info.speed_mps, info.seed, a.config_path,
+                        bc.effective_yaml, command};
     print_comparison(std::cout, info, r, binfo, br, "in process");
     metrics["baseline"] = baseline_json(binfo, br, "in process, same scenario and seed");
   }
-  if (!out_dir.empty()) {
+  if (!a.out_dir.empty()) {
     try {
-      write_outputs(out_dir, metrics, r);
+      write_outputs(a.out_dir, metrics, r);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "run_scenario: %s\n", e.what());
       return 1;
     }
-    std::cout << "  wrote " << out_dir << "/metrics.json, frames.csv, map.csv, trajectories/\n";
+    std::cout << "  wrote " << a.out_dir << "/metrics.json, frames.csv, map.csv, trajectories/\n";
   }
   return 0;
 }

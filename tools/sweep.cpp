@@ -99,89 +99,105 @@ void run_all(const TeamConfig& base, const std::vector<SweepJob>& jobs, int thre
   for (auto& t : pool) t.join();
 }
 
-}  // namespace
-}  // namespace elaslam
-
-int main(int argc, char** argv) {
-  using namespace elaslam;
+struct Args {
   std::string config_path, out_dir, modes_text = "ekf,gated,ela,consensus";
   std::string dyn_text = "5,20,35,50,65,80", speed_text = "0.1,0.3,0.5,0.7,0.9";
   int runs = 10, seed_base = 1, jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool no_plots = false, oracle = false;
+};
+
+/// -1 to go on, else the exit code.
+int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam sweep: the paper's experiment grid, in parallel"};
   cli::add_version_flag(app, "sweep");
-  app.add_option("--config", config_path, "YAML config (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
-  app.add_option("--modes", modes_text, "comma-separated modes");
-  app.add_option("--dynamism", dyn_text, "comma-separated dynamism levels [%]");
-  app.add_option("--speed", speed_text, "comma-separated landmark speeds [m/s]");
-  app.add_option("--runs", runs, "runs per cell")->check(CLI::Range(1, 100000));
-  app.add_option("--seed-base", seed_base, "seed of run 0 (run r: seed_base + r)")->check(CLI::Range(0, 1 << 30));
-  app.add_option("--jobs", jobs, "threads (default: all cores)")->check(CLI::Range(1, 1024));
-  app.add_option("--out", out_dir, "output directory")->required();
-  app.add_flag("--no-plots", no_plots, "do not call tools/plot_sweep.py");
-  app.add_flag("--oracle", oracle,
+  app.add_option("--config", a->config_path, "YAML config (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
+  app.add_option("--modes", a->modes_text, "comma-separated modes");
+  app.add_option("--dynamism", a->dyn_text, "comma-separated dynamism levels [%]");
+  app.add_option("--speed", a->speed_text, "comma-separated landmark speeds [m/s]");
+  app.add_option("--runs", a->runs, "runs per cell")->check(CLI::Range(1, 100000));
+  app.add_option("--seed-base", a->seed_base, "seed of run 0 (run r: seed_base + r)")->check(CLI::Range(0, 1 << 30));
+  app.add_option("--jobs", a->jobs, "threads (default: all cores)")->check(CLI::Range(1, 1024));
+  app.add_option("--out", a->out_dir, "output directory")->required();
+  app.add_flag("--no-plots", a->no_plots, "do not call tools/plot_sweep.py");
+  app.add_flag("--oracle", a->oracle,
                "evaluation bound: observations of truly moving landmarks are removed before the robots see them");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  return -1;
+}
+
+// One map like the paper's Fig 4: the middle cell's first run, in ela when the grid
+// has it, else in its first mode.
+void write_map(const Args& a, const SweepGrid& grid, const TeamConfig& base, const std::string& command) {
+  Mode map_mode = grid.modes.front();
+  for (Mode m : grid.modes)
+    if (m == Mode::kEla) map_mode = m;
+  RunOverrides o;
+  o.mode = map_mode;
+  o.dynamism_percent = grid.dynamism[grid.dynamism.size() / 2];
+  o.landmark_speed_mps = grid.speed[grid.speed.size() / 2];
+  o.seed = a.seed_base;
+  const TeamConfig c = apply_overrides(base, o);
+  const RunResult r = run_team(c);
+  RunInfo info{to_string(map_mode), c.scenario.dynamism_percent, c.scenario.landmark_speed_mps, a.seed_base,
+               a.config_path, c.effective_yaml, command};
+  write_outputs(a.out_dir + "/maps/" + to_string(map_mode), metrics_json(info, r), r);
+}
+
+void plot(const std::string& out_dir) {
+  const std::string script = cli::python_tool("plot_sweep.py");
+  std::fflush(stdout);
+  if (!std::filesystem::exists(script)) {
+    std::fprintf(stderr, "sweep: no %s: no plots\n", script.c_str());
+    return;
+  }
+  const std::string cmd = "'" + script + "' '" + out_dir + "'";
+  if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "sweep: plotting failed (%s)\n", cmd.c_str());
+}
+
+}  // namespace
+}  // namespace elaslam
+
+int main(int argc, char** argv) {
+  using namespace elaslam;
+  Args a;
+  if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
   SweepGrid grid;
   TeamConfig base;
   try {
-    grid.modes = parse_modes(modes_text);
-    grid.dynamism = parse_list(dyn_text, "--dynamism", 0.0, 100.0);
-    grid.speed = parse_list(speed_text, "--speed", 0.0, 100.0);
-    grid.runs = runs;
-    config_path = cli::find_config(config_path).path;
-    base = load_team_config(config_path);
-    base.oracle = oracle;
-    grid.oracle = oracle;
+    grid.modes = parse_modes(a.modes_text);
+    grid.dynamism = parse_list(a.dyn_text, "--dynamism", 0.0, 100.0);
+    grid.speed = parse_list(a.speed_text, "--speed", 0.0, 100.0);
+    grid.runs = a.runs;
+    a.config_path = cli::find_config(a.config_path).path;
+    base = load_team_config(a.config_path);
+    base.oracle = a.oracle;
+    grid.oracle = a.oracle;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sweep: %s\n", e.what());
     return 2;
   }
   grid.robot_ids.clear();
   for (const auto& r : base.scenario.robots) grid.robot_ids.push_back(r.id);
-  const std::vector<SweepJob> job_list = make_jobs(grid, seed_base);
+  const std::vector<SweepJob> job_list = make_jobs(grid, a.seed_base);
   std::fprintf(stderr, "sweep: %zu runs (%zu modes x %zu x %zu cells x %d runs) on %d threads\n", job_list.size(),
-               grid.modes.size(), grid.dynamism.size(), grid.speed.size(), runs, jobs);
+               grid.modes.size(), grid.dynamism.size(), grid.speed.size(), a.runs, a.jobs);
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<SweepResult> results;
-  run_all(base, job_list, jobs, &results);
+  run_all(base, job_list, a.jobs, &results);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   try {
-    write_sweep(out_dir, grid, job_list, results);
-    // One map like the paper's Fig 4: the middle cell's first run, in the first
-    // of ela / consensus / the first mode.
-    Mode map_mode = grid.modes.front();
-    for (Mode m : grid.modes)
-      if (m == Mode::kEla) map_mode = m;
-    RunOverrides o;
-    o.mode = map_mode;
-    o.dynamism_percent = grid.dynamism[grid.dynamism.size() / 2];
-    o.landmark_speed_mps = grid.speed[grid.speed.size() / 2];
-    o.seed = seed_base;
-    const TeamConfig c = apply_overrides(base, o);
-    const RunResult r = run_team(c);
-    RunInfo info{to_string(map_mode), c.scenario.dynamism_percent, c.scenario.landmark_speed_mps, seed_base,
-                 config_path, c.effective_yaml, cli::command_line(argc, argv)};
-    write_outputs(out_dir + "/maps/" + to_string(map_mode), metrics_json(info, r), r);
+    write_sweep(a.out_dir, grid, job_list, results);
+    write_map(a, grid, base, cli::command_line(argc, argv));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "sweep: %s\n", e.what());
     return 1;
   }
   std::printf("sweep: %zu runs in %.1f s (%.1f runs/s); tables: %s/tables.md\n", job_list.size(), wall,
-              static_cast<double>(job_list.size()) / wall, out_dir.c_str());
-  const std::string script = cli::python_tool("plot_sweep.py");
-  std::fflush(stdout);
-  if (!no_plots) {
-    if (std::filesystem::exists(script)) {
-      const std::string cmd = "'" + script + "' '" + out_dir + "'";
-      if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "sweep: plotting failed (%s)\n", cmd.c_str());
-    } else {
-      std::fprintf(stderr, "sweep: no %s: no plots\n", script.c_str());
-    }
-  }
+              static_cast<double>(job_list.size()) / wall, a.out_dir.c_str());
+  if (!a.no_plots) plot(a.out_dir);
   return 0;
 }

@@ -393,8 +393,13 @@ void FrameSource::compute_robot(const Dataset& d, const RobotSeries& s, PerRobot
   const std::vector<Command>& commands = delay_us > 0 ? delayed : s.odometry;
   OdometryIntegrator odo(commands, frame_utimes_[0], out->truth[0]);
   for (std::size_t k = 0; k < n; ++k) out->odometer[k] = odo.advance_to(frame_utimes_[k]);
+  // 2. Odometry gaps; 3. the observations of every frame.
+  count_odometry_gaps(s, st);
+  bin_observations(d, s, commands, out, st);
+}
 
-  // 2. Odometry gaps overlapping [t_0, t_last].
+// Odometry gaps over half a second overlapping [t_0, t_last].
+void FrameSource::count_odometry_gaps(const RobotSeries& s, RobotStats* st) const {
   for (std::size_t i = 0; i + 1 < s.odometry.size(); ++i) {
     const std::int64_t a = s.odometry[i].utime, b = s.odometry[i + 1].utime;
     if (b <= frame_utimes_.front() || a >= frame_utimes_.back()) continue;
@@ -404,8 +409,15 @@ void FrameSource::compute_robot(const Dataset& d, const RobotSeries& s, PerRobot
       st->max_odometry_gap_s = std::max(st->max_odometry_gap_s, gap);
     }
   }
+}
 
-  // 3. Observations: bin (t_{k-1}, t_k], filter, de-duplicate.
+// Observations binned into frames by time (t_{k-1}, t_k], filtered (misreads, the
+// robot's own barcode, other robots' unless kept), de-duplicated per frame (the
+// later reading wins), range-calibrated, and, with motion compensation, moved to
+// where the robot is at t_k.
+void FrameSource::bin_observations(const Dataset& d, const RobotSeries& s, const std::vector<Command>& commands,
+                                   PerRobot* out, RobotStats* st) const {
+  const std::size_t n = frame_utimes_.size();
   const std::int64_t period_us = std::llround(1e6 / options_.rate_hz);
   const int own_barcode = d.barcode_of_subject(s.id);
   out->obs_begin.assign(n + 1, 0);

@@ -243,6 +243,9 @@ class FrameSource {
   };
   void compute_frame_times(const Dataset& d);
   void compute_robot(const Dataset& d, const RobotSeries& s, PerRobot* out, RobotStats* st);
+  void count_odometry_gaps(const RobotSeries& s, RobotStats* st) const;
+  void bin_observations(const Dataset& d, const RobotSeries& s, const std::vector<Command>& commands, PerRobot* out,
+                        RobotStats* st) const;
 
   Options options_;
   std::int64_t t0_utime_ = 0, end_utime_ = 0;
