@@ -99,7 +99,7 @@ int parse_args(int argc, char** argv, Args* a) {
       ->required()
       ->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "mrclam_import");
-  app.add_option("--config", a->config_path, "YAML config with a dataset: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
+  cli::add_config_option(app, &a->config_path, "its dataset: section", "mrclam.yaml");
   app.add_option("--rate", a->rate, "frames per second (default dataset.rate_hz)")->check(CLI::Range(0.1, 1000.0));
   app.add_option("--robots", a->robots, "robots to import, e.g. 1,2,3,4,5 (default dataset.robots)");
   app.add_flag("--with-robot-barcodes", a->with_robot_barcodes, "keep other robots' barcodes as moving landmarks");

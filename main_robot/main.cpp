@@ -130,9 +130,7 @@ int main(int argc, char** argv) {
   elaslam::Args a;
   CLI::App app{"elaslam main_robot: the team's global map, on LCM"};
   elaslam::cli::add_version_flag(app, "main_robot");
-  app.add_option("--config", a.config,
-                 "YAML config file, its main: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
-                 "else the installed paper.yaml)");
+  elaslam::cli::add_config_option(app, &a.config, "its main: section");
   app.add_option("--state", a.state, "file to persist the global map in (reloaded at start)");
   elaslam::transport::add_transport_options(app, &a.transport);
   app.add_option("--event-queue", a.queues.event, "LMAP_EVENT subscription queue capacity")->check(CLI::Range(1, 1000000));

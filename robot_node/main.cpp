@@ -101,9 +101,7 @@ int main(int argc, char** argv) {
   elaslam::Args a;
   CLI::App app{"elaslam robot_node: one robot's EKF-SLAM with the ELA gate, on LCM"};
   elaslam::cli::add_version_flag(app, "robot_node");
-  app.add_option("--config", a.config,
-                 "YAML config file, its robot: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
-                 "else the installed paper.yaml)");
+  elaslam::cli::add_config_option(app, &a.config, "its robot: section");
   app.add_option("--robot", a.robot, "this robot's id (1-8)")->required()->check(CLI::Range(1, 8));
   app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");
   elaslam::transport::add_transport_options(app, &a.transport);

@@ -43,9 +43,7 @@ struct Args {
 
 void add_options(CLI::App& app, Args* a) {
   elaslam::cli::add_version_flag(app, "simulator");
-  app.add_option("--config", a->config,
-                 "YAML config with a scenario: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, "
-                 "else the installed paper.yaml)");
+  elaslam::cli::add_config_option(app, &a->config, "its scenario: section");
   app.add_option("--team-mode", a->run.team_mode, "the robots' mode, recorded in RUN_INFO (the simulator has none)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   a->rate = app.add_option("--rate", a->rate_hz, "override scenario.rate_hz [frames/s]")->check(CLI::Range(1e-3, 100000.0));

@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   double dynamism = 0.0, speed = 0.0;
   int seed = 0;
   elaslam::cli::add_version_flag(app, "scenario_dump");
-  app.add_option("--config", config, "YAML config with a scenario: section (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
+  elaslam::cli::add_config_option(app, &config, "its scenario: section");
   auto* o_dyn = app.add_option("--dynamism", dynamism, "override scenario.dynamism_percent [%]");
   auto* o_speed = app.add_option("--speed", speed, "override scenario.landmark_speed_mps [m/s]");
   auto* o_seed = app.add_option("--seed", seed, "override scenario.seed");

@@ -127,7 +127,7 @@ int parse_args(int argc, char** argv, Args* a) {
   app.add_option("--dataset", a->dataset_dir, "MRCLAM dataset directory (e.g. ../shared/data/mrclam/dataset6)")
       ->required()->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "run_dataset");
-  app.add_option("--config", a->config_path, "YAML config: dataset, robot, main sections (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed mrclam.yaml)");
+  cli::add_config_option(app, &a->config_path, "its dataset:, robot: and main: sections", "mrclam.yaml");
   app.add_option("--mode", a->mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--with-robot-barcodes", a->barcodes, "keep other robots' barcodes (moving landmarks)");

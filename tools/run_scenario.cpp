@@ -30,9 +30,7 @@ struct Args {
 int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam run_scenario: one in-process team run and its metrics"};
   cli::add_version_flag(app, "run_scenario");
-  app.add_option("--config", a->config_path,
-                 "YAML config: scenario, robot, main sections (default: $ELASLAM_CONFIG, else "
-                 "/etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
+  cli::add_config_option(app, &a->config_path, "its scenario:, robot: and main: sections");
   app.add_option("--mode", a->mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_option("--dynamism", a->dynamism, "percent of landmarks that move")->check(CLI::Range(0.0, 100.0));

@@ -110,7 +110,7 @@ struct Args {
 int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam sweep: the paper's experiment grid, in parallel"};
   cli::add_version_flag(app, "sweep");
-  app.add_option("--config", a->config_path, "YAML config (default: $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else the installed paper.yaml)");
+  cli::add_config_option(app, &a->config_path, "its scenario:, robot: and main: sections");
   app.add_option("--modes", a->modes_text, "comma-separated modes");
   app.add_option("--dynamism", a->dyn_text, "comma-separated dynamism levels [%]");
   app.add_option("--speed", a->speed_text, "comma-separated landmark speeds [m/s]");

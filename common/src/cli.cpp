@@ -46,6 +46,12 @@ void add_version_flag(CLI::App& app, const std::string& program) {
   app.set_version_flag("--version", version_line(program), "print the version and the source commit, then exit");
 }
 
+void add_config_option(CLI::App& app, std::string* path, const std::string& what, const std::string& default_name) {
+  app.add_option("--config", *path,
+                 "YAML config file, " + what + " (default: $" + std::string(kConfigEnv) + ", else " + kSystemConfig +
+                     ", else the installed " + default_name + ")");
+}
+
 std::string data_dir() {
   std::error_code ec;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);

@@ -18,6 +18,11 @@ std::string version_line(const std::string& program);
 /// Adds --version (prints version_line(program) and exits 0).
 void add_version_flag(CLI::App& app, const std::string& program);
 
+/// Adds --config FILE into *path, its help naming what the program reads (`what`,
+/// e.g. "its robot: section") and the lookup rule with the installed default's name.
+void add_config_option(CLI::App& app, std::string* path, const std::string& what,
+                       const std::string& default_name = "paper.yaml");
+
 /// <prefix>/share/elaslam, where <prefix> is the parent of the running program's
 /// directory (/proc/self/exe): /usr/share/elaslam for /usr/bin/elaslam-*, the same
 /// under any `cmake --install --prefix` or `dpkg -x` root, and build/share/elaslam
