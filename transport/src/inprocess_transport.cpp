@@ -25,7 +25,8 @@ const std::vector<std::size_t>& InProcessTransport::route(const std::string& cha
   std::vector<std::size_t> matched;
   for (std::size_t i = 0; i < subs_.size(); ++i) {
     const Sub& s = subs_[i];
-    if (s.handler != nullptr && (s.exact ? s.pattern == channel : std::regex_match(channel, s.rx))) matched.push_back(i);
+    if (s.handler != nullptr && (s.exact ? s.pattern == channel : regexec(s.rx.get(), channel.c_str(), 0, nullptr, 0) == 0))
+      matched.push_back(i);
   }
   return routes_.emplace(channel, std::move(matched)).first->second;
 }
@@ -57,13 +58,14 @@ bool InProcessTransport::publish(const std::string& channel, const void* data, s
 
 int InProcessTransport::subscribe(const std::string& pattern, RawHandler handler, void* context, int) {
   if (handler == nullptr) return 0;
-  Sub s{pattern, is_plain_name(pattern), {}, handler, context};
+  Sub s{pattern, is_plain_name(pattern), nullptr, handler, context};
   if (!s.exact) {
-    try {
-      s.rx = std::regex(pattern);
-    } catch (const std::regex_error&) {
+    auto rx = std::unique_ptr<regex_t, RegexFree>(new regex_t);
+    if (regcomp(rx.get(), ("^(" + pattern + ")$").c_str(), REG_EXTENDED | REG_NOSUB) != 0) {
+      delete rx.release();  // regcomp failed: nothing to regfree
       return 0;
     }
+    s.rx = std::move(rx);
   }
   subs_.push_back(std::move(s));
   ++subs_version_;

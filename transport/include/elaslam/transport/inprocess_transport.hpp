@@ -10,8 +10,10 @@
 // reused, so a steady flow of messages allocates nothing.
 #pragma once
 
+#include <regex.h>  // POSIX extended regular expressions (std::regex trips GCC 12's -Wmaybe-uninitialized under ASan)
+
 #include <cstdint>
-#include <regex>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -50,11 +52,17 @@ class InProcessTransport final : public Transport {
     std::string channel;
     std::vector<std::uint8_t> data;
   };
+  struct RegexFree {
+    void operator()(regex_t* r) const {
+      regfree(r);
+      delete r;
+    }
+  };
   struct Sub {
     std::string pattern;
-    bool exact;  // no regular expression characters: compared as a string
-    std::regex rx;
-    RawHandler handler;  // nullptr once unsubscribed
+    bool exact;                                  // no regular expression characters: compared as a string
+    std::unique_ptr<regex_t, RegexFree> rx;      // otherwise "^(pattern)$", as LCM matches a whole name
+    RawHandler handler;                          // nullptr once unsubscribed
     void* context;
   };
 
