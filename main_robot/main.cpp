@@ -93,6 +93,7 @@ int run(const Args& a) {
   if (!lcm) return 1;
   transport::NodeShell shell(*lcm, transport::ShellOptions("main_robot", a.transport.channel_suffix));
   MainNode node(o);
+  node.set_incarnation(transport::now_utime());  // a later start has a larger one (landmark_event_t)
   MainPorts<transport::NodeShell> ports(shell, node);
   if (!resume(a.state, &node.map())) return 2;
   if (!ports.open(a.queues)) {

@@ -75,6 +75,7 @@ int run(const Args& a) {
   if (!lcm) return 1;
   transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
   RobotNode node(o, a.robot);
+  node.set_incarnation(transport::now_utime());  // a later start has a larger one (landmark_event_t)
   RobotPorts<transport::NodeShell> ports(shell, node);
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");

@@ -119,7 +119,8 @@ def main() -> int:
         print(f"last POSE_1: frame {p.frame}, x {p.x:.3f} y {p.y:.3f} theta {p.theta:.3f}, {p.num_landmarks} landmarks")
     if "GLOBAL_MAP" in last:
         g = last["GLOBAL_MAP"]
-        print(f"last GLOBAL_MAP: frame {g.frame}, version {g.version}, {g.num_landmarks} static, {g.num_moving} moving")
+        print(f"last GLOBAL_MAP chunk: frame {g.frame}, version {g.version}, chunk {g.chunk + 1} of {g.num_chunks}, "
+              f"ids [{g.id_begin}, {g.id_end}): {g.num_landmarks} static, {g.num_moving} moving")
     return 1 if errors else 0
 
 

@@ -80,11 +80,15 @@ struct LogData {
   long events = 0;
   std::int64_t bytes_skipped = 0;  // [bytes] between events, not an event (a damaged log)
   bool complete = true;            // false: the log ends in a truncated event
+  GlobalMapAssembly map_assembly;  // GLOBAL_MAP chunks -> the map of one publication
 };
 
 template <typename Msg>
 bool decode(const LogEvent& ev, Msg* m, LogData* d) {
-  if (m->decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) >= 0) return true;
+  try {  // a negative count of a variable-length array makes LCM's decoder throw
+    if (m->decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) >= 0) return true;
+  } catch (const std::exception&) {
+  }
   ++d->decode_errors[ev.channel];
   return false;
 }
@@ -93,7 +97,7 @@ void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   MapRecord m;
   m.received_us = received;
   read_map(g, &m.landmarks, &m.moving);
-  for (int i = 0; i < contract::bounded(g.num_landmarks, contract::kMaxLandmarksPerMessage); ++i) {
+  for (int i = 0; i < contract::bounded(g.num_landmarks, static_cast<int>(g.landmarks.size())); ++i) {
     const auto& l = g.landmarks[i];
     Eigen::Matrix2d C;
     C << l.cov[0][0], l.cov[0][1], l.cov[1][0], l.cov[1][1];
@@ -129,7 +133,7 @@ void on_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
     f.time_s = static_cast<double>(m.utime) * 1e-6;
   } else if (ch == channels::global_map(sfx)) {
     global_map_t m;
-    if (decode(ev, &m, d)) on_map(m, ev.timestamp, d);
+    if (decode(ev, &m, d) && d->map_assembly.add(m)) on_map(d->map_assembly.map(), ev.timestamp, d);
   } else if (robot_of(ch, "POSE_", sfx) > 0) {
     pose_estimate_t m;
     if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev.timestamp};

@@ -49,7 +49,7 @@ class Progress {
       pose_robots_.insert(m.robot_id);
     });
     on<global_map_t>(channels::global_map(sfx), 20, [this](const global_map_t& m) {
-      for (int i = 0; i < contract::bounded(m.num_moving, contract::kMaxLandmarksPerMessage); ++i)
+      for (int i = 0; i < contract::bounded(m.num_moving, static_cast<int>(m.moving_ids.size())); ++i)
         moving_.insert(m.moving_ids[i]);
     });
     on<dynamic_notice_t>(channels::dynamic_notice(sfx), 200, [this](const dynamic_notice_t& m) {

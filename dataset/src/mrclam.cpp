@@ -541,12 +541,13 @@ void FrameSource::frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* 
       m.odom_var_rot_per_rad = options_.odom_var_rot_per_rad;
       m.odom_var_rot_per_m = options_.odom_var_rot_per_m;
       const int b = r.obs_begin[kk], e = r.obs_begin[kk + 1];
-      m.num_obs = static_cast<std::int16_t>(e - b);
+      contract::set_count(&m.obs, &m.num_obs, e - b);
       for (int j = b; j < e; ++j) {
         const Obs& z = r.obs[static_cast<std::size_t>(j)];
-        m.obs[j - b].landmark_id = z.subject;
-        m.obs[j - b].range = z.range;
-        m.obs[j - b].bearing = z.bearing;
+        range_bearing_t& o = m.obs[static_cast<std::size_t>(j - b)];
+        o.landmark_id = z.subject;
+        o.range = z.range;
+        o.bearing = z.bearing;
       }
     }
   }

@@ -1,5 +1,7 @@
 #include "elaslam/main_robot/global_map.hpp"
 
+#include <algorithm>
+
 #include <Eigen/Cholesky>
 #include <nlohmann/json.hpp>
 
@@ -14,6 +16,7 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   o->fusion = fusion == "information" ? Fusion::kInformation : Fusion::kCovarianceIntersection;
   r.read("publish_rate_hz", &o->publish_rate_hz, 0.1, 10000.0);
   r.read("state_save_interval_s", &o->state_save_interval_s, 0.0, 3600.0);
+  r.read("resync_interval_frames", &o->resync_interval_frames, 1, 100000);
 }
 
 const char* to_string(EventResult r) {
@@ -34,7 +37,55 @@ int GlobalEntry::contributors() const {
 }
 
 GlobalMap::GlobalMap(const GlobalMapOptions& options)
-    : options_(options), entries_(static_cast<std::size_t>(options.max_landmark_id)) {}
+    : options_(options), entries_(static_cast<std::size_t>(options.max_landmark_id)) {
+  for (auto& c : covered_) c.assign(entries_.size(), 0);
+}
+
+void GlobalMap::start_repair(RobotStream& s, int r, std::int64_t repair_seq) {
+  if (!s.gap_pending || repair_seq > s.repair_seq) {
+    std::fill(covered_[static_cast<std::size_t>(r)].begin(), covered_[static_cast<std::size_t>(r)].end(), 0);
+    s.covered = 0;
+    s.repair_seq = repair_seq;
+  }
+  s.gap_pending = true;
+}
+
+void GlobalMap::cover(RobotStream& s, int r, int id_begin, int id_end) {
+  auto& c = covered_[static_cast<std::size_t>(r)];
+  for (int id = id_begin; id < id_end; ++id) {
+    auto& bit = c[static_cast<std::size_t>(id)];
+    s.covered += bit == 0;
+    bit = 1;
+  }
+  if (s.covered >= max_landmark_id()) s.gap_pending = false;
+}
+
+IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t incarnation, int frame) {
+  RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
+  if (incarnation == s.incarnation || s.incarnation == 0) {
+    s.incarnation = incarnation;
+    return IncarnationVerdict::kCurrent;
+  }
+  if (incarnation > s.incarnation) {  // restarted without its state: a new stream
+    s.previous_incarnation = s.incarnation;
+    s.incarnation = incarnation;
+    s.last_seq = 0;
+    snapshot_seq_[static_cast<std::size_t>(robot_id - 1)] = 0;
+    ++s.restarts;
+    start_repair(s, robot_id - 1, 1);
+    s.repair_seq = 0;  // any snapshot of the new incarnation repairs
+    return IncarnationVerdict::kRestarted;
+  }
+  ++s.stale_incarnation;
+  if (incarnation == s.previous_incarnation && s.stale_incarnation >= 3)
+    s.duplicate_until_frame = std::max(newest_frame_, frame) + 50;
+  return IncarnationVerdict::kStale;
+}
+
+bool GlobalMap::duplicate_sender(int robot_id) const {
+  const RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
+  return s.duplicate_until_frame >= 0 && newest_frame_ <= s.duplicate_until_frame;
+}
 
 int GlobalMap::count(GlobalStatus s) const {
   int n = 0;
@@ -92,7 +143,7 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
   const bool gap = e.seq > s.last_seq + 1;
   if (gap) {
     ++s.gaps;
-    s.gap_pending = true;
+    start_repair(s, e.robot_id - 1, e.seq - 1);  // a snapshot taken after the lost events
   }
   s.last_seq = e.seq;
   s.last_frame = std::max(s.last_frame, e.frame);
@@ -118,16 +169,19 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
   return gap ? EventResult::kAppliedAfterGap : EventResult::kApplied;
 }
 
-void GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame,
-                               const std::vector<std::pair<int, RobotEstimate>>& lms,
-                               const std::vector<int>& moving_ids, std::vector<Notice>* notices) {
+bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id_begin, int id_end,
+                               const std::vector<std::pair<int, RobotEstimate>>& lms, const std::vector<int>& moving_ids,
+                               std::vector<Notice>* notices) {
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
   const std::size_t r = static_cast<std::size_t>(robot_id - 1);
+  if (seq < snapshot_seq_[r]) return false;  // an older snapshot than one applied: it would roll the map back
+  snapshot_seq_[r] = seq;
   // Events of r this map has not seen: a gap on r's event stream, or a snapshot
   // ahead of r's last applied event (a restarted main_robot: empty, or resumed from
   // a state file up to state_save_interval_s old). Those events may have been
-  // MOVING or RETURN: the snapshot's lists stand in for them.
-  const bool missed = s.gap_pending || seq > s.last_seq;
+  // MOVING or RETURN: the snapshot's lists stand in for them, chunk by chunk.
+  if (seq > s.last_seq) start_repair(s, robot_id - 1, seq);
+  const bool missed = s.gap_pending;
   // Moving ids first: a MOVING event lost in a gap is recovered here.
   if (missed) {
     for (int id : moving_ids) {
@@ -146,7 +200,7 @@ void GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame,
       // a landmark as moving until it sees it again, after others took it back).
     }
   }
-  for (auto& g : entries_) g.by_robot[r].valid = false;
+  for (int id = id_begin; id < id_end; ++id) entries_[static_cast<std::size_t>(id)].by_robot[r].valid = false;
   for (const auto& [id, est] : lms) {
     GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
     g.by_robot[r] = est;
@@ -164,13 +218,16 @@ void GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame,
       g.moving_unconfirmed = false;
     }
   }
-  for (auto& g : entries_)
+  for (int id = id_begin; id < id_end; ++id) {
+    GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
     if (g.status == GlobalStatus::kStatic) fuse(g);
+  }
   s.last_seq = std::max(s.last_seq, seq);
-  s.gap_pending = false;
+  if (s.gap_pending && seq >= s.repair_seq) cover(s, robot_id - 1, id_begin, id_end);
   s.last_frame = std::max(s.last_frame, frame);
   newest_frame_ = std::max(newest_frame_, frame);
   ++version_;
+  return true;
 }
 
 std::string GlobalMap::to_json() const {
@@ -181,7 +238,8 @@ std::string GlobalMap::to_json() const {
   j["newest_frame"] = newest_frame_;
   j["max_landmark_id"] = max_landmark_id();
   json streams = json::array();
-  for (const auto& s : streams_) streams.push_back({{"last_seq", s.last_seq}, {"last_frame", s.last_frame}});
+  for (const auto& s : streams_)
+    streams.push_back({{"last_seq", s.last_seq}, {"last_frame", s.last_frame}, {"incarnation", s.incarnation}});
   j["robots"] = streams;
   json lms = json::array();
   for (int id = 0; id < max_landmark_id(); ++id) {
@@ -215,6 +273,9 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
     for (std::size_t r = 0; r < rs.size(); ++r) {
       loaded.streams_[r].last_seq = rs[r].at("last_seq").get<std::int64_t>();
       loaded.streams_[r].last_frame = rs[r].at("last_frame").get<int>();
+      loaded.streams_[r].incarnation = rs[r].value("incarnation", std::int64_t{0});  // absent in v1 files of before
+      if (loaded.streams_[r].last_seq < 0 || loaded.streams_[r].incarnation < 0)
+        throw std::runtime_error("robots: negative seq or incarnation");
     }
     for (const json& l : j.at("landmarks")) {
       const int id = l.at("id").get<int>();

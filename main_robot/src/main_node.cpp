@@ -35,10 +35,37 @@ Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
 
 MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   robot_frame_.fill(-1);
-  pending_.reserve(contract::kMaxLandmarksPerMessage);
-  notices_.reserve(contract::kMaxLandmarksPerMessage);
-  snap_lms_.reserve(contract::kMaxLandmarksPerMessage);
-  snap_moving_.reserve(contract::kMaxLandmarksPerMessage);
+  resync_frame_.fill(-1000000);
+  const auto max_id = static_cast<std::size_t>(options.max_landmark_id);
+  pending_.reserve(max_id);
+  notices_.reserve(max_id);
+  snap_lms_.reserve(contract::kMaxCount);
+  snap_moving_.reserve(contract::kMaxCount);
+  resyncs_.reserve(kMaxTeamRobots * 4);
+  taken_.reserve(kMaxTeamRobots * 4);
+  global_map_t m{};
+  chunk_sizes_.fixed_bytes = m.getEncodedSize();
+  contract::set_count(&m.landmarks, &m.num_landmarks, 1);
+  chunk_sizes_.a_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
+  contract::set_count(&m.landmarks, &m.num_landmarks, 0);
+  contract::set_count(&m.moving_ids, &m.num_moving, 1);
+  m.moving_frames.resize(1);
+  m.moving_by.resize(1);
+  chunk_sizes_.b_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
+  chunk_sizes_.budget = contract::kMaxChunkBytes;
+  static_ids_.reserve(max_id);
+  moving_ids_.reserve(max_id);
+  const int n = max_chunks(chunk_sizes_, options.max_landmark_id, 0);
+  spans_.reserve(static_cast<std::size_t>(n));
+  chunks_.resize(static_cast<std::size_t>(n));
+  for (auto& c : chunks_) {
+    const auto a = static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.a_bytes));
+    const auto b = static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.b_bytes));
+    c.landmarks.reserve(a);
+    c.moving_ids.reserve(b);
+    c.moving_frames.reserve(b);
+    c.moving_by.reserve(b);
+  }
 }
 
 std::string MainNode::validate(const landmark_event_t& m) const {
@@ -60,20 +87,82 @@ std::string MainNode::validate(const lmap_snapshot_t& m) const {
   if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return str("robot_id outside [1, 8]", m.robot_id);
   if (m.seq < 0) return str("seq is negative", m.seq);
   if (m.frame < 0) return str("frame is negative", m.frame);
-  if (m.num_landmarks < 0 || m.num_landmarks > contract::kMaxLandmarksPerMessage)
-    return str(contract::count_outside("num_landmarks", contract::kMaxLandmarksPerMessage).c_str(), m.num_landmarks);
-  if (m.num_moving < 0 || m.num_moving > contract::kMaxLandmarksPerMessage)
-    return str(contract::count_outside("num_moving", contract::kMaxLandmarksPerMessage).c_str(), m.num_moving);
+  if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks) return str("chunk outside [0, num_chunks)", m.chunk);
+  if (m.id_begin < 0 || m.id_end <= m.id_begin || m.id_end > map_.max_landmark_id())
+    return str("id range not within [0, max_landmark_id), id_begin", m.id_begin);
+  if (!contract::count_fits(m.landmarks, m.num_landmarks)) return str("num_landmarks does not match the array", m.num_landmarks);
+  if (!contract::count_fits(m.moving_ids, m.num_moving)) return str("num_moving does not match the array", m.num_moving);
+  int previous = -1;
   for (int k = 0; k < m.num_landmarks; ++k) {
-    const landmark_estimate_t& l = m.landmarks[k];
-    if (l.id < 0 || l.id >= map_.max_landmark_id()) return str("landmark id outside [0, max_landmark_id)", l.id);
-    if (!std::isfinite(l.x) || !std::isfinite(l.y)) return str("landmark position not finite, id", l.id);
+    const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
+    if (l.id < m.id_begin || l.id >= m.id_end) return str("landmark id outside the chunk's range", l.id);
+    if (l.id <= previous) return str("landmark ids not ascending (or repeated), id", l.id);
+    previous = l.id;
+    if (!std::isfinite(l.x) || !std::isfinite(l.y) || std::fabs(l.x) > 1e6 || std::fabs(l.y) > 1e6)
+      return str("landmark position not finite or beyond 1e6 m, id", l.id);
     if (!finite_cov(l.cov)) return str("landmark covariance invalid, id", l.id);
   }
-  for (int k = 0; k < m.num_moving; ++k)
-    if (m.moving_ids[k] < 0 || m.moving_ids[k] >= map_.max_landmark_id())
-      return str("moving id outside [0, max_landmark_id)", m.moving_ids[k]);
+  for (int k = 0; k < m.num_moving; ++k) {
+    const int id = m.moving_ids[static_cast<std::size_t>(k)];
+    if (id < m.id_begin || id >= m.id_end) return str("moving id outside the chunk's range", id);
+  }
   return "";
+}
+
+bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int frame) {
+  switch (map_.observe_incarnation(robot_id, incarnation, frame)) {
+    case IncarnationVerdict::kCurrent: return true;
+    case IncarnationVerdict::kRestarted:
+      ++counters_.restarts;
+      robot_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;
+      alert_ = "robot " + std::to_string(robot_id) + " restarted without its state (incarnation " +
+               std::to_string(incarnation) + "): its stream starts over, snapshot requested";
+      request_resync(robot_id, resync_request_t::NEW_INCARNATION);
+      return true;
+    case IncarnationVerdict::kStale: break;
+  }
+  ++counters_.stale_incarnation;
+  auto& alerted = alerted_duplicate_[static_cast<std::size_t>(robot_id - 1)];
+  if (map_.duplicate_sender(robot_id) && !alerted) {
+    alert_ = "FAULT: two live senders use robot id " + std::to_string(robot_id) + " (incarnations " +
+             std::to_string(map_.stream(robot_id).incarnation) + " and " + std::to_string(incarnation) +
+             "); following the newer one";
+  }
+  alerted = map_.duplicate_sender(robot_id);
+  return false;
+}
+
+void MainNode::request_resync(int robot_id, std::int8_t reason) {
+  const auto r = static_cast<std::size_t>(robot_id - 1);
+  const int frame = std::max(map_.stream(robot_id).last_frame, robot_frame_[r]);
+  if (reason == resync_request_t::GAP && frame - resync_frame_[r] < map_.options().resync_interval_frames) return;
+  resync_frame_[r] = frame;
+  if (resyncs_.size() >= resyncs_.capacity()) return;
+  resync_request_t q{};
+  q.robot_id = static_cast<std::int16_t>(robot_id);
+  q.robot_incarnation = map_.stream(robot_id).incarnation;
+  q.after_seq = map_.stream(robot_id).last_seq;
+  q.reason = reason;
+  resyncs_.push_back(q);
+}
+
+const std::vector<resync_request_t>& MainNode::take_resyncs(std::int64_t now_utime) {
+  static const std::vector<resync_request_t> kNone;
+  if (resyncs_.empty()) return kNone;
+  for (auto& q : resyncs_) {
+    q.utime = now_utime;
+    q.incarnation = incarnation_;
+  }
+  counters_.resyncs_requested += static_cast<std::int64_t>(resyncs_.size());
+  taken_.swap(resyncs_);
+  resyncs_.clear();
+  return taken_;
+}
+
+std::string MainNode::take_alert() {
+  std::string a;
+  a.swap(alert_);
+  return a;
 }
 
 bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
@@ -81,6 +170,10 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
   if (!problem.empty()) {
     ++counters_.rejected_inputs;
     if (why) *why = problem;
+    return false;
+  }
+  if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
+    if (why) *why = "event of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
     return false;
   }
   GlobalEvent e;
@@ -93,7 +186,10 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
   e.cov = to_matrix(m.cov);
   switch (map_.apply(e, &pending_)) {
     case EventResult::kApplied: ++counters_.events; break;
-    case EventResult::kAppliedAfterGap: ++counters_.events, ++counters_.gaps; break;
+    case EventResult::kAppliedAfterGap:
+      ++counters_.events, ++counters_.gaps;
+      request_resync(m.robot_id, resync_request_t::GAP);
+      break;
     case EventResult::kDuplicate:
     case EventResult::kStale: ++counters_.duplicates; break;
   }
@@ -107,14 +203,21 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
     if (why) *why = problem;
     return false;
   }
+  if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
+    if (why) *why = "snapshot of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
+    return false;
+  }
   snap_lms_.clear();
   snap_moving_.clear();
   for (int k = 0; k < m.num_landmarks; ++k) {
-    const landmark_estimate_t& l = m.landmarks[k];
+    const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
     snap_lms_.push_back({l.id, RobotEstimate{true, {l.x, l.y}, to_matrix(l.cov), m.frame}});
   }
-  for (int k = 0; k < m.num_moving; ++k) snap_moving_.push_back(m.moving_ids[k]);
-  map_.apply_snapshot(m.robot_id, m.seq, m.frame, snap_lms_, snap_moving_, &pending_);
+  for (int k = 0; k < m.num_moving; ++k) snap_moving_.push_back(m.moving_ids[static_cast<std::size_t>(k)]);
+  if (!map_.apply_snapshot(m.robot_id, m.seq, m.frame, m.id_begin, m.id_end, snap_lms_, snap_moving_, &pending_)) {
+    ++counters_.stale_snapshots;
+    return true;
+  }
   ++counters_.snapshots;
   return true;
 }
@@ -125,6 +228,7 @@ const std::vector<dynamic_notice_t>& MainNode::take_notices(std::int64_t now_uti
     dynamic_notice_t d{};
     d.utime = now_utime;
     d.frame = n.frame;
+    d.incarnation = incarnation_;
     d.seq = ++notice_seq_;
     d.landmark_id = n.landmark_id;
     d.detected_by = static_cast<int16_t>(n.detected_by);
@@ -133,6 +237,23 @@ const std::vector<dynamic_notice_t>& MainNode::take_notices(std::int64_t now_uti
   pending_.clear();
   counters_.notices_sent += static_cast<std::int64_t>(notices_.size());
   return notices_;
+}
+
+int MainNode::on_pose(const pose_estimate_t& m) {
+  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots || m.frame < 0) {
+    ++counters_.rejected_inputs;
+    return -1;
+  }
+  const auto r = static_cast<std::size_t>(m.robot_id - 1);
+  const bool first = map_.stream(m.robot_id).incarnation == 0 && robot_frame_[r] < 0;
+  if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) return -1;
+  // Heard of first past its first frames (main started late or without its state):
+  // the robot's earlier events never reached this map.
+  if (first && m.frame > 0 && map_.stream(m.robot_id).last_seq == 0)
+    request_resync(m.robot_id, resync_request_t::MAIN_STARTED);
+  const int done = on_robot_frame(m.robot_id, m.frame);
+  if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // again, rate-limited
+  return done;
 }
 
 int MainNode::on_robot_frame(int robot_id, int frame) {
@@ -150,31 +271,57 @@ int MainNode::on_robot_frame(int robot_id, int frame) {
   return all;
 }
 
-const global_map_t& MainNode::global_map_msg(std::int64_t now_utime, int frame) {
-  msg_.utime = now_utime;
-  msg_.frame = frame >= 0 ? frame : (completed_frame_ >= 0 ? completed_frame_ : map_.newest_frame());
-  msg_.version = map_.version();
-  int n = 0, m = 0;
+int MainNode::make_global_map(std::int64_t now_utime, int frame) {
+  static_ids_.clear();
+  moving_ids_.clear();
   for (int id = 0; id < map_.max_landmark_id(); ++id) {
-    const GlobalEntry& g = map_.entry(id);
-    if (g.status == GlobalStatus::kStatic && n < contract::kMaxLandmarksPerMessage) {
-      global_landmark_t& l = msg_.landmarks[n++];
+    const GlobalStatus st = map_.entry(id).status;
+    if (st == GlobalStatus::kStatic) static_ids_.push_back(id);
+    else if (st == GlobalStatus::kMoving) moving_ids_.push_back(id);
+  }
+  cut_chunks(static_ids_.data(), static_cast<int>(static_ids_.size()), moving_ids_.data(),
+             static_cast<int>(moving_ids_.size()), chunk_sizes_, map_.max_landmark_id(), &spans_);
+  const int n = static_cast<int>(std::min(spans_.size(), chunks_.size()));  // equal: the pool fits the largest map
+  const int stamp = frame >= 0 ? frame : (completed_frame_ >= 0 ? completed_frame_ : map_.newest_frame());
+  for (int k = 0; k < n; ++k) {
+    const ChunkSpan& sp = spans_[static_cast<std::size_t>(k)];
+    global_map_t& c = chunks_[static_cast<std::size_t>(k)];
+    c.utime = now_utime;
+    c.frame = stamp;
+    c.incarnation = incarnation_;
+    c.version = map_.version();
+    c.chunk = static_cast<std::int16_t>(k);
+    c.num_chunks = static_cast<std::int16_t>(n);
+    c.id_begin = sp.id_begin;
+    c.id_end = sp.id_end;
+    contract::set_count(&c.landmarks, &c.num_landmarks, sp.count_a);
+    for (int i = 0; i < sp.count_a; ++i) {
+      const int id = static_ids_[static_cast<std::size_t>(sp.first_a + i)];
+      const GlobalEntry& g = map_.entry(id);
+      global_landmark_t& l = c.landmarks[static_cast<std::size_t>(i)];
       l.id = id;
       l.x = g.fused.x();
       l.y = g.fused.y();
       for (int r = 0; r < 2; ++r)
-        for (int c = 0; c < 2; ++c) l.cov[r][c] = g.fused_cov(r, c);
-      l.contributors = static_cast<int16_t>(g.contributors());
+        for (int q = 0; q < 2; ++q) l.cov[r][q] = g.fused_cov(r, q);
+      l.contributors = static_cast<std::int16_t>(g.contributors());
       l.status = global_landmark_t::STATIC;
       l.status_frame = g.status_frame;
-    } else if (g.status == GlobalStatus::kMoving && m < contract::kMaxLandmarksPerMessage) {
-      msg_.moving_ids[m++] = id;
+    }
+    contract::set_count(&c.moving_ids, &c.num_moving, sp.count_b);
+    c.moving_frames.resize(static_cast<std::size_t>(sp.count_b));
+    c.moving_by.resize(static_cast<std::size_t>(sp.count_b));
+    for (int i = 0; i < sp.count_b; ++i) {
+      const auto j = static_cast<std::size_t>(i);
+      const int id = moving_ids_[static_cast<std::size_t>(sp.first_b + i)];
+      const GlobalEntry& g = map_.entry(id);
+      c.moving_ids[j] = id;
+      c.moving_frames[j] = std::max(g.status_frame, 0);
+      c.moving_by[j] = static_cast<std::int16_t>(g.moving_unconfirmed ? 0 : g.moving_by);
     }
   }
-  msg_.num_landmarks = static_cast<int16_t>(n);
-  msg_.num_moving = static_cast<int16_t>(m);
   ++counters_.maps_published;
-  return msg_;
+  return n;
 }
 
 node_status_t MainNode::status_msg(std::int64_t now_utime) const {
@@ -183,6 +330,14 @@ node_status_t MainNode::status_msg(std::int64_t now_utime) const {
   s.frame = map_.newest_frame();
   s.node_kind = node_status_t::MAIN;
   s.node_id = 0;
+  s.incarnation = incarnation_;
+  for (int r = 1; r <= kMaxTeamRobots; ++r) {
+    if (map_.duplicate_sender(r)) {
+      s.duplicate_robots = static_cast<std::int16_t>(s.duplicate_robots | (1 << (r - 1)));
+      s.fault_flags |= node_status_t::FAULT_DUPLICATE_SENDER;
+    }
+    if (map_.stream(r).gap_pending) s.fault_flags |= node_status_t::FAULT_UNREPAIRED_GAP;
+  }
   s.frames = counters_.events;
   s.frames_dropped = counters_.gaps;
   s.rejected_inputs = counters_.rejected_inputs;

@@ -1,6 +1,7 @@
 #include "elaslam/robot_node/robot_node.hpp"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -44,13 +45,39 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
     : options_(options), robot_id_(robot_id), robot_(options, robot_id) {
   events_.reserve(static_cast<std::size_t>(2 * kMaxObservations + options.ekf.capacity + 8));
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
+  notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
   held_.reserve(kMaxHeldNotices);
+  prepare_snapshot_chunks();
+}
+
+// The encoded sizes of a chunk and of its entries, from the generated code, and a
+// pool of chunks for the largest map this robot can hold.
+void RobotNode::prepare_snapshot_chunks() {
+  lmap_snapshot_t m{};
+  chunk_sizes_.fixed_bytes = m.getEncodedSize();
+  contract::set_count(&m.landmarks, &m.num_landmarks, 1);
+  chunk_sizes_.a_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
+  contract::set_count(&m.landmarks, &m.num_landmarks, 0);
+  contract::set_count(&m.moving_ids, &m.num_moving, 1);
+  chunk_sizes_.b_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
+  chunk_sizes_.budget = contract::kMaxChunkBytes;
+  const int max_id = options_.ekf.max_landmark_id;
+  static_ids_.reserve(static_cast<std::size_t>(max_id));
+  moving_ids_.reserve(static_cast<std::size_t>(max_id));
+  const int n = max_chunks(chunk_sizes_, std::min(options_.ekf.capacity, max_id), max_id);
+  spans_.reserve(static_cast<std::size_t>(n));
+  chunks_.resize(static_cast<std::size_t>(n));
+  for (auto& c : chunks_) {
+    c.landmarks.reserve(static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.a_bytes)));
+    c.moving_ids.reserve(static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.b_bytes)));
+  }
 }
 
 std::string RobotNode::validate(const sensor_frame_t& m) const {
   if (m.robot_id != robot_id_) return str("robot_id is not this robot's", m.robot_id);
   if (m.frame < 0) return str("frame is negative", m.frame);
   if (m.num_obs < 0 || m.num_obs > kMaxObservations) return str(contract::count_outside("num_obs", kMaxObservations).c_str(), m.num_obs);
+  if (!contract::count_fits(m.obs, m.num_obs)) return str("num_obs larger than the obs array", m.num_obs);
   if (!finite(m.odom_x) || !finite(m.odom_y) || !finite(m.odom_theta)) return "odometer reading is not finite";
   if (std::fabs(m.odom_x) > 1e6 || std::fabs(m.odom_y) > 1e6) return "odometer position beyond 1e6 m";
   for (double v : {m.odom_var_trans_per_m, m.odom_var_rot_per_rad, m.odom_var_rot_per_m})
@@ -141,6 +168,7 @@ void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, con
   pose_.utime = now_utime;
   pose_.frame = msg.frame;
   pose_.robot_id = static_cast<int16_t>(robot_id_);
+  pose_.incarnation = incarnation_;
   pose_.source_utime = msg.utime;
   pose_.x = p.x;
   pose_.y = p.y;
@@ -162,6 +190,7 @@ void RobotNode::fill_events(std::int64_t now_utime) {
     m.utime = now_utime;
     m.frame = e.frame;
     m.robot_id = static_cast<int16_t>(robot_id_);
+    m.incarnation = incarnation_;
     m.seq = ++seq_;
     m.kind = static_cast<int8_t>(e.kind);
     m.landmark_id = e.landmark_id;
@@ -173,33 +202,47 @@ void RobotNode::fill_events(std::int64_t now_utime) {
   counters_.events_sent += static_cast<std::int64_t>(events_.size());
 }
 
-const lmap_snapshot_t& RobotNode::make_snapshot(std::int64_t now_utime) {
+int RobotNode::make_snapshot(std::int64_t now_utime) {
   const EkfSlam& f = robot_.filter();
-  snapshot_.utime = now_utime;
-  snapshot_.frame = last_frame_;
-  snapshot_.robot_id = static_cast<int16_t>(robot_id_);
-  snapshot_.seq = seq_;
-  int n = 0;
-  for (int slot = 0; slot < f.num_landmarks() && n < contract::kMaxLandmarksPerMessage; ++slot) {
-    const int id = f.id_at(slot);
-    if (robot_.lmap()[id].status != LandmarkStatus::kStatic) continue;  // candidates are not the map
-    landmark_estimate_t& l = snapshot_.landmarks[n++];
-    l.id = id;
-    const Eigen::Vector2d p = f.landmark(id);
-    l.x = p.x();
-    l.y = p.y();
-    set_cov2(l.cov, f.landmark_cov(id));
-  }
-  snapshot_.num_landmarks = static_cast<int16_t>(n);
-  int m = 0;
   const LMap& lm = robot_.lmap();
-  for (int id = 0; id < lm.size() && m < contract::kMaxLandmarksPerMessage; ++id) {
+  static_ids_.clear();
+  moving_ids_.clear();
+  for (int id = 0; id < lm.size(); ++id) {
     const LMapEntry& e = lm[id];
-    if (e.status == LandmarkStatus::kMoving || (e.status == LandmarkStatus::kCandidate && e.was_moving))
-      snapshot_.moving_ids[m++] = id;
+    if (e.status == LandmarkStatus::kStatic && f.has_landmark(id)) static_ids_.push_back(id);  // candidates are not the map
+    else if (e.status == LandmarkStatus::kMoving || (e.status == LandmarkStatus::kCandidate && e.was_moving))
+      moving_ids_.push_back(id);
   }
-  snapshot_.num_moving = static_cast<int16_t>(m);
-  return snapshot_;
+  cut_chunks(static_ids_.data(), static_cast<int>(static_ids_.size()), moving_ids_.data(),
+             static_cast<int>(moving_ids_.size()), chunk_sizes_, lm.size(), &spans_);
+  num_chunks_ = static_cast<int>(std::min(spans_.size(), chunks_.size()));  // equal: the pool fits the largest map
+  for (int k = 0; k < num_chunks_; ++k) {
+    const ChunkSpan& sp = spans_[static_cast<std::size_t>(k)];
+    lmap_snapshot_t& c = chunks_[static_cast<std::size_t>(k)];
+    c.utime = now_utime;
+    c.frame = last_frame_;
+    c.robot_id = static_cast<int16_t>(robot_id_);
+    c.incarnation = incarnation_;
+    c.seq = seq_;
+    c.chunk = static_cast<int16_t>(k);
+    c.num_chunks = static_cast<int16_t>(num_chunks_);
+    c.id_begin = sp.id_begin;
+    c.id_end = sp.id_end;
+    contract::set_count(&c.landmarks, &c.num_landmarks, sp.count_a);
+    for (int i = 0; i < sp.count_a; ++i) {
+      const int id = static_ids_[static_cast<std::size_t>(sp.first_a + i)];
+      landmark_estimate_t& l = c.landmarks[static_cast<std::size_t>(i)];
+      l.id = id;
+      const Eigen::Vector2d p = f.landmark(id);
+      l.x = p.x();
+      l.y = p.y();
+      set_cov2(l.cov, f.landmark_cov(id));
+    }
+    contract::set_count(&c.moving_ids, &c.num_moving, sp.count_b);
+    for (int i = 0; i < sp.count_b; ++i)
+      c.moving_ids[static_cast<std::size_t>(i)] = moving_ids_[static_cast<std::size_t>(sp.first_b + i)];
+  }
+  return num_chunks_;
 }
 
 bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
@@ -213,6 +256,8 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
     if (why) *why = problem;
     return false;
   }
+  auto& had = notice_frame_[static_cast<std::size_t>(msg.landmark_id)];
+  had = std::max(had, msg.frame);
   // Ahead of this robot's frames: hold it (a fresh node, one far behind or a full
   // buffer applies it at once; a notice is never lost).
   if (last_frame_ >= 0 && msg.frame > last_frame_ && msg.frame <= last_frame_ + options_.max_frame_gap &&
@@ -230,6 +275,61 @@ void RobotNode::apply_notice(const dynamic_notice_t& msg) {
   ++(removed ? counters_.notices_applied : counters_.notices_ignored);
 }
 
+std::string RobotNode::validate(const global_map_t& m) const {
+  const int max_id = options_.ekf.max_landmark_id;
+  if (m.num_moving < 0 || !contract::count_fits(m.moving_ids, m.num_moving) ||
+      !contract::count_fits(m.moving_frames, m.num_moving) || !contract::count_fits(m.moving_by, m.num_moving))
+    return str("num_moving does not match the moving arrays", m.num_moving);
+  for (int k = 0; k < m.num_moving; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    if (m.moving_ids[i] < 0 || m.moving_ids[i] >= max_id) return str("moving id outside [0, max_landmark_id)", m.moving_ids[i]);
+    if (m.moving_by[i] < 0 || m.moving_by[i] > contract::kMaxRobots) return str("moving_by outside [0, 8]", m.moving_by[i]);
+    if (m.moving_frames[i] < 0) return str("moving frame is negative", m.moving_frames[i]);
+  }
+  return "";
+}
+
+bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {
+  const std::string problem = validate(msg);
+  if (!problem.empty()) {
+    ++counters_.rejected_inputs;
+    if (why) *why = problem;
+    return false;
+  }
+  for (int k = 0; k < msg.num_moving; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const int id = msg.moving_ids[i], by = msg.moving_by[i], frame = msg.moving_frames[i];
+    // Unconfirmed (no notice went out), this robot's own finding, a notice had, or
+    // this robot's own view of it changed since (it saw it again): nothing to repair.
+    if (by == 0 || by == robot_id_ || notice_frame_[static_cast<std::size_t>(id)] >= frame ||
+        robot_.lmap()[id].status_frame > frame)
+      continue;
+    dynamic_notice_t n{};
+    n.frame = frame;
+    n.landmark_id = id;
+    n.detected_by = static_cast<int16_t>(by);
+    ++counters_.notices_repaired;
+    on_notice(n, nullptr);
+  }
+  return true;
+}
+
+bool RobotNode::on_resync(const resync_request_t& msg, std::int64_t now_utime) {
+  if (msg.robot_id != robot_id_ || last_frame_ < 0 || last_resync_frame_ == last_frame_) return false;
+  last_resync_frame_ = last_frame_;
+  make_snapshot(now_utime);
+  ++counters_.resyncs_answered;
+  return true;
+}
+
+bool RobotNode::on_own_channel_pose(const pose_estimate_t& msg) {
+  if (msg.incarnation == incarnation_) return false;  // this process's own POSE, looped back
+  ++counters_.foreign_poses;
+  const bool fresh = last_frame_ > duplicate_until_frame_;
+  duplicate_until_frame_ = std::max(last_frame_, 0) + 50;
+  return fresh || counters_.foreign_poses % 100 == 1;
+}
+
 node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   node_status_t s{};
   s.utime = now_utime;
@@ -237,6 +337,8 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   s.node_kind = node_status_t::ROBOT;
   s.node_id = static_cast<int16_t>(robot_id_);
   s.mode = status_mode(options_.mode);
+  s.incarnation = incarnation_;
+  s.fault_flags = counters_.foreign_poses > 0 && last_frame_ <= duplicate_until_frame_ ? node_status_t::FAULT_DUPLICATE_SENDER : 0;
   s.frames = counters_.frames;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;
   s.rejected_inputs = counters_.rejected_inputs;

@@ -18,12 +18,13 @@ elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime) {
   m.odom_var_trans_per_m = f.odometry_noise.var_trans_per_m;
   m.odom_var_rot_per_rad = f.odometry_noise.var_rot_per_rad;
   m.odom_var_rot_per_m = f.odometry_noise.var_rot_per_m;
-  m.num_obs = static_cast<std::int16_t>(f.num_obs);  // <= 64 by construction (Sensor::observe)
+  contract::set_count(&m.obs, &m.num_obs, f.num_obs);  // <= 64 by construction (Sensor::observe)
   for (int i = 0; i < f.num_obs; ++i) {
     const Observation& z = f.obs[static_cast<std::size_t>(i)];
-    m.obs[i].landmark_id = z.landmark_id;
-    m.obs[i].range = z.range_m;
-    m.obs[i].bearing = z.bearing_rad;
+    range_bearing_t& o = m.obs[static_cast<std::size_t>(i)];
+    o.landmark_id = z.landmark_id;
+    o.range = z.range_m;
+    o.bearing = z.bearing_rad;
   }
   return m;
 }

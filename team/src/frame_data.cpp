@@ -51,10 +51,50 @@ void add_observed(const sensor_frame_t& s, std::vector<int>* observed) {
 void read_map(const global_map_t& g, std::vector<std::pair<int, Eigen::Vector2d>>* landmarks, std::vector<int>* moving) {
   landmarks->clear();
   moving->clear();
-  for (int i = 0; i < contract::bounded(g.num_landmarks, contract::kMaxLandmarksPerMessage); ++i)
+  for (int i = 0; i < contract::bounded(g.num_landmarks, static_cast<int>(g.landmarks.size())); ++i)
     landmarks->push_back({g.landmarks[i].id, {g.landmarks[i].x, g.landmarks[i].y}});
-  for (int i = 0; i < contract::bounded(g.num_moving, contract::kMaxLandmarksPerMessage); ++i)
+  for (int i = 0; i < contract::bounded(g.num_moving, static_cast<int>(g.moving_ids.size())); ++i)
     moving->push_back(g.moving_ids[i]);
+}
+
+bool GlobalMapAssembly::add(const global_map_t& c) {
+  const bool consistent = c.num_chunks >= 1 && c.chunk >= 0 && c.chunk < c.num_chunks &&
+                          contract::count_fits(c.landmarks, c.num_landmarks) &&
+                          contract::count_fits(c.moving_ids, c.num_moving) &&
+                          contract::count_fits(c.moving_frames, c.num_moving) && contract::count_fits(c.moving_by, c.num_moving);
+  if (!consistent) return false;
+  const bool same = count_ > 0 && c.utime == building_.utime && c.incarnation == building_.incarnation &&
+                    c.version == building_.version && c.frame == building_.frame && c.num_chunks == building_.num_chunks;
+  if (!same) {  // a new publication
+    building_ = global_map_t{};
+    building_.utime = c.utime;
+    building_.frame = c.frame;
+    building_.incarnation = c.incarnation;
+    building_.version = c.version;
+    building_.num_chunks = c.num_chunks;
+    received_.assign(static_cast<std::size_t>(c.num_chunks), false);
+    count_ = 0;
+  }
+  if (received_[static_cast<std::size_t>(c.chunk)]) return false;  // a duplicate
+  received_[static_cast<std::size_t>(c.chunk)] = true;
+  ++count_;
+  building_.landmarks.insert(building_.landmarks.end(), c.landmarks.begin(), c.landmarks.begin() + c.num_landmarks);
+  building_.moving_ids.insert(building_.moving_ids.end(), c.moving_ids.begin(), c.moving_ids.begin() + c.num_moving);
+  building_.moving_frames.insert(building_.moving_frames.end(), c.moving_frames.begin(),
+                                 c.moving_frames.begin() + c.num_moving);
+  building_.moving_by.insert(building_.moving_by.end(), c.moving_by.begin(), c.moving_by.begin() + c.num_moving);
+  if (count_ < building_.num_chunks) return false;
+  complete_ = building_;
+  complete_.chunk = 0;
+  complete_.num_chunks = 1;
+  complete_.id_begin = 0;
+  complete_.id_end = c.id_end;
+  complete_.num_landmarks = static_cast<std::int16_t>(std::min<std::size_t>(complete_.landmarks.size(), contract::kMaxCount));
+  complete_.num_moving = static_cast<std::int16_t>(std::min<std::size_t>(complete_.moving_ids.size(), contract::kMaxCount));
+  std::sort(complete_.landmarks.begin(), complete_.landmarks.end(),
+            [](const global_landmark_t& a, const global_landmark_t& b) { return a.id < b.id; });
+  count_ = 0;
+  return true;
 }
 
 }  // namespace elaslam

@@ -177,7 +177,11 @@ struct Reader {
   // or is damaged.
   template <typename Msg>
   static Decoded decode(const LogEvent& ev, Msg* m) {
-    if (m->decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) >= 0) return Decoded::kOk;
+    try {  // a negative count of a variable-length array makes LCM's decoder throw
+      if (m->decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) >= 0) return Decoded::kOk;
+    } catch (const std::exception&) {
+      return Decoded::kBad;
+    }
     if (ev.data.size() < 8) return Decoded::kBad;
     std::uint64_t h = 0;
     for (int i = 0; i < 8; ++i) h = (h << 8) | ev.data[static_cast<std::size_t>(i)];

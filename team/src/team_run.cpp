@@ -7,6 +7,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "elaslam/common/contract.hpp"
+
 #include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
@@ -25,9 +27,9 @@ void remove_moving(const FrameData& f, sensor_frame_t* s) {
   for (int o = 0; o < s->num_obs; ++o) {
     const auto id = static_cast<std::size_t>(s->obs[o].landmark_id);
     if (id < f.truly_moving.size() && f.truly_moving[id]) continue;
-    s->obs[kept++] = s->obs[o];
+    s->obs[static_cast<std::size_t>(kept++)] = s->obs[static_cast<std::size_t>(o)];
   }
-  s->num_obs = static_cast<std::int16_t>(kept);
+  contract::set_count(&s->obs, &s->num_obs, kept);
 }
 
 }  // namespace
@@ -160,6 +162,7 @@ class InProcessTeam {
   std::int64_t first_utime_ = 0;
   double time_s_ = 0.0;
   FrameData f_;
+  GlobalMapAssembly map_assembly_;  // GLOBAL_MAP chunks -> the map of a publication
   ground_truth_t gt_in_;
   std::vector<sensor_frame_t> sensors_;
   sensor_frame_t sensor_;
@@ -200,7 +203,10 @@ InProcessTeam::InProcessTeam(const RobotOptions& robot_options, const GlobalMapO
   world_.subscribe<ground_truth_t>(channels::ground_truth(), on_truth(), transport::kUnboundedQueue);
   world_.subscribe<pose_estimate_t>("POSE_[0-9]+", on_pose(), transport::kUnboundedQueue);
   world_.subscribe<global_map_t>(
-      channels::global_map(), [this](const global_map_t& g, const std::string&) { read_map(g, &f_.map_landmarks, &f_.map_moving); },
+      channels::global_map(),
+      [this](const global_map_t& g, const std::string&) {
+        if (map_assembly_.add(g)) read_map(map_assembly_.map(), &f_.map_landmarks, &f_.map_moving);
+      },
       transport::kUnboundedQueue);
 }
 

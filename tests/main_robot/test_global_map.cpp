@@ -260,7 +260,9 @@ TEST(MainNode, BadMessagesAreCountedAndDropped) {
   EXPECT_FALSE(node.on_event(bad, &why));
   lmap_snapshot_t snap{};
   snap.robot_id = 1;
-  snap.num_landmarks = 300;
+  snap.num_chunks = 1;
+  snap.id_end = 32;
+  snap.num_landmarks = 300;  // the array holds none
   EXPECT_FALSE(node.on_snapshot(snap, &why));
   EXPECT_NE(why.find("num_landmarks"), std::string::npos);
   EXPECT_EQ(node.counters().rejected_inputs, 6);
@@ -278,11 +280,15 @@ TEST(MainNode, NoticesGetSequenceNumbersAndMapMessageListsMoving) {
   EXPECT_EQ(n[0].landmark_id, 3);
   EXPECT_EQ(n[0].detected_by, 2);
   EXPECT_TRUE(node.take_notices(101).empty());
-  const global_map_t& g = node.global_map_msg(200);
+  ASSERT_EQ(node.make_global_map(200), 1);
+  const global_map_t& g = node.map_chunk(0);
   ASSERT_EQ(g.num_landmarks, 1);
   EXPECT_EQ(g.landmarks[0].id, 4);
   ASSERT_EQ(g.num_moving, 1);
   EXPECT_EQ(g.moving_ids[0], 3);
+  EXPECT_EQ(g.moving_by[0], 2);
+  EXPECT_EQ(g.id_begin, 0);
+  EXPECT_EQ(g.id_end, 32);
 }
 
 }  // namespace

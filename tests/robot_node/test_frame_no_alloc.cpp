@@ -51,10 +51,13 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
           ++t.events[e.kind];
           main.on_event(e);
         }
-        if (node.snapshot_ready()) main.on_snapshot(node.snapshot_msg()), ++t.snapshots;
+        if (node.snapshot_ready())
+          for (int c = 0; c < node.num_snapshot_chunks(); ++c) main.on_snapshot(node.snapshot_chunk(c)), ++t.snapshots;
         for (const auto& n : main.take_notices(0))
           for (auto& r : robots) r.on_notice(n), ++t.notices;
-        main.global_map_msg(0);
+        const int chunks = main.make_global_map(0);
+        for (int c = 0; c < chunks; ++c)
+          for (auto& r : robots) r.on_global_map(main.map_chunk(c));
         node.status_msg(0);
       }
     }

@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/common/contract.hpp"
 #include "scene.hpp"
 
 namespace elaslam {
@@ -22,7 +23,7 @@ sensor_frame_t to_msg(const FrameInput& in, int robot_id) {
   m.odom_var_trans_per_m = in.noise.var_trans_per_m;
   m.odom_var_rot_per_rad = in.noise.var_rot_per_rad;
   m.odom_var_rot_per_m = in.noise.var_rot_per_m;
-  m.num_obs = static_cast<int16_t>(in.num_obs);
+  contract::set_count(&m.obs, &m.num_obs, in.num_obs);
   for (int k = 0; k < in.num_obs; ++k) {
     m.obs[k].landmark_id = in.obs[static_cast<std::size_t>(k)].landmark_id;
     m.obs[k].range = in.obs[static_cast<std::size_t>(k)].z.range;
@@ -125,8 +126,11 @@ TEST_F(RobotNodeInput, OutputsCarrySeqPoseAndPeriodicSnapshots) {
   EXPECT_FALSE(node_.snapshot_ready());
   run(4, 11);  // frame 10: snapshot (period 10)
   ASSERT_TRUE(node_.snapshot_ready());
-  EXPECT_EQ(node_.snapshot_msg().num_landmarks, 6);
-  EXPECT_EQ(node_.snapshot_msg().seq, node_.event_msgs().back().seq);
+  ASSERT_EQ(node_.num_snapshot_chunks(), 1);  // 6 landmarks fit one datagram
+  EXPECT_EQ(node_.snapshot_chunk(0).num_landmarks, 6);
+  EXPECT_EQ(node_.snapshot_chunk(0).seq, node_.event_msgs().back().seq);
+  EXPECT_EQ(node_.snapshot_chunk(0).id_begin, 0);
+  EXPECT_EQ(node_.snapshot_chunk(0).id_end, node_.robot().lmap().size());  // max_landmark_id
 }
 
 TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {

@@ -183,11 +183,37 @@ def cmd_compare_poses(args, T):
     return 3 if notes and worst >= args.tol else 0
 
 
+class _Map:
+    """The chunks of one GLOBAL_MAP publication put together (global_map_t)."""
+    def __init__(self, first):
+        self.key = (first.utime, first.incarnation, first.version, first.frame, first.num_chunks)
+        self.frame, self.version, self.num_chunks = first.frame, first.version, first.num_chunks
+        self.chunks = {}
+
+    def add(self, c):
+        self.chunks[c.chunk] = c
+        return len(self.chunks) == self.num_chunks
+
+    def finish(self):
+        cs = [self.chunks[i] for i in sorted(self.chunks)]
+        self.landmarks = [l for c in cs for l in c.landmarks[:c.num_landmarks]]
+        self.moving_ids = [m for c in cs for m in c.moving_ids[:c.num_moving]]
+        self.num_landmarks, self.num_moving = len(self.landmarks), len(self.moving_ids)
+        return self
+
+
 def last_map(path, T):
-    last = None
+    """The last complete GLOBAL_MAP publication of a log: the final map."""
+    last, building = None, None
     for ev in read_log(path):
-        if ev.channel == "GLOBAL_MAP":
-            last = T.global_map_t.decode(ev.data)  # the last one published: the final map
+        if ev.channel != "GLOBAL_MAP":
+            continue
+        c = T.global_map_t.decode(ev.data)
+        key = (c.utime, c.incarnation, c.version, c.frame, c.num_chunks)
+        if building is None or building.key != key:
+            building = _Map(c)
+        if building.add(c):
+            last = building.finish()
     return last
 
 

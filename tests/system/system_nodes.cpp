@@ -97,6 +97,7 @@ sensor_frame_t frame(int k, int robot = 1) {
   sensor_frame_t m{};
   m.frame = k;
   m.robot_id = static_cast<int16_t>(robot);
+  m.obs.resize(2);
   m.num_obs = 2;
   m.obs[0] = {3, 2.0, 0.5};
   m.obs[1] = {4, 3.0, -0.5};
@@ -161,8 +162,11 @@ TEST(SystemMainRobot, RestartedMainRobotContinuesWithTheSameMap) {
   snap.robot_id = 1;
   snap.seq = 3;
   snap.frame = 10;
+  snap.num_chunks = 1;
+  snap.id_end = 256;  // the whole id space of config/paper.yaml in one chunk
+  snap.landmarks.resize(4);
   snap.num_landmarks = 4;
-  for (int i = 0; i < 4; ++i) snap.landmarks[i] = {10 + i, double(i), 2.0, {{0.01, 0.0}, {0.0, 0.01}}};
+  for (int i = 0; i < 4; ++i) snap.landmarks[static_cast<std::size_t>(i)] = {10 + i, double(i), 2.0, {{0.01, 0.0}, {0.0, 0.01}}};
   bus.publish(channels::lmap_snapshot(), snap);
   EXPECT_TRUE(bus.until([&] { return bus.last_map.num_landmarks == 4; }, 10000));
   EXPECT_EQ(main.stop(), 0);

@@ -79,7 +79,7 @@ if [ -x "$PY" ]; then
   for ch in POSE_1 POSE_2 POSE_3 SENSOR_1 GROUND_TRUTH; do
     grep -q "^$ch  *150 decoded$" "$OUT/decoded.txt" || { echo "python decode: $ch"; cat "$OUT/decoded.txt"; exit 1; }
   done
-  grep -q "^last GLOBAL_MAP: frame 149" "$OUT/decoded.txt" || { cat "$OUT/decoded.txt"; exit 1; }
+  grep -q "^last GLOBAL_MAP chunk: frame 149" "$OUT/decoded.txt" || { cat "$OUT/decoded.txt"; exit 1; }
   echo "python decode: ok"
 else
   echo "python decode: skipped (no .venv; tools/setup.sh makes it)"

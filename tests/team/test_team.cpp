@@ -171,6 +171,7 @@ TEST(TeamNotices, MovingLandmarkDetectedByOneRobotIsDroppedByTheOthers) {
     sensor_frame_t m{};
     m.frame = k;
     m.robot_id = static_cast<int16_t>(robot);
+    m.obs.resize(static_cast<std::size_t>(in.num_obs));
     m.num_obs = static_cast<int16_t>(in.num_obs);
     for (int i = 0; i < in.num_obs; ++i)
       m.obs[i] = {in.obs[static_cast<std::size_t>(i)].landmark_id, in.obs[static_cast<std::size_t>(i)].z.range,

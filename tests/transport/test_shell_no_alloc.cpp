@@ -28,6 +28,7 @@ TEST(ShellNoAlloc, ASensorToPoseRoundTripAllocatesNothingOnceWarm) {
                                  kUnboundedQueue);
   sensor_frame_t s{};
   s.robot_id = 1;
+  s.obs.resize(10);
   s.num_obs = 10;
   auto frame = [&](int k) {
     s.frame = k;

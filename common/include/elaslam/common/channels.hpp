@@ -18,6 +18,7 @@ inline std::string status_robot(int robot_id, const std::string& suffix = "") {
 inline std::string ground_truth(const std::string& suffix = "") { return "GROUND_TRUTH" + suffix; }
 inline std::string lmap_event(const std::string& suffix = "") { return "LMAP_EVENT" + suffix; }
 inline std::string lmap_snapshot(const std::string& suffix = "") { return "LMAP_SNAPSHOT" + suffix; }
+inline std::string lmap_resync(const std::string& suffix = "") { return "LMAP_RESYNC" + suffix; }
 inline std::string global_map(const std::string& suffix = "") { return "GLOBAL_MAP" + suffix; }
 inline std::string dynamic_notice(const std::string& suffix = "") { return "DYNAMIC_NOTICE" + suffix; }
 inline std::string status_main(const std::string& suffix = "") { return "STATUS_MAIN" + suffix; }

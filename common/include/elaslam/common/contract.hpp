@@ -3,6 +3,7 @@
 // count field and every error message about one is built from these constants.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <type_traits>
 
@@ -14,19 +15,38 @@
 
 namespace elaslam::contract {
 
-constexpr int kMaxObsPerFrame = 64;           // sensor_frame_t.obs
+constexpr int kMaxObsPerFrame = 64;           // sensor_frame_t.obs (a variable-length array: a bound, not a size)
 constexpr int kMaxRobots = 8;                 // ground_truth_t.robot_ids / robots, run_info_t.robot_ids
-constexpr int kMaxLandmarksPerMessage = 256;  // ground_truth_t.landmarks, global_map_t.landmarks / moving_ids,
-                                              // lmap_snapshot_t.landmarks
+constexpr int kMaxLandmarksPerMessage = 256;  // ground_truth_t.landmarks
+constexpr int kMaxCount = 32767;              // the most any int16_t count field can say
 
-static_assert(std::extent_v<decltype(sensor_frame_t::obs)> == kMaxObsPerFrame);
+// Messages that repair state fit one datagram (lmap_snapshot_t, global_map_t chunks):
+// at most this many bytes encoded (LCM's payload, fingerprint included). With LCM's
+// header (8 bytes and the channel name) and IP/UDP (28 bytes) a chunk stays under a
+// 1,500-byte MTU for channel names of up to 200 characters, and under the 1,400
+// bytes of a typical tunnelled link for names of up to 100.
+constexpr int kMaxChunkBytes = 1200;
+
 static_assert(std::extent_v<decltype(ground_truth_t::robot_ids)> == kMaxRobots);
 static_assert(std::extent_v<decltype(ground_truth_t::robots)> == kMaxRobots);
 static_assert(std::extent_v<decltype(run_info_t::robot_ids)> == kMaxRobots);
 static_assert(std::extent_v<decltype(ground_truth_t::landmarks)> == kMaxLandmarksPerMessage);
-static_assert(std::extent_v<decltype(global_map_t::landmarks)> == kMaxLandmarksPerMessage);
-static_assert(std::extent_v<decltype(global_map_t::moving_ids)> == kMaxLandmarksPerMessage);
-static_assert(std::extent_v<decltype(lmap_snapshot_t::landmarks)> == kMaxLandmarksPerMessage);
+
+/// Set a variable-length array and its count together (the arrays of sensor_frame_t,
+/// lmap_snapshot_t and global_map_t): resize (no allocation within the capacity
+/// reserved by transport/message_arrays.hpp) and store the count.
+template <class Vec, class Count>
+void set_count(Vec* array, Count* count, int n) {
+  array->resize(static_cast<std::size_t>(n));
+  *count = static_cast<Count>(n);
+}
+
+/// True when a decoded or filled message's count field and its array agree (LCM's
+/// decoder does not resize an array of primitives for a zero count).
+template <class Vec>
+bool count_fits(const Vec& array, int count) {
+  return count >= 0 && static_cast<std::size_t>(count) <= array.size();
+}
 
 /// "<field> outside [0, <capacity>]": the refusal of a count field, from the constant.
 inline std::string count_outside(const char* field, int capacity) {

@@ -3,8 +3,12 @@
 // a status (STATIC, MOVING) and the frame it last changed. Fixed capacity.
 //
 // Events are idempotent and ordered per robot by seq: duplicates and stale ones
-// are ignored; a gap is noted and repaired by the robot's next snapshot, which
-// replaces that robot's contribution wholesale. No I/O.
+// are ignored; a gap is noted and repaired by the robot's snapshot chunks, each of
+// which replaces that robot's contribution within its range of ids; the gap counts
+// as repaired once chunks taken after it have covered every id. Each robot's stream
+// belongs to one incarnation of it (landmark_event_t): a newer one (a restart
+// without state) starts the stream over, an older one is a replay or a second sender
+// with the same id (observe_incarnation). No I/O.
 #pragma once
 
 #include <array>
@@ -27,6 +31,7 @@ struct GlobalMapOptions {
   Fusion fusion = Fusion::kInformation;
   double publish_rate_hz = 10.0;       // process only: GLOBAL_MAP rate
   double state_save_interval_s = 1.0;  // process only: at most one save per interval
+  int resync_interval_frames = 5;      // ask a robot with an unrepaired gap again after this many of its frames
 };
 void parse(config::Reader& r, GlobalMapOptions* o);
 
@@ -80,11 +85,24 @@ struct Notice {
 enum class EventResult { kApplied, kAppliedAfterGap, kDuplicate, kStale };
 const char* to_string(EventResult r);
 
+enum class IncarnationVerdict {
+  kCurrent,    // the robot's current incarnation (or its first one)
+  kRestarted,  // a newer one: the robot restarted without its state; its stream starts over
+  kStale,      // an older one: a replay, or a second live sender with this id (refuse)
+};
+
 struct RobotStream {
+  std::int64_t incarnation = 0;  // the robot's current incarnation, 0: none seen yet
+  std::int64_t previous_incarnation = 0;
   std::int64_t last_seq = 0;   // highest seq applied (or covered by a snapshot)
-  bool gap_pending = false;    // a gap was seen and no snapshot has repaired it yet
+  bool gap_pending = false;    // a gap was seen and snapshot chunks have not covered every id since
+  std::int64_t repair_seq = 0; // chunks with at least this seq repair the pending gap
+  int covered = 0;             // ids covered by such chunks so far (of max_landmark_id)
   std::int64_t gaps = 0;       // gaps seen
   std::int64_t duplicates = 0; // duplicate or stale events ignored
+  std::int64_t restarts = 0;   // new incarnations after the first
+  std::int64_t stale_incarnation = 0;  // messages of an older incarnation refused
+  int duplicate_until_frame = -1;      // a second live sender was seen: flagged until this frame
   int last_frame = -1;
 };
 
@@ -98,7 +116,24 @@ class GlobalMap {
   /// Replace robot r's contribution with a snapshot: its static landmarks, and the
   /// ids it holds as moving (applied only while a gap is pending for r).
   void apply_snapshot(int robot_id, std::int64_t seq, int frame, const std::vector<std::pair<int, RobotEstimate>>& lms,
-                      const std::vector<int>& moving_ids, std::vector<Notice>* notices);
+                      const std::vector<int>& moving_ids, std::vector<Notice>* notices) {
+    apply_snapshot(robot_id, seq, frame, 0, max_landmark_id(), lms, moving_ids, notices);
+  }
+  /// The same within the ids [id_begin, id_end) only (one chunk of a snapshot); `lms`
+  /// and `moving_ids` lie in that range. A chunk older than the robot's newest
+  /// applied snapshot is ignored (returns false).
+  bool apply_snapshot(int robot_id, std::int64_t seq, int frame, int id_begin, int id_end,
+                      const std::vector<std::pair<int, RobotEstimate>>& lms, const std::vector<int>& moving_ids,
+                      std::vector<Notice>* notices);
+
+  /// Robot r's messages carry `incarnation`; `frame` is the message's frame. A newer
+  /// incarnation than the current one starts r's stream over (its seq restarts at 1,
+  /// a gap is pending until its snapshot has covered every id); an older one is
+  /// refused, and when it is the one just replaced, counted as a second live sender
+  /// (flagged for 50 frames from the third such message).
+  IncarnationVerdict observe_incarnation(int robot_id, std::int64_t incarnation, int frame);
+  /// True while a second live sender with robot r's id is flagged.
+  bool duplicate_sender(int robot_id) const;
 
   const GlobalEntry& entry(int id) const { return entries_[static_cast<std::size_t>(id)]; }
   int max_landmark_id() const { return static_cast<int>(entries_.size()); }
@@ -122,7 +157,12 @@ class GlobalMap {
 
   GlobalMapOptions options_;
   std::vector<GlobalEntry> entries_;
+  void start_repair(RobotStream& s, int r, std::int64_t repair_seq);
+  void cover(RobotStream& s, int r, int id_begin, int id_end);
+
   std::array<RobotStream, kMaxTeamRobots> streams_{};
+  std::array<std::vector<std::uint8_t>, kMaxTeamRobots> covered_;  // per robot, per id: covered since the gap
+  std::array<std::int64_t, kMaxTeamRobots> snapshot_seq_{};        // newest snapshot seq applied per robot
   std::int64_t version_ = 0;
   int newest_frame_ = -1;
 };

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/chunks.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
@@ -17,6 +18,7 @@
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/resync_request_t.hpp"
 
 namespace elaslam {
 
@@ -29,6 +31,10 @@ struct MainCounters {
   std::int64_t decode_errors = 0;    // counted by the I/O shell
   std::int64_t notices_sent = 0;
   std::int64_t maps_published = 0;
+  std::int64_t resyncs_requested = 0;    // LMAP_RESYNC requests sent
+  std::int64_t restarts = 0;             // robots seen with a new incarnation
+  std::int64_t stale_incarnation = 0;    // messages of an older incarnation refused (replay, second sender)
+  std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, ignored
 };
 
 class MainNode {
@@ -42,18 +48,32 @@ class MainNode {
 
   /// Notices produced since the last call, as messages (seq assigned); clears them.
   const std::vector<dynamic_notice_t>& take_notices(std::int64_t now_utime);
+  /// Repair requests (LMAP_RESYNC) produced since the last call; clears them. A robot
+  /// is asked when its events show a gap, when it restarted without its state, when
+  /// it is first heard of past frame 0, and again every resync_interval_frames of its
+  /// frames while the gap stays unrepaired.
+  const std::vector<resync_request_t>& take_resyncs(std::int64_t now_utime);
 
-  /// Robot `robot_id` has finished frame `frame` (its POSE arrived; it publishes its
+  /// A robot's POSE: robot `robot_id` has finished frame `frame` (it publishes its
   /// events before its POSE). Returns the newest frame that every robot seen so far
   /// has finished when that advanced with this call, else -1: the moment to publish
-  /// GLOBAL_MAP for that frame.
+  /// GLOBAL_MAP for that frame. A POSE of a stale incarnation returns -1.
+  int on_pose(const pose_estimate_t& msg);
   int on_robot_frame(int robot_id, int frame);
 
-  /// The global map as a message (at most 256 static landmarks, 256 moving ids),
-  /// stamped with `frame` (default: the newest frame every robot has finished, or
-  /// before any POSE was seen, the newest frame of any event).
-  const global_map_t& global_map_msg(std::int64_t now_utime, int frame = -1);
+  /// The global map in chunks that each fit one datagram (global_map_t), stamped
+  /// with `frame` (default: the newest frame every robot has finished, or before any
+  /// POSE was seen, the newest frame of any event). Returns the chunk count.
+  int make_global_map(std::int64_t now_utime, int frame = -1);
+  const global_map_t& map_chunk(int i) const { return chunks_[static_cast<std::size_t>(i)]; }
   node_status_t status_msg(std::int64_t now_utime) const;
+
+  /// The incarnation GLOBAL_MAP, DYNAMIC_NOTICE and LMAP_RESYNC carry (set at start-up).
+  std::int64_t incarnation() const { return incarnation_; }
+  void set_incarnation(std::int64_t v) { incarnation_ = v; }
+  /// A line for stderr when something happened an operator must see (a second
+  /// sender with a robot's id, a robot restarted), once per occurrence; else "".
+  std::string take_alert();
 
   GlobalMap& map() { return map_; }
   const GlobalMap& map() const { return map_; }
@@ -63,6 +83,9 @@ class MainNode {
   std::string validate(const lmap_snapshot_t& msg) const;
 
  private:
+  /// The incarnation check of every robot message: false when it must be refused.
+  bool accept_incarnation(int robot_id, std::int64_t incarnation, int frame);
+  void request_resync(int robot_id, std::int8_t reason);
   GlobalMap map_;
   MainCounters counters_;
   std::vector<Notice> pending_;
@@ -70,7 +93,16 @@ class MainNode {
   std::int64_t notice_seq_ = 0;
   std::array<int, kMaxTeamRobots> robot_frame_;  // last finished frame per robot, -1: never seen
   int completed_frame_ = -1;
-  global_map_t msg_{};
+  std::int64_t incarnation_ = 0;
+  std::vector<resync_request_t> resyncs_, taken_;
+  std::array<int, kMaxTeamRobots> resync_frame_;  // robot frame of the last request, per robot
+  std::array<bool, kMaxTeamRobots> alerted_duplicate_{};
+  std::string alert_;
+  // GLOBAL_MAP chunks: a pool sized at construction for the largest map (no allocation).
+  ChunkSizes chunk_sizes_;
+  std::vector<int> static_ids_, moving_ids_;
+  std::vector<ChunkSpan> spans_;
+  std::vector<global_map_t> chunks_;
   std::vector<std::pair<int, RobotEstimate>> snap_lms_;
   std::vector<int> snap_moving_;
 };
@@ -99,7 +131,8 @@ class MainPorts {
         node_(node),
         map_(channels::global_map(shell.suffix())),
         notice_(channels::dynamic_notice(shell.suffix())),
-        status_(channels::status_main(shell.suffix())) {}
+        status_(channels::status_main(shell.suffix())),
+        resync_(channels::lmap_resync(shell.suffix())) {}
 
   /// Subscribe the inputs; false when the transport refused.
   bool open(const MainQueues& queues = {}) {
@@ -116,7 +149,10 @@ class MainPorts {
   }
 
   /// GLOBAL_MAP now, stamped `frame` (default: the newest frame every robot has finished).
-  void publish_map(int frame = -1) { shell_.publish(map_, node_.global_map_msg(shell_.now_utime(), frame)); }
+  void publish_map(int frame = -1) {
+    const int n = node_.make_global_map(shell_.now_utime(), frame);
+    for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
+  }
   void publish_status() { shell_.publish(status_, node_.status_msg(shell_.now_utime())); }
 
  private:
@@ -131,16 +167,20 @@ class MainPorts {
     send_notices();
   }
   void on_pose(const pose_estimate_t& m) {
-    const int done = node_.on_robot_frame(m.robot_id, m.frame);
+    const int done = node_.on_pose(m);
+    send_notices();
     if (done >= 0) publish_map(done);
   }
   void send_notices() {
     for (const auto& n : node_.take_notices(shell_.now_utime())) shell_.publish(notice_, n);
+    for (const auto& r : node_.take_resyncs(shell_.now_utime())) shell_.publish(resync_, r);
+    const std::string alert = node_.take_alert();
+    if (!alert.empty()) shell_.say(alert);
   }
 
   Shell& shell_;
   MainNode& node_;
-  const std::string map_, notice_, status_;  // channel names, built once
+  const std::string map_, notice_, status_, resync_;  // channel names, built once
 };
 
 }  // namespace elaslam

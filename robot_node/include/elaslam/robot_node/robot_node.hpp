@@ -11,12 +11,15 @@
 #include <vector>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/chunks.hpp"
 #include "elaslam/common/histogram.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
+#include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/resync_request_t.hpp"
 #include "elaslam/robot_node/robot.hpp"
 #include "elaslam/sensor_frame_t.hpp"
 
@@ -35,6 +38,9 @@ struct RobotNodeCounters {
   std::int64_t notices_applied = 0;   // dynamic notices that removed a landmark here
   std::int64_t notices_ignored = 0;   // notices about landmarks this robot did not hold / its own
   std::int64_t notices_deferred = 0;  // notices for a frame this robot had not processed yet: held until it has
+  std::int64_t notices_repaired = 0;  // moving landmarks learnt from GLOBAL_MAP whose notice never came
+  std::int64_t resyncs_answered = 0;  // snapshots sent on main_robot's request
+  std::int64_t foreign_poses = 0;     // POSE_<r> messages of another incarnation: a second sender with this id
 };
 
 class RobotNode {
@@ -55,6 +61,21 @@ class RobotNode {
   /// between frames k and k + 1). Held at most node.max_frame_gap frames ahead.
   bool on_notice(const dynamic_notice_t& msg, std::string* why = nullptr);
 
+  /// One chunk of the global map: every landmark in it that the team knows is moving
+  /// and whose notice this robot has not had (lost, or sent before it started) is
+  /// taken as that notice (held like one), unless this robot has changed its own
+  /// view of the landmark since. Returns false when the chunk was invalid.
+  bool on_global_map(const global_map_t& msg, std::string* why = nullptr);
+
+  /// main_robot asks for a snapshot. True when this robot answers: a snapshot is
+  /// ready (snapshot_chunk()), at most one per processed frame.
+  bool on_resync(const resync_request_t& msg, std::int64_t now_utime);
+
+  /// A POSE_<r> message seen on this robot's own channel. Returns true when it is
+  /// another sender's (another incarnation): two processes run as this robot; the
+  /// STATUS fault flag stays set for 50 frames after the last one.
+  bool on_own_channel_pose(const pose_estimate_t& msg);
+
   void count_decode_error() { ++counters_.decode_errors; }
   void count_queue_drops(std::int64_t n) { counters_.queue_drops += n; }
 
@@ -63,9 +84,16 @@ class RobotNode {
   const std::vector<landmark_event_t>& event_msgs() const { return events_; }
   /// True when this frame also produced a snapshot (every snapshot_period_frames).
   bool snapshot_ready() const { return snapshot_ready_; }
-  const lmap_snapshot_t& snapshot_msg() const { return snapshot_; }
-  /// Fill a snapshot now (e.g. on start-up or on request).
-  const lmap_snapshot_t& make_snapshot(std::int64_t now_utime);
+  /// The last snapshot, in chunks that each fit one datagram (lmap_snapshot_t).
+  int num_snapshot_chunks() const { return num_chunks_; }
+  const lmap_snapshot_t& snapshot_chunk(int i) const { return chunks_[static_cast<std::size_t>(i)]; }
+  /// Fill a snapshot now (e.g. on start-up or on request); returns its chunk count.
+  int make_snapshot(std::int64_t now_utime);
+
+  /// The incarnation every outgoing message carries (landmark_event_t): set at
+  /// start-up, or from the state file the robot resumes from.
+  std::int64_t incarnation() const { return incarnation_; }
+  void set_incarnation(std::int64_t v) { incarnation_ = v; }
 
   node_status_t status_msg(std::int64_t now_utime) const;
   const RobotNodeCounters& counters() const { return counters_; }
@@ -81,6 +109,8 @@ class RobotNode {
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);
+  void prepare_snapshot_chunks();
+  std::string validate(const global_map_t& msg) const;
 
   RobotOptions options_;
   int robot_id_;
@@ -92,8 +122,17 @@ class RobotNode {
   std::int64_t seq_ = 0;
   pose_estimate_t pose_{};
   std::vector<landmark_event_t> events_;
-  lmap_snapshot_t snapshot_{};
+  std::int64_t incarnation_ = 0;
+  // Snapshot chunks: a pool sized at construction for the largest map (no allocation).
+  ChunkSizes chunk_sizes_;
+  std::vector<int> static_ids_, moving_ids_;  // scratch: the map's ids, ascending
+  std::vector<ChunkSpan> spans_;
+  std::vector<lmap_snapshot_t> chunks_;
+  int num_chunks_ = 0;
   bool snapshot_ready_ = false;
+  int last_resync_frame_ = -1;
+  int duplicate_until_frame_ = -1;            // STATUS shows FAULT_DUPLICATE_SENDER until then
+  std::vector<int> notice_frame_;             // per landmark id: frame of the newest notice had, -1: none
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
   std::vector<dynamic_notice_t> held_;  // notices for frames not processed yet (fixed capacity)
 };
@@ -104,11 +143,16 @@ class RobotNode {
 struct RobotQueues {
   int sensor = 200;
   int notice = 1000;
+  int global_map = 1000;  // chunks: several per publication
+  int resync = 100;
+  int own_pose = 100;     // this robot's own POSE channel: a second sender with this id
 };
 
-/// A RobotNode on the message layer (transport/node_shell.hpp): receives SENSOR_<r>
-/// and DYNAMIC_NOTICE; for every processed frame publishes its LMAP_EVENTs, its
-/// LMAP_SNAPSHOT when one is due, then POSE_<r> (the end of the robot's frame for
+/// A RobotNode on the message layer (transport/node_shell.hpp): receives SENSOR_<r>,
+/// DYNAMIC_NOTICE, GLOBAL_MAP (the moving set: lost notices repaired), LMAP_RESYNC
+/// (main_robot asks for a snapshot) and its own POSE_<r> (a second sender with this
+/// id); for every processed frame publishes its LMAP_EVENTs, its LMAP_SNAPSHOT
+/// chunks when one is due, then POSE_<r> (the end of the robot's frame for
 /// main_robot); STATUS_ROBOT_<r> on request. The robot_node process and the
 /// in-process team run both run this, so the live and in-process paths share it.
 /// A template on the shell only so that this library builds without the transport
@@ -133,7 +177,15 @@ class RobotPorts {
     const int notice = shell_.template subscribe<dynamic_notice_t>(
         channels::dynamic_notice(shell_.suffix()), [this](const dynamic_notice_t& m, const std::string&) { on_notice(m); },
         queues.notice);
-    return sensor > 0 && notice > 0;
+    const int map = shell_.template subscribe<global_map_t>(
+        channels::global_map(shell_.suffix()), [this](const global_map_t& m, const std::string&) { on_map(m); },
+        queues.global_map);
+    const int resync = shell_.template subscribe<resync_request_t>(
+        channels::lmap_resync(shell_.suffix()), [this](const resync_request_t& m, const std::string&) { on_resync(m); },
+        queues.resync);
+    const int own = shell_.template subscribe<pose_estimate_t>(
+        pose_, [this](const pose_estimate_t& m, const std::string&) { on_own_pose(m); }, queues.own_pose);
+    return sensor > 0 && notice > 0 && map > 0 && resync > 0 && own > 0;
   }
 
   void publish_status() { shell_.publish(status_, node_.status_msg(shell_.now_utime())); }
@@ -154,14 +206,33 @@ class RobotPorts {
       ev.utime = now;
       shell_.publish(event_, ev);
     }
-    if (node_.snapshot_ready()) shell_.publish(snapshot_, node_.snapshot_msg());
+    if (node_.snapshot_ready()) publish_snapshot();
     pose_estimate_t pose = node_.pose_msg();
     pose.utime = shell_.now_utime();
     shell_.publish(pose_, pose);
   }
 
+  void publish_snapshot() {
+    for (int i = 0; i < node_.num_snapshot_chunks(); ++i) shell_.publish(snapshot_, node_.snapshot_chunk(i));
+  }
+
+  void on_map(const global_map_t& msg) {
+    std::string why;
+    if (!node_.on_global_map(msg, &why)) shell_.refuse("global map refused: " + why);
+  }
+
+  void on_resync(const resync_request_t& msg) {
+    if (node_.on_resync(msg, shell_.now_utime())) publish_snapshot();
+  }
+
+  void on_own_pose(const pose_estimate_t& msg) {
+    if (node_.on_own_channel_pose(msg))  // loudly, not rate-limited: an operator must see it
+      shell_.say("FAULT: another process publishes " + pose_ + " (incarnation " + std::to_string(msg.incarnation) +
+                 ", this one " + std::to_string(node_.incarnation()) + "): two robots with one id");
+  }
+
   void on_notice(const dynamic_notice_t& msg) {
-    const std::int64_t lost = notice_seq_.observe(msg.seq);
+    const std::int64_t lost = notice_seq_.observe(msg.seq, msg.incarnation);
     if (lost > 0) node_.count_queue_drops(lost);
     std::string why;
     if (!node_.on_notice(msg, &why)) shell_.refuse("dynamic notice refused: " + why);

@@ -31,8 +31,27 @@ void set_pose(std::size_t index, const pose_estimate_t& p, FrameData* f);
 /// for detection recall).
 void add_observed(const sensor_frame_t& s, std::vector<int>* observed);
 
-/// GLOBAL_MAP: its static landmarks (id, estimate) and moving ids (FrameData's
-/// map_landmarks and map_moving), replacing what the vectors held.
+/// GLOBAL_MAP as assembled by GlobalMapAssembly: its static landmarks (id, estimate)
+/// and moving ids (FrameData's map_landmarks and map_moving), replacing what the
+/// vectors held.
 void read_map(const global_map_t& g, std::vector<std::pair<int, Eigen::Vector2d>>* landmarks, std::vector<int>* moving);
+
+/// The chunks of one GLOBAL_MAP publication (global_map_t: they share utime,
+/// incarnation, version and frame) put back together, for tools that need the whole
+/// map: add() every chunk received; when one completes a publication, map() holds it
+/// as one message covering every id (num_chunks 1). A chunk of another publication
+/// starts over: a publication with a lost chunk is never complete.
+class GlobalMapAssembly {
+ public:
+  /// True when `chunk` completed a publication (map() then holds it). Chunks that
+  /// contradict themselves (counts, chunk index) are ignored.
+  bool add(const global_map_t& chunk);
+  const global_map_t& map() const { return complete_; }
+
+ private:
+  global_map_t building_{}, complete_{};
+  std::vector<bool> received_;
+  int count_ = 0;
+};
 
 }  // namespace elaslam

@@ -17,12 +17,14 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "elaslam/transport/message_arrays.hpp"
 #include "elaslam/transport/sequence.hpp"
 #include "elaslam/transport/transport.hpp"
 
@@ -143,11 +145,12 @@ class NodeShell {
     Input(NodeShell* s, Handler<Msg> handle, Validator<Msg> validate)
         : msg_(std::make_unique<Msg>()), handle_(std::move(handle)), validate_(std::move(validate)) {
       shell = s;
+      reserve_arrays(msg_.get());
     }
     void dispatch(const RawMessage& m) override {
       ++counters.received;
       // [authenticate m's bytes here, before anything reads them]
-      if (msg_->decode(m.data, 0, static_cast<int>(m.size)) < 0) return shell->decode_failed(this, Msg::getTypeName());
+      if (!decode(m)) return shell->decode_failed(this, Msg::getTypeName());
       if (validate_) {
         const std::string why = validate_(*msg_, m.channel);
         if (!why.empty()) return shell->refuse(why);
@@ -157,6 +160,14 @@ class NodeShell {
     }
 
    private:
+    // A negative count makes LCM's decoder throw (std::vector::resize): not a message.
+    bool decode(const RawMessage& m) {
+      try {
+        return msg_->decode(m.data, 0, static_cast<int>(m.size)) >= 0;
+      } catch (const std::exception&) {
+        return false;
+      }
+    }
     std::unique_ptr<Msg> msg_;  // on the heap: some messages are tens of KB
     Handler<Msg> handle_;
     Validator<Msg> validate_;
