@@ -11,8 +11,11 @@ generated Python types (BUILD/lcmgen/python) to read the recordings.
 
 Targets (every fault row; docs/faults.md): final global map's static landmarks
 within 2 of the lossless run's, its landmark error within 1.2x, every truly moving
-landmark a robot reported MOVING (LMAP_EVENT) absent from the last GLOBAL_MAP's
-static landmarks; a kill row also: robot R's mean pose error within 1.5x.
+landmark whose latest word from the robots is MOVING (LMAP_EVENT: no later ADD or
+RETURN of it by any robot) absent from the last GLOBAL_MAP's static landmarks; a
+kill row also: robot R's mean pose error within 1.5x. (A landmark a robot flagged and
+later re-added, e.g. one that stopped at the end of its path, is the robots' call,
+not the protocol's: the CSV has the raw counts too, moving_ever_flagged[_in_map].)
 """
 import argparse
 import csv
@@ -27,19 +30,26 @@ ROBOT_FACTOR = 1.5
 
 
 def read_recording(path, types, kill_robot, restart_time):
-    """Ids some robot reported MOVING, the last GLOBAL_MAP's static ids, and robot
-    kill_robot's POSEs received after restart_time (Unix seconds; None: not counted)."""
+    """From a recording (lcm-logger's: complete, whatever the hosts lost): ids some
+    robot reported MOVING; of those, the ids whose latest word from the robots (by
+    frame, over ADD, MOVING and RETURN events of every robot) is MOVING; the last
+    GLOBAL_MAP's static ids and frame; robot kill_robot's POSEs received after
+    restart_time (Unix seconds; None: not counted)."""
     import lcm
+    E = types.landmark_event_t
     moving, static, last_map_frame, poses_after = set(), None, -1, 0
+    word = {}  # id -> (frame, kind): the robots' latest word on the landmark
     pose_channel = f"POSE_{kill_robot}"
     for ev in lcm.EventLog(path, "r"):
         if ev.channel == "LMAP_EVENT":
             try:
-                m = types.landmark_event_t.decode(ev.data)
+                m = E.decode(ev.data)
             except Exception:  # noqa: BLE001 (counted by evaluate's decode_errors)
                 continue
-            if m.kind == types.landmark_event_t.MOVING:
+            if m.kind == E.MOVING:
                 moving.add(m.landmark_id)
+            if m.kind in (E.ADD, E.MOVING, E.RETURN) and m.frame >= word.get(m.landmark_id, (-1, 0))[0]:
+                word[m.landmark_id] = (m.frame, m.kind)
         elif ev.channel == "GLOBAL_MAP":
             try:
                 m = types.global_map_t.decode(ev.data)
@@ -49,7 +59,8 @@ def read_recording(path, types, kill_robot, restart_time):
             last_map_frame = m.frame
         elif ev.channel == pose_channel and restart_time is not None and ev.timestamp / 1e6 > restart_time:
             poses_after += 1
-    return moving, static or set(), last_map_frame, poses_after
+    still_moving = {i for i in moving if word[i][1] == E.MOVING}
+    return moving, still_moving, static or set(), last_map_frame, poses_after
 
 
 def parse_name(name):
@@ -94,9 +105,10 @@ def analyse(run_dir, types, kill_robot):
             if row["truly_moving"] == "1":
                 truly_moving.add(int(row["id"]))
     kill_t, restart_t = fault_times(os.path.join(run_dir, "faults.log"))
-    flagged, static, map_frame, poses_after = read_recording(os.path.join(run_dir, "run.lcmlog"), types,
+    flagged, still_moving, static, map_frame, poses_after = read_recording(os.path.join(run_dir, "run.lcmlog"), types,
                                                                kill_robot, restart_t)
-    detected = flagged & truly_moving
+    detected = still_moving & truly_moving
+    ever = flagged & truly_moving
     loss, packets, dropped = measured_loss(os.path.join(run_dir, "loss.csv"))
     robots = {r["id"]: r for r in metrics["robots"]}
     return {
@@ -106,6 +118,8 @@ def analyse(run_dir, types, kill_robot):
         "moving_deleted": len(detected - static),
         "moving_left": sorted(detected & static),
         "false_flags": len(flagged - truly_moving),
+        "moving_ever_flagged": len(ever),
+        "moving_ever_flagged_in_map": len(ever & static),
         "last_map_frame": map_frame,
         "robot_error": {rid: r["error_mean"] for rid, r in robots.items()},
         "robot_dropped": {rid: r.get("frames_dropped", 0) for rid, r in robots.items()},
@@ -190,6 +204,8 @@ def main():
              "map_static": a["static"], "map_static_vs_lossless": static_rel, "map_error_m": f"{a['error']:.4f}",
              "map_error_vs_lossless": f"{a['error'] / ref['error']:.3f}" if ref else "",
              "moving_detected": a["moving_detected"], "moving_deleted": a["moving_deleted"],
+             "moving_ever_flagged": a["moving_ever_flagged"],
+             "moving_ever_flagged_in_map": a["moving_ever_flagged_in_map"],
              "false_moving_flags": a["false_flags"], "last_map_frame": a["last_map_frame"]}
         for r in robot_ids:
             c[f"robot{r}_error_m"] = f"{a['robot_error'].get(r, float('nan')):.4f}"
