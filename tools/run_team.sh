@@ -269,22 +269,25 @@ EOF
 }
 
 # loss_report: per host, incoming UDP packets and those dropped (DIR/loss.csv), and a
-# line; also the datagrams the host reassembled from IP fragments (a datagram with a
-# fragment lost is not: the rest waits ipfrag_time, 30 s, in at most
-# ipfrag_high_thresh, 4 MB, of memory; beyond that, new fragments are refused).
+# line; also the host's IP reassembly: datagrams reassembled from fragments, and
+# reassemblies that failed (the rest of a datagram with a fragment lost waits
+# ipfrag_time, 30 s, in at most ipfrag_high_thresh, 4 MB, of memory: it fails when
+# it times out, or at once when the memory is full: then the loss of fragmented
+# datagrams exceeds 1-(1-p)^k).
 loss_report() {
-  local h n d ok total_n=0 total_d=0
-  echo "host,packets,dropped,loss_percent,reassembled" >"$OUT/loss.csv"
+  local h n d ok fails total_n=0 total_d=0
+  echo "host,packets,dropped,loss_percent,reassembled,reassembly_failed" >"$OUT/loss.csv"
   for h in "${!HOST_NS[@]}"; do
     [ "$h" != log ] || continue
     read -r n d < <(ip netns exec "${HOST_NS[$h]}" nft list table inet elaslam_loss 2>/dev/null |
       awk '/comment "incoming"/ { for (i = 1; i < NF; i++) if ($i == "packets") n = $(i + 1) }
            /comment "dropped"/  { for (i = 1; i < NF; i++) if ($i == "packets") d = $(i + 1) }
            END { print n + 0, d + 0 }')
-    ok=$(ip netns exec "${HOST_NS[$h]}" cat /proc/net/snmp 2>/dev/null |
+    read -r ok fails < <(ip netns exec "${HOST_NS[$h]}" cat /proc/net/snmp 2>/dev/null |
       awk '$1 == "Ip:" && !hdr { for (i = 2; i <= NF; i++) col[$i] = i; hdr = 1; next }
-           $1 == "Ip:" { print $col["ReasmOKs"] + 0; found = 1 } END { if (!found) print 0 }')
-    echo "$h,$n,$d,$(awk -v n="$n" -v d="$d" 'BEGIN { printf "%.2f", n ? 100 * d / n : 0 }'),$ok" >>"$OUT/loss.csv"
+           $1 == "Ip:" { print $col["ReasmOKs"] + 0, $col["ReasmFails"] + 0; found = 1 }
+           END { if (!found) print 0, 0 }')
+    echo "$h,$n,$d,$(awk -v n="$n" -v d="$d" 'BEGIN { printf "%.2f", n ? 100 * d / n : 0 }'),$ok,$fails" >>"$OUT/loss.csv"
     total_n=$((total_n + n)); total_d=$((total_d + d))
   done
   echo "run_team.sh: loss $LOSS %: dropped $total_d of $total_n incoming UDP packets (IP fragments) at the hosts," \
