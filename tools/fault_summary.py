@@ -220,6 +220,25 @@ def main():
         c["result"] = "reference" if fault is None else ("pass" if not fails else "fail")
         c["failed_targets"] = "; ".join(fails)
         csv_rows.append(c)
+    # Per fault over the seeds: means of the relative figures, rows that passed.
+    by_fault = {}
+    for c in csv_rows:
+        if c.get("result") in ("pass", "fail"):
+            by_fault.setdefault(c["fault"], []).append(c)
+    if by_fault:
+        md += ["", "| fault | runs | loss measured % | map static vs lossless | map error vs lossless | "
+               f"moving detected / deleted | robot {args.kill_robot} error vs lossless | frames dropped | passed |",
+               "|---|---|---|---|---|---|---|---|---|"]
+        mean = lambda v: sum(v) / len(v)
+        for fault, cs in by_fault.items():
+            loss = [float(c["loss_measured_percent"]) for c in cs if c["loss_measured_percent"] != "-"]
+            md.append(f"| {fault} | {len(cs)} | {f'{mean(loss):.1f}' if loss else '-'} | "
+                      f"{mean([int(c['map_static_vs_lossless']) for c in cs]):+.1f} | "
+                      f"x{mean([float(c['map_error_vs_lossless']) for c in cs]):.2f} | "
+                      f"{sum(c['moving_detected'] for c in cs)} / {sum(c['moving_deleted'] for c in cs)} | "
+                      f"x{mean([float(c[f'robot{args.kill_robot}_error_vs_lossless']) for c in cs]):.2f} | "
+                      f"{mean([c['frames_dropped'] for c in cs]):.0f} | "
+                      f"{sum(c['result'] == 'pass' for c in cs)} of {len(cs)} |")
     text = "\n".join(md) + "\n"
     sys.stdout.write(text)
     open(os.path.join(args.out, "summary.md"), "w").write(text)

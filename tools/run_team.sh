@@ -24,9 +24,10 @@
 #   (--no-baseline: without). DIR/metrics.json has everything, with provenance.
 # - As root, the whole team runs in a private network namespace with multicast on
 #   its loopback (nothing leaves the machine); with --hosts each process gets a
-#   namespace of its own, joined by a bridge (veth pairs), as separate onboard
-#   computers would be (multicast TTL 1). Not as root: the LCM URL comes from
-#   LCM_DEFAULT_URL (or LCM's default) and multicast on loopback must be enabled.
+#   namespace of its own (lcm-logger too), joined by a bridge (veth pairs), as
+#   separate onboard computers would be (multicast TTL 1). Not as root: the LCM URL
+#   comes from LCM_DEFAULT_URL (or LCM's default) and multicast on loopback must be
+#   enabled.
 # - A process that dies is reported with its exit status; the script then exits 1.
 #   Ctrl-C stops everything, says the run was interrupted and exits 130. Nothing is
 #   left behind (processes, namespaces).
