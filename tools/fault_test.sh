@@ -57,19 +57,28 @@ ints() {  # ints NAME LIST: a list of non-negative integers (spaces or commas)
   local v; for v in ${2//,/ }; do [[ "$v" =~ ^[0-9]+$ ]] || die "$1 takes integers, got '$v'"; done
   [ -n "${2//[ ,]/}" ] || die "$1 needs at least one value"
 }
+num() {  # num VALUE LO HI: VALUE is a number in [LO, HI]
+  [[ "$1" =~ ^[0-9]+([.][0-9]*)?$|^[.][0-9]+$ ]] &&
+    awk -v v="$1" -v lo="$2" -v hi="$3" 'BEGIN { exit !(v + 0 >= lo + 0 && v + 0 <= hi + 0) }'
+}
 while [ $# -gt 0 ]; do
   case "$1" in
     --seeds|--losses|--frames|--dynamism|--speed|--kill-robot|--kill-at-frame|--restart-after|--out|--port|--build-dir|--config)
       [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --seeds) ints --seeds "$2"; SEEDS="${2//,/ }"; shift 2 ;;
-    --losses) for v in ${2//,/ }; do [[ "$v" =~ ^[0-9]+([.][0-9])?$ ]] || die "--losses: a percentage with at most one decimal, got '$v'"; done
+    --losses) for v in ${2//,/ }; do
+                if ! [[ "$v" =~ ^[0-9]+([.][0-9])?$ ]] || ! num "$v" 0 100; then
+                  die "--losses: percentages in [0, 100] with at most one decimal, got '$v'"
+                fi
+              done
               LOSSES="${2//,/ }"; shift 2 ;;
     --frames) ints --frames "$2"; FRAMES="$2"; shift 2 ;;
-    --dynamism) DYNAMISM="$2"; shift 2 ;;
-    --speed) SPEED="$2"; shift 2 ;;
+    --dynamism) num "$2" 0 100 || die "--dynamism must be in [0, 100], got '$2'"; DYNAMISM="$2"; shift 2 ;;
+    --speed) num "$2" 0 100 || die "--speed must be in [0, 100], got '$2'"; SPEED="$2"; shift 2 ;;
     --kill-robot) ints --kill-robot "$2"; KILL_ROBOT="$2"; shift 2 ;;
     --kill-at-frame) ints --kill-at-frame "$2"; KILL_FRAME="$2"; shift 2 ;;
-    --restart-after) RESTART_AFTER="$2"; shift 2 ;;
+    --restart-after) [ "$2" = -1 ] || num "$2" 0 3600 || die "--restart-after must be -1 or in [0, 3600], got '$2'"
+                     RESTART_AFTER="$2"; shift 2 ;;
     --no-kill) KILL=0; shift ;;
     --out) OUT="$2"; shift 2 ;;
     --port) ints --port "$2"; PORT="$2"; shift 2 ;;

@@ -26,11 +26,15 @@ die() { echo "loss_check.sh: $*" >&2; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --loss|--count|--size) [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
-    --loss) [[ "$2" =~ ^[0-9]+([.][0-9])?$ ]] && awk -v v="$2" 'BEGIN { exit !(v <= 100) }' ||
-              die "--loss must be in [0, 100] with at most one decimal, got '$2'"; LOSS="$2"; shift 2 ;;
+    --loss) if ! [[ "$2" =~ ^[0-9]+([.][0-9])?$ ]] || ! awk -v v="$2" 'BEGIN { exit !(v <= 100) }'; then
+              die "--loss must be in [0, 100] with at most one decimal, got '$2'"
+            fi
+            LOSS="$2"; shift 2 ;;
     --count) [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "--count must be a positive integer"; COUNT="$2"; shift 2 ;;
-    --size) [[ "$2" =~ ^[0-9]+$ ]] && [ "$2" -ge 1500 ] && [ "$2" -le 65000 ] ||
-              die "--size must be in [1500, 65000] bytes"; SIZE="$2"; shift 2 ;;
+    --size) if ! [[ "$2" =~ ^[0-9]+$ ]] || [ "$2" -lt 1500 ] || [ "$2" -gt 65000 ]; then
+              die "--size must be in [1500, 65000] bytes"
+            fi
+            SIZE="$2"; shift 2 ;;
     -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "loss_check.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac

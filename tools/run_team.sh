@@ -149,7 +149,7 @@ OUT="$(cd "$OUT" && pwd)"
 # Whoever is outermost says that the run was interrupted (once).
 NESTED_PID=""
 interrupted() {
-  trap - INT TERM
+  trap '' INT TERM
   if [ -n "$NESTED_PID" ]; then kill -TERM "$NESTED_PID" 2>/dev/null || true; wait "$NESTED_PID" 2>/dev/null || true; fi
   [ -n "${ELASLAM_RUN_TEAM_NESTED:-}" ] || echo -e "\nrun_team.sh: interrupted: the run did not finish (partial logs in $OUT)" >&2
   exit 130
@@ -195,8 +195,9 @@ MODE_ARGS=(${MODE:+--mode "$MODE"})
 PY="$ROOT/.venv/bin/python"
 if [ -n "$KILL_ROBOT" ]; then
   [[ " ${ROBOTS[*]} " == *" $KILL_ROBOT "* ]] || die "--kill-robot $KILL_ROBOT: the scenario's robots are ${ROBOTS[*]}"
-  [ -x "$PY" ] && [ -f "$BUILD_DIR/lcmgen/python/elaslam/__init__.py" ] ||
+  if [ ! -x "$PY" ] || [ ! -f "$BUILD_DIR/lcmgen/python/elaslam/__init__.py" ]; then
     die "--kill-robot needs the Python venv (tools/setup.sh) and the Python message types (build target elaslam_lcmtypes_py)"
+  fi
 fi
 PIDS=()
 NAMES=()
@@ -207,6 +208,7 @@ declare -A HOST_NS HOST_IP CMDS
 
 cleanup() {
   local pid
+  trap '' INT TERM  # a second Ctrl-C (or TERM) must not leave namespaces behind
   for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID; do kill -TERM "$pid" 2>/dev/null || true; done
   for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID; do wait "$pid" 2>/dev/null || true; done
   for ns in "${NETNS[@]}"; do

@@ -25,7 +25,7 @@ ip netns list >/dev/null 2>&1 || { echo "fault_loss: skipped (no ip netns)"; exi
 command -v nft >/dev/null || { echo "fault_loss: skipped (no nft: Debian package nftables)"; exit 77; }
 [ -x "$ROOT/.venv/bin/python" ] || { echo "fault_loss: skipped (no .venv; tools/setup.sh makes it)"; exit 77; }
 OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "fault_loss: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+if [ -n "${KEEP_OUT:-}" ]; then echo "fault_loss: output in $OUT"; else trap 'rm -rf "$OUT"' EXIT; fi
 
 "$ROOT/tools/fault_test.sh" --build-dir "$BUILD" --out "$OUT" --port 7711 --seeds 1 --losses 20 --frames 100 \
   --kill-robot 2 --kill-at-frame 60 --restart-after 1.0 || {
