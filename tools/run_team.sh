@@ -6,6 +6,8 @@
 #   tools/run_team.sh [--config FILE] [--mode M] [--rate F] [--dynamism P] [--speed V]
 #                     [--seed S] [--frames N] [--out DIR] [--hosts] [--port P] [--in-process]
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
+#                     [--loss P] [--kill-robot R --kill-at-frame F [--restart-after S]]
+#                     [--robot-state]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
 #   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
@@ -22,9 +24,10 @@
 #   (--no-baseline: without). DIR/metrics.json has everything, with provenance.
 # - As root, the whole team runs in a private network namespace with multicast on
 #   its loopback (nothing leaves the machine); with --hosts each process gets a
-#   namespace of its own, joined by a bridge (veth pairs), as separate onboard
-#   computers would be (multicast TTL 1). Not as root: the LCM URL comes from
-#   LCM_DEFAULT_URL (or LCM's default) and multicast on loopback must be enabled.
+#   namespace of its own (lcm-logger too), joined by a bridge (veth pairs), as
+#   separate onboard computers would be (multicast TTL 1). Not as root: the LCM URL
+#   comes from LCM_DEFAULT_URL (or LCM's default) and multicast on loopback must be
+#   enabled.
 # - A process that dies is reported with its exit status; the script then exits 1.
 #   Ctrl-C stops everything, says the run was interrupted and exits 130. Nothing is
 #   left behind (processes, namespaces).
@@ -39,6 +42,21 @@
 #   2-vCPU machine it brings sensor-to-pose p99 at 100 Hz under 1 ms
 #   (docs/benchmarks.md). --no-progress: no progress line (measurements: one process
 #   fewer woken by every datagram).
+# - Faults (docs/faults.md; tools/fault_test.sh runs a set of them):
+#   --loss P (with --hosts; P in [0, 100], at most one decimal): every receiving
+#   host (simulator, main_robot, each robot; not lcm-logger's host, so that the
+#   recording is complete) drops P % of its incoming IPv4 UDP packets, single IP
+#   fragments before reassembly (nftables, prerouting at priority -450, numgen
+#   random), as a lossy link would: a datagram of k fragments is lost with
+#   1-(1-P)^k. DIR/loss.csv: per host, incoming UDP packets (fragments) and those
+#   dropped, from the rule's counters.
+#   --kill-robot R --kill-at-frame F: when robot R has published its pose of frame F
+#   (or later; watched from lcm-logger's host), its robot_node gets SIGKILL and,
+#   --restart-after S seconds later (default 1.0; -1: never), is started again with
+#   the same command, host and arguments (its log appended). DIR/faults.log says
+#   when. Needs the Python venv (tools/setup.sh).
+#   --robot-state: each robot_node gets --state DIR/state/robot<R>.json (a
+#   robot_node that saves and reloads its state; main_robot always has --state).
 # Exit status: 0 done, 1 the run failed, 2 bad arguments, 130 interrupted.
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
@@ -54,6 +72,12 @@ INSIDE=0
 REALTIME=0
 PROGRESS=1
 BASELINE=1
+LOSS=""          # --loss: percent, as given
+KILL_ROBOT=""
+KILL_FRAME=""
+RESTART_AFTER=1.0
+ROBOT_STATE=0
+FRAMES_ARG=""    # --frames, when given (to check --kill-at-frame against)
 SIM_ARGS=()      # overrides for the simulator (and run_scenario)
 EVAL_ARGS=()     # the same facts, for the record when a log lacks RUN_INFO
 
@@ -69,7 +93,8 @@ number() {
 }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir)
+    --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir|--loss|--kill-robot|\
+    --kill-at-frame|--restart-after)
       [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --config) CONFIG="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
@@ -78,10 +103,16 @@ while [ $# -gt 0 ]; do
     --speed) number --speed "$2" 0 100; SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
     --seed) number --seed "$2" 0 2147483647 int; SIM_ARGS+=("$1" "$2"); EVAL_ARGS+=("$1" "$2"); shift 2 ;;
     --rate) number --rate "$2" 0.001 100000; SIM_ARGS+=("$1" "$2"); shift 2 ;;
-    --frames) number --frames "$2" 1 100000000 int; SIM_ARGS+=("$1" "$2"); shift 2 ;;
+    --frames) number --frames "$2" 1 100000000 int; SIM_ARGS+=("$1" "$2"); FRAMES_ARG="$2"; shift 2 ;;
     --port) number --port "$2" 1 65535 int; PORT="$2"; shift 2 ;;
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --hosts) HOSTS=1; shift ;;
+    --loss) [[ "$2" =~ ^[0-9]+([.][0-9])?$ ]] || die "--loss must be a percentage in [0, 100] with at most one decimal, got '$2'"
+            number --loss "$2" 0 100; LOSS="$2"; shift 2 ;;
+    --kill-robot) number --kill-robot "$2" 1 8 int; KILL_ROBOT="$2"; shift 2 ;;
+    --kill-at-frame) number --kill-at-frame "$2" 0 100000000 int; KILL_FRAME="$2"; shift 2 ;;
+    --restart-after) [ "$2" = -1 ] || number --restart-after "$2" 0 3600; RESTART_AFTER="$2"; shift 2 ;;
+    --robot-state) ROBOT_STATE=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
     --realtime) REALTIME=1; shift ;;
     --no-progress) PROGRESS=0; shift ;;
@@ -96,6 +127,16 @@ case "$MODE" in ""|ekf|gated|ela|consensus) ;; *) die "--mode must be ekf, gated
 CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
 [ "$HOSTS" -eq 0 ] || [ "$(id -u)" -eq 0 ] || die "--hosts needs root (network namespaces)"
 [ "$IN_PROCESS" -eq 0 ] || [ "$HOSTS" -eq 0 ] || die "--in-process and --hosts do not go together"
+[ -z "$LOSS" ] || [ "$HOSTS" -eq 1 ] || die "--loss needs --hosts (the loss is a rule in each host's namespace)"
+[ -z "$LOSS" ] || command -v nft >/dev/null || die "--loss needs nft (Debian package nftables)"
+{ [ -z "$KILL_ROBOT" ] && [ -z "$KILL_FRAME" ]; } || { [ -n "$KILL_ROBOT" ] && [ -n "$KILL_FRAME" ]; } ||
+  die "--kill-robot and --kill-at-frame go together"
+[ -z "$KILL_FRAME" ] || [ -z "$FRAMES_ARG" ] || [ "$KILL_FRAME" -lt "$FRAMES_ARG" ] ||
+  die "--kill-at-frame must be below --frames ($FRAMES_ARG), got $KILL_FRAME"
+[ -n "$KILL_ROBOT" ] || [ "$RESTART_AFTER" = 1.0 ] || die "--restart-after needs --kill-robot"
+if [ "$IN_PROCESS" -eq 1 ] && { [ -n "$KILL_ROBOT" ] || [ "$ROBOT_STATE" -eq 1 ]; }; then
+  die "--in-process has no processes to kill, no network to lose packets on and no robot state files"
+fi
 if [ "$REALTIME" -eq 1 ] && { [ "$(id -u)" -ne 0 ] || ! command -v chrt >/dev/null; }; then
   echo "run_team.sh: --realtime needs root and chrt (util-linux); running with normal scheduling" >&2
   REALTIME=0
@@ -103,11 +144,12 @@ fi
 [ -n "$OUT" ] || OUT="$ROOT/runs/team_$(date +%Y%m%d_%H%M%S)"
 mkdir -p "$OUT/logs" 2>/dev/null || die "cannot create the output directory $OUT"
 OUT="$(cd "$OUT" && pwd)"
+[ "$ROBOT_STATE" -eq 0 ] || mkdir -p "$OUT/state"
 
 # Whoever is outermost says that the run was interrupted (once).
 NESTED_PID=""
 interrupted() {
-  trap - INT TERM
+  trap '' INT TERM
   if [ -n "$NESTED_PID" ]; then kill -TERM "$NESTED_PID" 2>/dev/null || true; wait "$NESTED_PID" 2>/dev/null || true; fi
   [ -n "${ELASLAM_RUN_TEAM_NESTED:-}" ] || echo -e "\nrun_team.sh: interrupted: the run did not finish (partial logs in $OUT)" >&2
   exit 130
@@ -150,18 +192,30 @@ fi
 
 ROBOTS=($("$BIN/simulator" --config "$CONFIG" --list-robots))
 MODE_ARGS=(${MODE:+--mode "$MODE"})
+PY="$ROOT/.venv/bin/python"
+if [ -n "$KILL_ROBOT" ]; then
+  [[ " ${ROBOTS[*]} " == *" $KILL_ROBOT "* ]] || die "--kill-robot $KILL_ROBOT: the scenario's robots are ${ROBOTS[*]}"
+  if [ ! -x "$PY" ] || [ ! -f "$BUILD_DIR/lcmgen/python/elaslam/__init__.py" ]; then
+    die "--kill-robot needs the Python venv (tools/setup.sh) and the Python message types (build target elaslam_lcmtypes_py)"
+  fi
+fi
 PIDS=()
 NAMES=()
 NETNS=()
 MONITOR_PID=""
-declare -A HOST_NS
+WATCH_PID=""     # --kill-robot: waits for robot R's pose of frame F
+declare -A HOST_NS HOST_IP CMDS
 
 cleanup() {
   local pid
-  for pid in "${PIDS[@]}" $MONITOR_PID; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${PIDS[@]}" $MONITOR_PID; do wait "$pid" 2>/dev/null || true; done
-  for ns in "${NETNS[@]}"; do ip netns del "$ns" 2>/dev/null || true; done
-  PIDS=(); NETNS=(); MONITOR_PID=""
+  trap '' INT TERM  # a second Ctrl-C (or TERM) must not leave namespaces behind
+  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID; do wait "$pid" 2>/dev/null || true; done
+  for ns in "${NETNS[@]}"; do
+    [ -z "$LOSS" ] || ip netns exec "$ns" nft delete table inet elaslam_loss 2>/dev/null || true
+    ip netns del "$ns" 2>/dev/null || true
+  done
+  PIDS=(); NETNS=(); MONITOR_PID=""; WATCH_PID=""
 }
 trap cleanup EXIT
 
@@ -171,15 +225,23 @@ start() {
   local prefix=()
   while [ "$1" != "--" ]; do prefix+=("$1"); shift; done
   shift
+  CMDS[$name]="$(printf '%q ' "${prefix[@]}" "$@")"
   "${prefix[@]}" "$@" >"$OUT/logs/$name.log" 2>&1 &
   PIDS+=($!)
   NAMES+=("$name")
 }
 
+# restart NAME: the same command again (same host, same arguments), log appended.
+restart() {
+  eval "${CMDS[$1]}" '>>"$OUT/logs/$1.log" 2>&1 &'
+  PIDS+=($!)
+  NAMES+=("$1")
+}
+
 # One namespace per "host", joined by the bridge in the hub namespace.
 make_host() {
   local name="$1" index="$2" ns="elaslam_${$}_$1"
-  ip netns add "$ns"; NETNS+=("$ns"); HOST_NS[$name]="$ns"
+  ip netns add "$ns"; NETNS+=("$ns"); HOST_NS[$name]="$ns"; HOST_IP[$name]="10.77.0.$((index + 1))"
   ip link add "v$$_$index" type veth peer name eth0 netns "$ns"
   ip link set "v$$_$index" netns "$HUB" up
   ip -n "$HUB" link set "v$$_$index" master br0 up
@@ -187,6 +249,52 @@ make_host() {
   ip -n "$ns" addr add "10.77.0.$((index + 1))/24" dev eth0
   ip -n "$ns" link set eth0 up multicast on
   ip -n "$ns" route add 224.0.0.0/4 dev eth0
+}
+
+# add_loss HOST: drop LOSS % of the host's incoming IPv4 UDP packets. Prerouting at
+# priority -450, before defragmentation (-400) and conntrack (-200): each IP fragment
+# is a packet of its own, lost independently, as on a lossy link; every fragment has
+# `ip protocol udp` in its header (the UDP header is in the first one only). The
+# host's own multicast, looped back to it, is not incoming (ip saddr). Two counters:
+# every incoming UDP packet, and those dropped (loss_report).
+add_loss() {
+  local ns="${HOST_NS[$1]}" ip="${HOST_IP[$1]}" permille
+  permille=$(awk -v p="$LOSS" 'BEGIN { printf "%d", p * 10 + 0.5 }')
+  ip netns exec "$ns" nft -f - <<EOF
+table inet elaslam_loss {
+  chain pre {
+    type filter hook prerouting priority -450; policy accept;
+    ip protocol udp ip saddr != $ip counter comment "incoming"
+    ip protocol udp ip saddr != $ip numgen random mod 1000 < $permille counter drop comment "dropped"
+  }
+}
+EOF
+}
+
+# loss_report: per host, incoming UDP packets and those dropped (DIR/loss.csv), and a
+# line; also the host's IP reassembly: datagrams reassembled from fragments, and
+# reassemblies that failed (the rest of a datagram with a fragment lost waits
+# ipfrag_time, 30 s, in at most ipfrag_high_thresh, 4 MB, of memory: it fails when
+# it times out, or at once when the memory is full: then the loss of fragmented
+# datagrams exceeds 1-(1-p)^k).
+loss_report() {
+  local h n d ok fails total_n=0 total_d=0
+  echo "host,packets,dropped,loss_percent,reassembled,reassembly_failed" >"$OUT/loss.csv"
+  for h in "${!HOST_NS[@]}"; do
+    [ "$h" != log ] || continue
+    read -r n d < <(ip netns exec "${HOST_NS[$h]}" nft list table inet elaslam_loss 2>/dev/null |
+      awk '/comment "incoming"/ { for (i = 1; i < NF; i++) if ($i == "packets") n = $(i + 1) }
+           /comment "dropped"/  { for (i = 1; i < NF; i++) if ($i == "packets") d = $(i + 1) }
+           END { print n + 0, d + 0 }')
+    read -r ok fails < <(ip netns exec "${HOST_NS[$h]}" cat /proc/net/snmp 2>/dev/null |
+      awk '$1 == "Ip:" && !hdr { for (i = 2; i <= NF; i++) col[$i] = i; hdr = 1; next }
+           $1 == "Ip:" { print $col["ReasmOKs"] + 0, $col["ReasmFails"] + 0; found = 1 }
+           END { if (!found) print 0, 0 }')
+    echo "$h,$n,$d,$(awk -v n="$n" -v d="$d" 'BEGIN { printf "%.2f", n ? 100 * d / n : 0 }'),$ok,$fails" >>"$OUT/loss.csv"
+    total_n=$((total_n + n)); total_d=$((total_d + d))
+  done
+  echo "run_team.sh: loss $LOSS %: dropped $total_d of $total_n incoming UDP packets (IP fragments) at the hosts," \
+    "$(awk -v n="$total_n" -v d="$total_d" 'BEGIN { printf "%.2f", n ? 100 * d / n : 0 }') % ($OUT/loss.csv)"
 }
 
 # lcm-logger's LCM queue holds 30 messages; a burst (the first landmarks' ADD
@@ -199,11 +307,19 @@ rt() { [ "$REALTIME" -eq 1 ] && echo chrt -f "$1"; return 0; }
 
 launch() {  # $1: how to run each role (a function printing the prefix)
   local where="$1"
-  start logger $($where main) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
+  start logger $($where log) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
   start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json"
+  local state=()
   for r in "${ROBOTS[@]}"; do
-    start "robot_node_$r" $($where "robot$r") $(rt 50) -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}"
+    [ "$ROBOT_STATE" -eq 0 ] || state=(--state "$OUT/state/robot$r.json")
+    start "robot_node_$r" $($where "robot$r") $(rt 50) -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}" \
+      "${state[@]}"
   done
+  if [ -n "$KILL_ROBOT" ]; then  # from the logger's host: it hears every pose
+    $($where log) "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-frame "POSE_$KILL_ROBOT" \
+      "$KILL_FRAME" --timeout 86400 >"$OUT/logs/kill_watch.log" 2>&1 &
+    WATCH_PID=$!
+  fi
   if [ "$PROGRESS" -eq 1 ]; then  # to the terminal; not supervised (a failure costs only the line)
     $($where main) "$BIN/monitor" &
     MONITOR_PID=$!
@@ -212,10 +328,45 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}"
 }
 
+# fault NOTE: a line in DIR/faults.log (Unix time, what happened) and on stderr.
+fault() { echo "$EPOCHREALTIME $*" >>"$OUT/faults.log"; echo "run_team.sh: $*" >&2; }
+
+# --kill-robot: SIGKILL robot_node R (it is no longer supervised until restarted).
+RESTART_AT_US=""
+kill_robot() {
+  local i name="robot_node_$KILL_ROBOT" pid=""
+  for i in "${!PIDS[@]}"; do [ "${NAMES[$i]}" = "$name" ] && pid="${PIDS[$i]}" && break; done
+  [ -n "$pid" ] || { echo "run_team.sh: $name is not running, cannot kill it" >&2; return 1; }
+  kill -KILL "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  unset 'PIDS[i]' 'NAMES[i]'
+  PIDS=("${PIDS[@]}"); NAMES=("${NAMES[@]}")
+  echo "--- $(date -u +%FT%T.%3NZ) run_team.sh: SIGKILL after frame $KILL_FRAME" >>"$OUT/logs/$name.log"
+  fault "killed robot $KILL_ROBOT (robot_node pid $pid, SIGKILL): it had published its pose of frame $KILL_FRAME or later"
+  if [ "$RESTART_AFTER" != -1 ]; then
+    RESTART_AT_US=$(awk -v now="${EPOCHREALTIME/./}" -v s="$RESTART_AFTER" 'BEGIN { printf "%.0f", now + s * 1e6 }')
+  fi
+}
+
 # Wait for the simulator to finish; any other process that exits first is a failure.
 supervise() {
   local sim_pid="${PIDS[-1]}" i
   while kill -0 "$sim_pid" 2>/dev/null; do
+    if [ -n "$WATCH_PID" ] && ! kill -0 "$WATCH_PID" 2>/dev/null; then
+      local wrc=0; wait "$WATCH_PID" || wrc=$?
+      WATCH_PID=""
+      if [ "$wrc" -ne 0 ]; then
+        echo "run_team.sh: watching robot $KILL_ROBOT's poses failed (log: $OUT/logs/kill_watch.log)" >&2
+        return 1
+      fi
+      kill_robot || return 1
+    fi
+    if [ -n "$RESTART_AT_US" ] && [ "${EPOCHREALTIME/./}" -ge "$RESTART_AT_US" ]; then
+      RESTART_AT_US=""
+      echo "--- $(date -u +%FT%T.%3NZ) run_team.sh: restarted after ${RESTART_AFTER}s" >>"$OUT/logs/robot_node_$KILL_ROBOT.log"
+      restart "robot_node_$KILL_ROBOT"
+      fault "restarted robot $KILL_ROBOT (robot_node pid ${PIDS[-1]}, the same command) after ${RESTART_AFTER}s down"
+    fi
     for i in "${!PIDS[@]}"; do
       [ "${PIDS[$i]}" = "$sim_pid" ] && continue
       if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
@@ -233,6 +384,12 @@ supervise() {
     tail -n 5 "$OUT/logs/simulator.log" >&2 || true
     return 1
   fi
+  if [ -n "$WATCH_PID" ]; then
+    echo "run_team.sh: robot $KILL_ROBOT never published its pose of frame $KILL_FRAME: it was not killed" >&2
+    return 1
+  fi
+  [ -z "$RESTART_AT_US" ] || fault "the run ended before robot $KILL_ROBOT's restart was due"
+  return 0
 }
 
 # Stop every node (SIGINT: clean exit with a final status line), bounded.
@@ -269,7 +426,9 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
   rc=0
   ELASLAM_RUN_TEAM_NESTED=1 "$ROOT/tools/netns_run.sh" --port "$PORT" -- "$0" --inside --build-dir "$BUILD_DIR" \
     --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} $([ "$REALTIME" -eq 1 ] && echo --realtime) \
-    $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" &
+    $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" \
+    ${KILL_ROBOT:+--kill-robot "$KILL_ROBOT" --kill-at-frame "$KILL_FRAME" --restart-after "$RESTART_AFTER"} \
+    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) &
   NESTED_PID=$!
   wait "$NESTED_PID" || rc=$?
   NESTED_PID=""
@@ -285,11 +444,15 @@ if [ "$HOSTS" -eq 1 ]; then
   ip -n "$HUB" link set br0 up
   URL="udpm://239.255.76.67:${PORT}?ttl=1&recv_buf_size=8388608"
   idx=0
-  for h in sim main "${ROBOTS[@]/#/robot}"; do
+  for h in sim main "${ROBOTS[@]/#/robot}" log; do
     make_host "$h" $idx
     idx=$((idx + 1))
   done
   echo "run_team.sh: ${#HOST_NS[@]} hosts on a bridge (10.77.0.0/24), LCM $URL"
+  if [ -n "$LOSS" ]; then
+    for h in sim main "${ROBOTS[@]/#/robot}"; do add_loss "$h"; done
+    echo "run_team.sh: every host but the logger's drops $LOSS % of its incoming UDP packets (nftables)"
+  fi
   launch own_host
 elif [ "$INSIDE" -eq 1 ]; then
   echo "run_team.sh: team in a private network namespace, LCM $LCM_DEFAULT_URL"
@@ -304,6 +467,7 @@ echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator
 status=0
 supervise || status=1
 stop_all || status=1
+[ -z "$LOSS" ] || loss_report
 [ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
 echo "run_team.sh: recorded $OUT/run.lcmlog"
 "$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --config "$CONFIG" "${BASE_ARGS[@]}" ${MODE_NAME:+--mode "$MODE_NAME"} \

@@ -4,7 +4,7 @@
 # for every frame, and its metrics agree with the in-process run of the same
 # scenario and seed. Exit 77 (skip) when namespaces are not available.
 # With --hosts (test system_hosts): run_team.sh --hosts, one network namespace per
-# process (simulator, main_robot + logger, each robot) joined by a bridge, LCM with
+# process (simulator, main_robot, each robot, lcm-logger) joined by a bridge, LCM with
 # TTL 1 across it, as separate onboard computers would be.
 #   tests/system/team_live.sh BUILD_DIR [--hosts]
 set -euo pipefail

@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# System test `system_fault_loss`: the fault-injection harness works (docs/faults.md).
+# tools/fault_test.sh, short: one seed, 100 frames, the lossless run, 20 % packet loss
+# (run_team.sh --hosts --loss 20) and robot 2 killed (SIGKILL) after frame 60 and
+# restarted after 1 s. Asserts what today's code achieves robustly:
+#   - every run completes (metrics.json) and the table is written;
+#   - the loss rule really drops packets (nftables counters: dropped > 0, and the
+#     measured loss near 20 %), the lossless run has no loss table;
+#   - robot 2 was killed and restarted once (faults.log, evaluate's restarts) and
+#     published POSE_2 again after the restart.
+# The targets (the table's pass/fail: static landmarks within 2 of the lossless run,
+# map error within 1.2x, moving landmarks deleted, robot 2 within 1.5x) are asserted
+# only with ASSERT_TARGETS=1: switch it on once the fault-tolerance work has landed.
+# Ports 7711-7713 (one per run; each run has namespaces of its own anyway).
+# Exit 77 (skip) without root, ip netns, nft or the Python venv.
+#   tests/system/fault_loss.sh BUILD_DIR
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+BUILD="$(cd "${1:?usage: fault_loss.sh BUILD_DIR}" && pwd)"
+# ---- switch on when the protocol changes (fault tolerance) have landed ----------
+ASSERT_TARGETS=${ASSERT_TARGETS:-0}
+# ----------------------------------------------------------------------------------
+[ "$(id -u)" -eq 0 ] || { echo "fault_loss: skipped (needs root for network namespaces)"; exit 77; }
+ip netns list >/dev/null 2>&1 || { echo "fault_loss: skipped (no ip netns)"; exit 77; }
+command -v nft >/dev/null || { echo "fault_loss: skipped (no nft: Debian package nftables)"; exit 77; }
+[ -x "$ROOT/.venv/bin/python" ] || { echo "fault_loss: skipped (no .venv; tools/setup.sh makes it)"; exit 77; }
+OUT="$(mktemp -d)"
+if [ -n "${KEEP_OUT:-}" ]; then echo "fault_loss: output in $OUT"; else trap 'rm -rf "$OUT"' EXIT; fi
+
+"$ROOT/tools/fault_test.sh" --build-dir "$BUILD" --out "$OUT" --port 7711 --seeds 1 --losses 20 --frames 100 \
+  --kill-robot 2 --kill-at-frame 60 --restart-after 1.0 || {
+  rc=$?; for d in "$OUT"/seed*; do echo "--- $d"; tail -n 5 "$d/run_team.txt"; done; exit "$rc"; }
+python3 - "$OUT" "$ASSERT_TARGETS" <<'PY'
+import csv, os, sys
+out, assert_targets = sys.argv[1], sys.argv[2] == "1"
+rows = {r["run"]: r for r in csv.DictReader(open(os.path.join(out, "summary.csv")))}
+fails = []
+for name in ("seed1_lossless", "seed1_loss20", "seed1_kill2"):
+    if name not in rows or rows[name]["result"] == "did not run":
+        fails.append(f"{name}: did not run")
+lossless, lossy, kill = (rows.get(n, {}) for n in ("seed1_lossless", "seed1_loss20", "seed1_kill2"))
+if os.path.exists(os.path.join(out, "seed1_lossless", "loss.csv")):
+    fails.append("the lossless run has a loss table")
+dropped, packets = int(lossy.get("udp_dropped") or 0), int(lossy.get("udp_packets") or 0)
+if dropped <= 0:
+    fails.append(f"20 % loss: the rule dropped nothing ({dropped} of {packets} packets)")
+elif not 15 <= 100 * dropped / packets <= 25:
+    fails.append(f"20 % loss: measured {100 * dropped / packets:.1f} %")
+else:
+    print(f"fault_loss: 20 % loss: {dropped} of {packets} incoming UDP packets dropped ({100 * dropped / packets:.1f} %)")
+if int(lossy.get("frames_dropped") or 0) == 0:
+    fails.append("20 % loss: no robot frame dropped (were SENSOR messages lost at all?)")
+if kill.get("killed") != "1" or kill.get("restarted") != "1" or kill.get("robot2_restarts") != "1":
+    fails.append(f"kill: killed {kill.get('killed')}, restarted {kill.get('restarted')}, "
+                 f"evaluate's restarts {kill.get('robot2_restarts')} (want 1, 1, 1)")
+if int(kill.get("robot2_poses_after_restart") or 0) < 10:
+    fails.append(f"kill: robot 2 published {kill.get('robot2_poses_after_restart')} poses after its restart")
+else:
+    print(f"fault_loss: robot 2 killed after frame 60, restarted, {kill['robot2_poses_after_restart']} poses after")
+if assert_targets:  # the targets of docs/faults.md (the table's pass/fail)
+    for r in (lossy, kill):
+        if r.get("result") != "pass":
+            fails.append(f"{r.get('run')}: targets not met: {r.get('failed_targets')}")
+else:
+    print("fault_loss: targets not asserted (ASSERT_TARGETS=0; the table above says pass/fail)")
+if fails:
+    print("\n".join("fault_loss: " + f for f in fails)); sys.exit(1)
+print("fault_loss: ok")
+PY
