@@ -69,6 +69,7 @@ class RobotNode {
 
   node_status_t status_msg(std::int64_t now_utime) const;
   const RobotNodeCounters& counters() const { return counters_; }
+  std::int64_t event_seq() const { return seq_; }  // seq of the last LMAP_EVENT sent
   const Robot& robot() const { return robot_; }
   const DurationHistogram& processing() const { return processing_; }
   int robot_id() const { return robot_id_; }
@@ -77,7 +78,14 @@ class RobotNode {
   /// ranges, ids within capacity). Empty string when valid.
   std::string validate(const sensor_frame_t& msg) const;
 
+  /// This run's incarnation: the start-up wall clock [us] of a fresh start, kept
+  /// from the state file on a resume (robot_node/main.cpp).
+  std::int64_t incarnation() const { return incarnation_; }
+  void set_incarnation(std::int64_t v) { incarnation_ = v; }
+
  private:
+  friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
+
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);
@@ -96,6 +104,7 @@ class RobotNode {
   bool snapshot_ready_ = false;
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
   std::vector<dynamic_notice_t> held_;  // notices for frames not processed yet (fixed capacity)
+  std::int64_t incarnation_ = 0;
 };
 
 /// Receive queue bounds of the robot's inputs. LCM's default of 30 drops silently
