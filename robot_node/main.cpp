@@ -1,18 +1,23 @@
 // robot_node: one robot's EKF-SLAM with the ELA gate, as its own process on LCM.
-//   robot_node [--config FILE] --robot R [--mode M] [--lcm-url URL] [--channel-suffix S]
+//   robot_node [--config FILE] --robot R [--mode M] [--state PATH] [--lcm-url URL] [--channel-suffix S]
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
 // the installed default (common/cli.hpp).
 // Subscribes SENSOR_<R>, DYNAMIC_NOTICE; publishes POSE_<R>, LMAP_EVENT,
 // LMAP_SNAPSHOT, STATUS_ROBOT_<R>. A thin shell: RobotNode on the node shell
 // (RobotPorts, robot_node.hpp), exactly as the in-process team run runs it.
+// With --state the node's whole state (robot_state.hpp) is saved atomically after
+// processed frames at most every node.state_save_interval_s and at exit, and
+// resumed at start; a corrupt file is moved aside to PATH.corrupt (docs/deployment.md).
 #include <chrono>
 #include <cstdio>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/atomic_file.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/robot_node/robot_state.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -23,6 +28,7 @@ struct Args {
   std::string config;
   int robot = 0;
   std::string mode;
+  std::string state;
   transport::TransportArgs transport;
   RobotQueues queues;
   double status_period_s = 1.0;
@@ -44,6 +50,40 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
     return false;
   }
   return true;
+}
+
+std::int64_t wall_clock_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+/// The state in `path` when there is one; a corrupt one is moved aside to
+/// PATH.corrupt (said why) and the node starts fresh: a bad file must not keep a
+/// robot down. A fresh start takes a new incarnation (later starts: larger ones).
+void resume(const std::string& path, RobotNode* node) {
+  node->set_incarnation(wall_clock_us());
+  if (path.empty()) return;
+  std::string text, why;
+  bool missing = false;
+  if (!files::read_all(path, &text, &why, &missing)) {
+    if (!missing) std::fprintf(stderr, "robot_node %d: cannot read state %s: %s; starting fresh\n", node->robot_id(), path.c_str(), why.c_str());
+    return;
+  }
+  if (load_robot_state(text, node, &why)) {
+    std::fprintf(stderr, "robot_node %d: resumed from %s at frame %d, %d landmarks, seq %lld (incarnation %lld)\n",
+                 node->robot_id(), path.c_str(), node->robot().last_frame(), node->robot().filter().num_landmarks(),
+                 (long long)node->event_seq(), (long long)node->incarnation());
+    return;
+  }
+  const std::string aside = path + ".corrupt";
+  const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
+  std::fprintf(stderr, "robot_node %d: state file %s is corrupt: %s; %s, starting fresh\n", node->robot_id(), path.c_str(),
+               why.c_str(), moved ? ("moved aside to " + aside).c_str() : "could not move it aside");
+}
+
+void save(const std::string& path, const RobotNode& node) {
+  std::string why;
+  if (!files::write_atomic(path, save_robot_state(node), &why))
+    std::fprintf(stderr, "robot_node %d: cannot save state: %s\n", node.robot_id(), why.c_str());
 }
 
 void final_line(const RobotNode& node) {
@@ -75,7 +115,7 @@ int run(const Args& a) {
   if (!lcm) return 1;
   transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
   RobotNode node(o, a.robot);
-  node.set_incarnation(transport::now_utime());  // a later start has a larger one (landmark_event_t)
+  resume(a.state, &node);
   RobotPorts<transport::NodeShell> ports(shell, node);
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");
@@ -86,13 +126,24 @@ int run(const Args& a) {
   if (a.verbose) std::fprintf(stderr, "%s\n", effective.c_str());
   transport::install_stop_handlers();
   shell.every(std::chrono::milliseconds(static_cast<int>(a.status_period_s * 1000)), [&] { ports.publish_status(); });
-  if (shell.spin(100) == transport::NodeShell::Exit::kTransportError) {
-    final_line(node);
-    return 1;
-  }
-  ports.publish_status();
+  // Each turn, after the frame's messages went out: the state once a frame was
+  // processed, at most every state_save_interval_s (0: after every frame).
+  using Clock = transport::NodeShell::Clock;
+  const auto save_period = std::chrono::microseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1e6));
+  auto next_save = Clock::now();
+  std::int64_t saved_frames = node.counters().frames;
+  shell.every(Clock::duration::zero(), [&] {
+    const auto now = Clock::now();
+    if (a.state.empty() || now < next_save || node.counters().frames == saved_frames) return;
+    save(a.state, node);
+    saved_frames = node.counters().frames;
+    next_save = now + save_period;
+  });
+  const bool transport_failed = shell.spin(100) == transport::NodeShell::Exit::kTransportError;
+  if (!a.state.empty()) save(a.state, node);  // SIGINT / SIGTERM (and a failed transport): the latest state
+  if (!transport_failed) ports.publish_status();
   final_line(node);
-  return 0;
+  return transport_failed ? 1 : 0;
 }
 
 }  // namespace
@@ -105,6 +156,7 @@ int main(int argc, char** argv) {
   elaslam::cli::add_config_option(app, &a.config, "its robot: section");
   app.add_option("--robot", a.robot, "this robot's id (1-8)")->required()->check(CLI::Range(1, 8));
   app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");
+  app.add_option("--state", a.state, "file to keep this robot's state in (resumed at start, saved atomically)");
   elaslam::transport::add_transport_options(app, &a.transport);
   app.add_option("--sensor-queue", a.queues.sensor, "SENSOR_<R> subscription queue capacity")->check(CLI::Range(1, 100000));
   app.add_option("--notice-queue", a.queues.notice, "DYNAMIC_NOTICE queue capacity")->check(CLI::Range(1, 100000));

@@ -417,6 +417,32 @@ EkfStatus EkfSlam::remove_landmark(int id) {
 
 // ---- accessors (all read the lower triangle) ---------------------------------------
 
+// ---- state file -----------------------------------------------------------------
+
+EkfStatus EkfSlam::restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids) {
+  const int n = static_cast<int>(slot_ids.size());
+  const Index dim = Layout::dim(n);
+  if (n > options_.capacity || x.size() != dim || P.rows() != dim || P.cols() != dim) return EkfStatus::kBadInput;
+  std::vector<std::uint8_t> used(static_cast<std::size_t>(options_.max_landmark_id), 0);
+  for (int id : slot_ids) {
+    if (!valid_id(id) || used[static_cast<std::size_t>(id)]) return EkfStatus::kBadInput;
+    used[static_cast<std::size_t>(id)] = 1;
+  }
+  std::fill(id_to_slot_.begin(), id_to_slot_.end(), -1);
+  std::fill(slot_to_id_.begin(), slot_to_id_.end(), -1);
+  for (int slot = 0; slot < n; ++slot) {
+    slot_to_id_[static_cast<std::size_t>(slot)] = slot_ids[static_cast<std::size_t>(slot)];
+    id_to_slot_[static_cast<std::size_t>(slot_ids[static_cast<std::size_t>(slot)])] = slot;
+  }
+  num_landmarks_ = n;
+  x_.setZero();
+  x_.head(dim) = x;
+  P_.setZero();  // the inactive part of P stays zero (reset, remove_landmark)
+  P_.topLeftCorner(dim, dim) = P;
+  upper_stale_ = false;
+  return EkfStatus::kOk;
+}
+
 bool EkfSlam::has_landmark(int id) const { return slot_of(id) >= 0; }
 
 int EkfSlam::slot_of(int id) const {

@@ -44,6 +44,22 @@ Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise&
   return Eigen::Vector3d(var_trans, var_trans, var_rot).asDiagonal();
 }
 
+Eigen::Matrix3d dead_reckoning_cov(const Eigen::Matrix3d& P0, int steps, double step_m, double turn_rad,
+                                   const OdometryNoise& noise) {
+  // The noise of each increment counts its turn; the Jacobians are those of the
+  // straight path (heading 0 throughout).
+  const Eigen::Matrix3d U = odometry_covariance({step_m, 0.0, turn_rad}, noise);
+  Eigen::Matrix3d F_x, F_u;
+  motion({0.0, 0.0, 0.0}, {step_m, 0.0, 0.0}, &F_x, &F_u);
+  const Eigen::Matrix3d Q = F_u * U * F_u.transpose();
+  Eigen::Matrix3d P = P0;
+  for (int k = 0; k < std::min(steps, kMaxDeadReckoningSteps); ++k) P = (F_x * P * F_x.transpose() + Q).eval();
+  // Largest eigenvalue of the symmetric 2x2 position block.
+  const double a = P(0, 0), c = P(1, 1), b = 0.5 * (P(0, 1) + P(1, 0));
+  const double lambda = 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  return Eigen::Vector3d(lambda, lambda, P(2, 2)).asDiagonal();
+}
+
 RangeBearing observe(const Pose2& pose, const Eigen::Vector2d& p_LinW,
                      Eigen::Matrix<double, 2, 3>* H_x, Eigen::Matrix2d* H_l) {
   const double dx = p_LinW.x() - pose.x, dy = p_LinW.y() - pose.y;  // [m], in W

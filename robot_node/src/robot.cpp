@@ -81,6 +81,10 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     P0(StateLayout::kX, StateLayout::kX) = P0(StateLayout::kY, StateLayout::kY) =
         options_.initial_sigma_xy * options_.initial_sigma_xy;
     P0(StateLayout::kTheta, StateLayout::kTheta) = options_.initial_sigma_theta * options_.initial_sigma_theta;
+    // A late start (first frame > 0: started late, or restarted without a state
+    // file): the odometer has dead-reckoned since frame 0; its prior says so.
+    if (in.frame > 0)
+      P0 = dead_reckoning_cov(P0, in.frame, options_.late_start_step_m, options_.late_start_turn, in.noise);
     ekf_.reset(in.odometer, P0);
     initialised_ = true;
   } else {

@@ -67,6 +67,11 @@ void parse(config::Reader& r, RobotOptions* o) {
     n.read("snapshot_period_frames", &o->snapshot_period_frames, 1, 100000);
     n.read("update_period_frames", &o->update_period_frames, 1, 100000);
     n.read("max_frame_gap", &o->max_frame_gap, 1, 100000);
+    n.read_optional("late_start_step_m", &o->late_start_step_m, 0.0, 100.0);
+    double turn_deg = rad2deg(o->late_start_turn);
+    n.read_optional("late_start_turn_deg", &turn_deg, 0.0, 180.0);
+    o->late_start_turn = deg2rad(turn_deg);
+    n.read_optional("state_save_interval_s", &o->state_save_interval_s, 0.0, 3600.0);
   });
   if (o->ekf.capacity > o->ekf.max_landmark_id)
     r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");

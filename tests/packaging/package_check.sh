@@ -156,7 +156,8 @@ units_check() { # ROOT PREFIX ETC
       grep -qx "Environment=ELASLAM_CONFIG=$etc/elaslam.yaml" "$f" || fail "$u: no ELASLAM_CONFIG=$etc/elaslam.yaml"
     fi
   done
-  grep -q "^ExecStart=$p/bin/elaslam-robot-node --robot %i " "$root$p/lib/systemd/system/elaslam-robot@.service" \
+  grep -q "^ExecStart=$p/bin/elaslam-robot-node --robot %i --state %S/elaslam/robot-%i/state.json " \
+    "$root$p/lib/systemd/system/elaslam-robot@.service" \
     || fail "elaslam-robot@.service: ExecStart"
   grep -q "^ExecStart=$p/bin/elaslam-main-robot --state %S/elaslam/main-robot/global_map.json" \
     "$root$p/lib/systemd/system/elaslam-main-robot.service" || fail "elaslam-main-robot.service: ExecStart"

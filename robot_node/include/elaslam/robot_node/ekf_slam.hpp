@@ -139,6 +139,13 @@ class EkfSlam {
   /// The chi-square threshold used by the gate (2 dof, options.gate_probability).
   double gate_threshold() const { return gate_threshold_; }
 
+  // ---- state file (robot_state.cpp) -------------------------------------------
+  /// Replace the whole state by a saved one: mean x (dim(n)), covariance P (dim(n)
+  /// square, symmetric; the caller has checked it), slot_ids[slot] = landmark id in
+  /// slot order. kBadInput, filter unchanged, when sizes or ids are inconsistent.
+  /// Start-up only (not the frame path).
+  EkfStatus restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids);
+
  private:
   bool valid_id(int id) const { return id >= 0 && id < options_.max_landmark_id; }
   /// Input checks shared by check() and update(): kBadInput / kUnknownLandmark.

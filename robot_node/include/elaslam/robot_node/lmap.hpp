@@ -129,6 +129,9 @@ class LMap {
   /// robot does not hold it; MOVING when it `left_filter` for it.
   void told_moving(int id, int frame, bool left_filter);
 
+  // ---- state file (robot_state.cpp, which validates the entry) ------------------------
+  void restore(int id, const LMapEntry& e) { at(id) = e; }
+
  private:
   LMapEntry& at(int id) { return entries_[static_cast<std::size_t>(id)]; }
   void set_status(int id, LandmarkStatus s, int frame);

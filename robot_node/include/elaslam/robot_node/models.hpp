@@ -33,6 +33,17 @@ Pose2 motion(const Pose2& pose, const Pose2& increment, Eigen::Matrix3d* F_x = n
 /// A small floor keeps U positive definite for a standing robot.
 Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise& noise);
 
+/// The pose covariance of dead reckoning from a start known to within P0, after
+/// `steps` odometer increments of step_m [m] and turn_rad [rad] each: eq 5 applied
+/// `steps` times on a straight path (the lever arm of a heading error is largest
+/// there), the x, y block then made isotropic with its largest eigenvalue (the
+/// direction of travel is unknown) and the cross terms dropped. The prior of a
+/// robot whose first frame is not frame 0 (docs/decisions.md, "late start").
+/// steps is capped at kMaxDeadReckoningSteps. Allocates nothing.
+constexpr int kMaxDeadReckoningSteps = 100000;
+Eigen::Matrix3d dead_reckoning_cov(const Eigen::Matrix3d& P0, int steps, double step_m, double turn_rad,
+                                   const OdometryNoise& noise);
+
 /// Observation h(R, l) (eq 7): range and bearing of landmark p_LinW seen from R_WB.
 /// H_x = dh/dR (2x3), H_l = dh/dl (2x2). Undefined (Jacobians set to zero, range 0)
 /// when the landmark is at the robot centre.

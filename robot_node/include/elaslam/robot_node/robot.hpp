@@ -90,6 +90,8 @@ class Robot {
   int last_frame() const { return last_frame_; }
 
  private:
+  friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
+
   void predict(const FrameInput& in, FrameSummary* s);
   void process_classic(const FrameInput& in, FrameSummary* s);
   void process_ela(const FrameInput& in, FrameSummary* s);

@@ -90,13 +90,15 @@ class RobotNode {
   /// Fill a snapshot now (e.g. on start-up or on request); returns its chunk count.
   int make_snapshot(std::int64_t now_utime);
 
-  /// The incarnation every outgoing message carries (landmark_event_t): set at
-  /// start-up, or from the state file the robot resumes from.
+  /// The incarnation every outgoing message carries (landmark_event_t): the start-up
+  /// wall clock [us] of a fresh start, kept from the state file on a resume
+  /// (robot_node/main.cpp).
   std::int64_t incarnation() const { return incarnation_; }
   void set_incarnation(std::int64_t v) { incarnation_ = v; }
 
   node_status_t status_msg(std::int64_t now_utime) const;
   const RobotNodeCounters& counters() const { return counters_; }
+  std::int64_t event_seq() const { return seq_; }  // seq of the last LMAP_EVENT sent
   const Robot& robot() const { return robot_; }
   const DurationHistogram& processing() const { return processing_; }
   int robot_id() const { return robot_id_; }
@@ -106,6 +108,8 @@ class RobotNode {
   std::string validate(const sensor_frame_t& msg) const;
 
  private:
+  friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
+
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);

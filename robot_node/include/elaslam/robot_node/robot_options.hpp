@@ -56,6 +56,14 @@ struct RobotOptions {
   int snapshot_period_frames = 10;      // LMAP_SNAPSHOT every N frames
   int update_period_frames = 1;         // at most one UPDATE event per landmark per N frames
   int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
+  /// A robot whose first frame is not frame 0 (started late, or restarted without
+  /// a state file) takes the odometer's dead reckoning over that many frames of
+  /// this motion as its prior (dead_reckoning_cov, docs/decisions.md).
+  double late_start_step_m = 0.15;      // [m]   the most a robot moves per frame
+  double late_start_turn = deg2rad(1.5);  // [rad] its turn per frame
+  /// The robot_node process saves its state file (--state) at most this often (0:
+  /// after every frame), and at exit.
+  double state_save_interval_s = 0.5;   // [s]
 };
 
 /// Read the `robot:` section (see config/paper.yaml for every key and its unit).

@@ -1,0 +1,40 @@
+// A robot node's state file: everything a RobotNode needs to continue after a
+// restart as if it had never stopped (robot_node --state PATH; docs/deployment.md,
+// docs/decisions.md "robot state file"): the filter (mean, covariance, slot layout),
+// the L-map (every LMapEntry field), the Robot's frame bookkeeping (last frame, last
+// odometer reading), and the node's last frame, event seq, counters, held notices
+// and incarnation. Per-frame scratch (ElaGate, ConsensusSolver, the last frame's
+// outgoing messages) is rebuilt by every frame and not kept; neither are processing
+// times (DurationHistogram) nor the message layer's notice seq (RobotPorts).
+//
+// Format: JSON (nlohmann; doubles round-trip exactly) {"format", "version",
+// "fnv1a64", "state"}: the checksum is FNV-1a 64 over state.dump(), so a flipped
+// byte anywhere is caught. The covariance is kept as its lower triangle (symmetric
+// by construction). Loading validates like a message (finite, bounded, ids and
+// counts within the configuration, slots consistent with the L-map, P positive
+// semi-definite) into a scratch node and swaps it in only when everything passed.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "elaslam/robot_node/robot_node.hpp"
+
+namespace elaslam {
+
+constexpr const char* kRobotStateFormat = "elaslam.robot_state";
+constexpr int kRobotStateVersion = 1;
+
+/// The state file's text for `node` (start-up and between frames; allocates).
+std::string save_robot_state(const RobotNode& node);
+
+/// Restore `node` from a state file's text. false with `why` (the field and the
+/// problem) when the text is not a valid state for this node's robot id, capacity,
+/// max_landmark_id and mode; `node` is then unchanged. Never throws.
+bool load_robot_state(const std::string& text, RobotNode* node, std::string* why);
+
+/// FNV-1a 64 of a dumped "state" object, as hex: for tests and tools that edit a
+/// state on purpose and must seal it again.
+std::string robot_state_checksum(const std::string& state_dump);
+
+}  // namespace elaslam

@@ -1,0 +1,418 @@
+#include "elaslam/robot_node/robot_state.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+#include "elaslam/common/contract.hpp"
+
+namespace elaslam {
+
+using json = nlohmann::json;
+
+namespace {
+
+// Anything beyond these is a corrupt file, not a robot's state.
+constexpr double kMaxPosition = 1e6;      // [m]
+constexpr double kMaxVariance = 1e12;     // [m^2], [rad^2]
+constexpr double kMaxWhitened = 1e12;     // drift and innovation sums (whitened, unitless)
+constexpr double kAngleSlack = 1e-9;      // [rad] on [-pi, pi]
+constexpr double kMaxCount = 1e15;        // seq and counters
+constexpr double kMaxIncarnation = 1e18;  // [us] wall clock at a fresh start
+constexpr double kPsdTolerance = 1e-9;    // LDLT pivots >= -tol * max(1, max diag(P))
+constexpr int kMaxFrame = std::numeric_limits<int>::max();
+constexpr int kMinReportedFrame = -1000000;  // LMapEntry::reported_frame's "never"
+
+struct StateError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) { throw StateError(where + ": " + what); }
+
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+const json& need(const json& o, const std::string& where, const char* key) {
+  if (!o.is_object()) fail(where, "not an object");
+  const auto it = o.find(key);
+  if (it == o.end()) fail(where + "." + key, "missing");
+  return *it;
+}
+
+double real(const json& v, const std::string& where, double lo, double hi) {
+  if (!v.is_number()) fail(where, v.is_null() ? "null (a NaN or infinity when saved?)" : "not a number");
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) fail(where, "not finite");
+  if (d < lo || d > hi) fail(where, num(d) + " outside [" + num(lo) + ", " + num(hi) + "]");
+  return d;
+}
+
+std::int64_t whole(const json& v, const std::string& where, double lo, double hi) {
+  if (!v.is_number_integer()) fail(where, "not an integer");
+  const double d = v.is_number_unsigned() ? static_cast<double>(v.get<std::uint64_t>()) : static_cast<double>(v.get<std::int64_t>());
+  if (d < lo || d > hi) fail(where, num(d) + " outside [" + num(lo) + ", " + num(hi) + "]");
+  return v.get<std::int64_t>();
+}
+
+bool boolean(const json& v, const std::string& where) {
+  if (!v.is_boolean()) fail(where, "not true or false");
+  return v.get<bool>();
+}
+
+const json& array(const json& v, const std::string& where, std::size_t min_n, std::size_t max_n) {
+  if (!v.is_array()) fail(where, "not an array");
+  if (v.size() < min_n || v.size() > max_n)
+    fail(where, std::to_string(v.size()) + " elements, expected " +
+                    (min_n == max_n ? std::to_string(min_n) : std::to_string(min_n) + " to " + std::to_string(max_n)));
+  return v;
+}
+
+Eigen::Vector2d vec2(const json& v, const std::string& where, double bound) {
+  const json& a = array(v, where, 2, 2);
+  return {real(a[0], where + "[0]", -bound, bound), real(a[1], where + "[1]", -bound, bound)};
+}
+
+// A 2x2 covariance, row-major: finite, variances in [0, kMaxVariance], symmetric and PSD within rounding.
+Eigen::Matrix2d cov2(const json& v, const std::string& where) {
+  const json& a = array(v, where, 4, 4);
+  Eigen::Matrix2d C;
+  for (int k = 0; k < 4; ++k) C(k / 2, k % 2) = real(a[static_cast<std::size_t>(k)], where + "[" + std::to_string(k) + "]", -kMaxVariance, kMaxVariance);
+  if (C(0, 0) < 0.0 || C(1, 1) < 0.0) fail(where, "negative variance");
+  const double scale = std::max(C(0, 0) + C(1, 1), 1e-300);
+  if (std::fabs(C(0, 1) - C(1, 0)) > 1e-6 * scale) fail(where, "not symmetric");
+  if (C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0) < -1e-9 * scale * scale) fail(where, "not positive semi-definite");
+  return C;
+}
+
+json to_json(const Eigen::Vector2d& v) { return json::array({v.x(), v.y()}); }
+json to_json(const Eigen::Matrix2d& C) { return json::array({C(0, 0), C(0, 1), C(1, 0), C(1, 1)}); }
+
+// The counters by name (one table for saving and loading).
+const std::pair<const char*, std::int64_t RobotNodeCounters::*> kCounters[] = {
+    {"frames", &RobotNodeCounters::frames},
+    {"frames_gap", &RobotNodeCounters::frames_gap},
+    {"frames_duplicate", &RobotNodeCounters::frames_duplicate},
+    {"frames_out_of_order", &RobotNodeCounters::frames_out_of_order},
+    {"rejected_inputs", &RobotNodeCounters::rejected_inputs},
+    {"decode_errors", &RobotNodeCounters::decode_errors},
+    {"queue_drops", &RobotNodeCounters::queue_drops},
+    {"filter_faults", &RobotNodeCounters::filter_faults},
+    {"events_sent", &RobotNodeCounters::events_sent},
+    {"notices_applied", &RobotNodeCounters::notices_applied},
+    {"notices_ignored", &RobotNodeCounters::notices_ignored},
+    {"notices_deferred", &RobotNodeCounters::notices_deferred},
+};
+
+// LMapEntry's fields by kind, with their lower bounds (upper: kMaxFrame).
+struct IntField {
+  const char* name;
+  int LMapEntry::*field;
+  int lo;
+};
+const IntField kEntryInts[] = {
+    {"last_seen_frame", &LMapEntry::last_seen_frame, -1},
+    {"consistent_sightings", &LMapEntry::consistent_sightings, 0},
+    {"outside_streak", &LMapEntry::outside_streak, 0},
+    {"missing_frames", &LMapEntry::missing_frames, 0},
+    {"status_frame", &LMapEntry::status_frame, -1},
+    {"reported_frame", &LMapEntry::reported_frame, kMinReportedFrame},
+    {"moved_frame", &LMapEntry::moved_frame, -1},
+    {"times_moving", &LMapEntry::times_moving, 0},
+    {"innovations", &LMapEntry::innovations, 0},
+};
+const std::pair<const char*, bool LMapEntry::*> kEntryBools[] = {
+    {"was_moving", &LMapEntry::was_moving},
+    {"reported_moving", &LMapEntry::reported_moving},
+};
+struct VecField {
+  const char* name;
+  Eigen::Vector2d LMapEntry::*field;
+  double bound;
+};
+const VecField kEntryVecs[] = {
+    {"position", &LMapEntry::position, kMaxPosition},
+    {"innovation_sum", &LMapEntry::innovation_sum, kMaxWhitened},
+    {"drift", &LMapEntry::drift, kMaxWhitened},
+};
+
+bool is_default(const LMapEntry& e) {
+  const LMapEntry d;
+  for (const auto& f : kEntryInts)
+    if (e.*f.field != d.*f.field) return false;
+  for (const auto& f : kEntryBools)
+    if (e.*f.second != d.*f.second) return false;
+  for (const auto& f : kEntryVecs)
+    if (e.*f.field != d.*f.field) return false;
+  return e.status == d.status && e.cov == d.cov;
+}
+
+LandmarkStatus parse_status(const json& v, const std::string& where) {
+  if (v.is_string())
+    for (LandmarkStatus s : {LandmarkStatus::kUnknown, LandmarkStatus::kCandidate, LandmarkStatus::kStatic,
+                             LandmarkStatus::kMoving})
+      if (v.get<std::string>() == to_string(s)) return s;
+  fail(where, "not one of unknown, candidate, static, moving");
+}
+
+}  // namespace
+
+// Friend of Robot and RobotNode: the only code that reads and writes their private state for the file.
+struct RobotStateAccess {
+  static json save(const RobotNode& n);
+  static void load(const json& state, RobotNode* scratch);
+
+ private:
+  static json save_node(const RobotNode& n);
+  static json save_filter(const EkfSlam& f);
+  static json save_lmap(const LMap& m);
+  static void check_header(const json& s, const RobotNode& n);
+  static void load_node(const json& s, RobotNode* n);
+  static void load_robot(const json& s, Robot* r, int node_last_frame);
+  static void load_filter(const json& s, Robot* r);
+  static void load_lmap(const json& s, Robot* r);
+  static void check_consistency(const Robot& r);
+};
+
+json RobotStateAccess::save_node(const RobotNode& n) {
+  json counters = json::object();
+  for (const auto& c : kCounters) counters[c.first] = n.counters_.*c.second;
+  json held = json::array();
+  for (const dynamic_notice_t& m : n.held_)
+    held.push_back({{"utime", m.utime}, {"frame", m.frame}, {"seq", m.seq}, {"landmark_id", m.landmark_id},
+                    {"detected_by", m.detected_by}});
+  json had = json::array();  // [id, frame] of the newest notice had per landmark (GLOBAL_MAP repair)
+  for (std::size_t id = 0; id < n.notice_frame_.size(); ++id)
+    if (n.notice_frame_[id] >= 0) had.push_back({static_cast<int>(id), n.notice_frame_[id]});
+  return {{"last_frame", n.last_frame_}, {"seq", n.seq_}, {"counters", counters}, {"held_notices", held},
+          {"notice_frames", had}};
+}
+
+json RobotStateAccess::save_filter(const EkfSlam& f) {
+  json ids = json::array();
+  for (int slot = 0; slot < f.num_landmarks(); ++slot) ids.push_back(f.id_at(slot));
+  json mean = json::array();
+  for (Eigen::Index i = 0; i < f.mean().size(); ++i) mean.push_back(f.mean()(i));
+  const auto P = f.covariance();
+  json lower = json::array();  // row-major lower triangle
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    for (Eigen::Index j = 0; j <= i; ++j) lower.push_back(P(i, j));
+  return {{"slot_ids", ids}, {"mean", mean}, {"cov_lower", lower}};
+}
+
+json RobotStateAccess::save_lmap(const LMap& m) {
+  json entries = json::array();
+  for (int id = 0; id < m.size(); ++id) {
+    const LMapEntry& e = m[id];
+    if (is_default(e)) continue;
+    json j = {{"id", id}, {"status", to_string(e.status)}, {"cov", to_json(e.cov)}};
+    for (const auto& f : kEntryInts) j[f.name] = e.*f.field;
+    for (const auto& f : kEntryBools) j[f.first] = e.*f.second;
+    for (const auto& f : kEntryVecs) j[f.name] = to_json(e.*f.field);
+    entries.push_back(std::move(j));
+  }
+  return entries;
+}
+
+json RobotStateAccess::save(const RobotNode& n) {
+  const Robot& r = n.robot_;
+  const RobotOptions& o = r.options();
+  json robot = {{"initialised", r.initialised_},
+                {"last_frame", r.last_frame_},
+                {"last_odometer", json::array({r.last_odometer_.x, r.last_odometer_.y, r.last_odometer_.theta})}};
+  return {{"robot_id", n.robot_id_},
+          {"mode", to_string(o.mode)},
+          {"capacity", o.ekf.capacity},
+          {"max_landmark_id", o.ekf.max_landmark_id},
+          {"incarnation", n.incarnation_},
+          {"node", save_node(n)},
+          {"robot", robot},
+          {"filter", save_filter(r.ekf_)},
+          {"lmap", save_lmap(r.lmap_)}};
+}
+
+// A state from another robot, capacity or mode is not this node's: refused.
+void RobotStateAccess::check_header(const json& s, const RobotNode& n) {
+  const RobotOptions& o = n.options_;
+  const std::int64_t id = whole(need(s, "state", "robot_id"), "state.robot_id", 1, contract::kMaxRobots);
+  if (id != n.robot_id_)
+    fail("state.robot_id", std::to_string(id) + " is not this robot's (" + std::to_string(n.robot_id_) + ")");
+  const json& mode = need(s, "state", "mode");
+  if (!mode.is_string() || mode.get<std::string>() != to_string(o.mode))
+    fail("state.mode", mode.dump() + " is not the configured mode \"" + to_string(o.mode) + "\"");
+  for (const auto& [key, want] : {std::pair<const char*, int>{"capacity", o.ekf.capacity},
+                                  std::pair<const char*, int>{"max_landmark_id", o.ekf.max_landmark_id}}) {
+    const std::int64_t got = whole(need(s, "state", key), std::string("state.") + key, 0, kMaxFrame);
+    if (got != want)
+      fail(std::string("state.") + key, std::to_string(got) + " is not the configured " + std::to_string(want));
+  }
+}
+
+void RobotStateAccess::load_node(const json& s, RobotNode* n) {
+  const json& node = need(s, "state", "node");
+  n->incarnation_ = whole(need(s, "state", "incarnation"), "state.incarnation", 0, kMaxIncarnation);
+  n->last_frame_ = static_cast<int>(whole(need(node, "node", "last_frame"), "node.last_frame", -1, kMaxFrame));
+  n->seq_ = whole(need(node, "node", "seq"), "node.seq", 0, kMaxCount);
+  const json& counters = need(node, "node", "counters");
+  for (const auto& c : kCounters)
+    n->counters_.*c.second = whole(need(counters, "node.counters", c.first), std::string("node.counters.") + c.first, 0, kMaxCount);
+  const json& held = array(need(node, "node", "held_notices"), "node.held_notices", 0, n->held_.capacity());
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    const std::string w = "node.held_notices[" + std::to_string(k) + "]";
+    dynamic_notice_t m{};
+    m.utime = whole(need(held[k], w, "utime"), w + ".utime", 0, kMaxIncarnation);
+    m.frame = static_cast<int32_t>(whole(need(held[k], w, "frame"), w + ".frame", n->last_frame_ + 1.0,
+                                         static_cast<double>(n->last_frame_) + n->options_.max_frame_gap));
+    m.seq = whole(need(held[k], w, "seq"), w + ".seq", 0, kMaxCount);
+    m.landmark_id = static_cast<int32_t>(whole(need(held[k], w, "landmark_id"), w + ".landmark_id", 0, n->options_.ekf.max_landmark_id - 1));
+    m.detected_by = static_cast<int16_t>(whole(need(held[k], w, "detected_by"), w + ".detected_by", 1, contract::kMaxRobots));
+    n->held_.push_back(m);
+  }
+  const json& had = array(need(node, "node", "notice_frames"), "node.notice_frames", 0, n->notice_frame_.size());
+  for (std::size_t k = 0; k < had.size(); ++k) {
+    const std::string w = "node.notice_frames[" + std::to_string(k) + "]";
+    const json& pair = array(had[k], w, 2, 2);
+    const auto id = static_cast<std::size_t>(whole(pair[0], w + "[0]", 0, n->options_.ekf.max_landmark_id - 1));
+    n->notice_frame_[id] = static_cast<int>(whole(pair[1], w + "[1]", 0, kMaxFrame));
+  }
+}
+
+void RobotStateAccess::load_robot(const json& s, Robot* r, int node_last_frame) {
+  const json& robot = need(s, "state", "robot");
+  r->initialised_ = boolean(need(robot, "robot", "initialised"), "robot.initialised");
+  r->last_frame_ = static_cast<int>(whole(need(robot, "robot", "last_frame"), "robot.last_frame", -1, kMaxFrame));
+  if (r->last_frame_ != node_last_frame)
+    fail("robot.last_frame", std::to_string(r->last_frame_) + " differs from node.last_frame " + std::to_string(node_last_frame));
+  const json& odo = array(need(robot, "robot", "last_odometer"), "robot.last_odometer", 3, 3);
+  r->last_odometer_.x = real(odo[0], "robot.last_odometer[0]", -kMaxPosition, kMaxPosition);
+  r->last_odometer_.y = real(odo[1], "robot.last_odometer[1]", -kMaxPosition, kMaxPosition);
+  r->last_odometer_.theta = real(odo[2], "robot.last_odometer[2]", -kPi - kAngleSlack, kPi + kAngleSlack);
+}
+
+void RobotStateAccess::load_filter(const json& s, Robot* r) {
+  const json& f = need(s, "state", "filter");
+  const EkfOptions& o = r->options_.ekf;
+  const json& ids = array(need(f, "filter", "slot_ids"), "filter.slot_ids", 0, static_cast<std::size_t>(o.capacity));
+  std::vector<int> slot_ids;
+  for (std::size_t k = 0; k < ids.size(); ++k)
+    slot_ids.push_back(static_cast<int>(whole(ids[k], "filter.slot_ids[" + std::to_string(k) + "]", 0, o.max_landmark_id - 1)));
+  const Eigen::Index dim = StateLayout::dim(static_cast<int>(slot_ids.size()));
+  const auto n_mean = static_cast<std::size_t>(dim), n_lower = static_cast<std::size_t>(dim * (dim + 1) / 2);
+  const json& mean = array(need(f, "filter", "mean"), "filter.mean", n_mean, n_mean);
+  Eigen::VectorXd x(dim);
+  for (Eigen::Index i = 0; i < dim; ++i) {
+    const bool heading = i == StateLayout::kTheta;
+    x(i) = real(mean[static_cast<std::size_t>(i)], "filter.mean[" + std::to_string(i) + "]",
+                heading ? -kPi - kAngleSlack : -kMaxPosition, heading ? kPi + kAngleSlack : kMaxPosition);
+  }
+  const json& lower = array(need(f, "filter", "cov_lower"), "filter.cov_lower", n_lower, n_lower);
+  Eigen::MatrixXd P(dim, dim);
+  std::size_t k = 0;
+  for (Eigen::Index i = 0; i < dim; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j, ++k) {
+      const std::string w = "filter.cov_lower[" + std::to_string(k) + "] (P(" + std::to_string(i) + "," + std::to_string(j) + "))";
+      P(i, j) = P(j, i) = real(lower[k], w, -kMaxVariance, kMaxVariance);
+      if (i == j && P(i, i) < 0.0) fail(w, "negative variance " + num(P(i, i)));
+    }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(P);
+  const double tol = kPsdTolerance * std::max(1.0, P.diagonal().maxCoeff());
+  if (ldlt.info() != Eigen::Success || (ldlt.vectorD().array() < -tol).any())
+    fail("filter.cov_lower", "the covariance is not positive semi-definite (smallest LDLT pivot " +
+                                 num(ldlt.vectorD().minCoeff()) + ")");
+  if (r->ekf_.restore(x, P, slot_ids) != EkfStatus::kOk) fail("filter.slot_ids", "a landmark id appears twice");
+}
+
+void RobotStateAccess::load_lmap(const json& s, Robot* r) {
+  const json& entries = array(need(s, "state", "lmap"), "lmap", 0, static_cast<std::size_t>(r->lmap_.size()));
+  std::vector<std::uint8_t> seen(static_cast<std::size_t>(r->lmap_.size()), 0);
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const std::string w = "lmap[" + std::to_string(k) + "]";
+    const json& j = entries[k];
+    const int id = static_cast<int>(whole(need(j, w, "id"), w + ".id", 0, r->lmap_.size() - 1));
+    if (seen[static_cast<std::size_t>(id)]++) fail(w + ".id", std::to_string(id) + " appears twice");
+    LMapEntry e;
+    e.status = parse_status(need(j, w, "status"), w + ".status");
+    e.cov = cov2(need(j, w, "cov"), w + ".cov");
+    for (const auto& f : kEntryInts) e.*f.field = static_cast<int>(whole(need(j, w, f.name), w + "." + f.name, f.lo, kMaxFrame));
+    for (const auto& f : kEntryBools) e.*f.second = boolean(need(j, w, f.first), w + "." + f.first);
+    for (const auto& f : kEntryVecs) e.*f.field = vec2(need(j, w, f.name), w + "." + f.name, f.bound);
+    r->lmap_.restore(id, e);
+  }
+}
+
+// The filter holds exactly the STATIC landmarks and (some) candidates: what Robot keeps true.
+void RobotStateAccess::check_consistency(const Robot& r) {
+  for (int slot = 0; slot < r.ekf_.num_landmarks(); ++slot) {
+    const int id = r.ekf_.id_at(slot);
+    const LandmarkStatus st = r.lmap_[id].status;
+    if (st != LandmarkStatus::kStatic && st != LandmarkStatus::kCandidate)
+      fail("filter.slot_ids[" + std::to_string(slot) + "]",
+           "landmark " + std::to_string(id) + " is in the filter but " + to_string(st) + " in the L-map");
+  }
+  for (int id = 0; id < r.lmap_.size(); ++id)
+    if (r.lmap_[id].status == LandmarkStatus::kStatic && !r.ekf_.has_landmark(id))
+      fail("lmap", "landmark " + std::to_string(id) + " is static but not in the filter");
+}
+
+void RobotStateAccess::load(const json& s, RobotNode* scratch) {
+  check_header(s, *scratch);
+  load_node(s, scratch);
+  load_robot(s, &scratch->robot_, scratch->last_frame_);
+  load_filter(s, &scratch->robot_);
+  load_lmap(s, &scratch->robot_);
+  check_consistency(scratch->robot_);
+}
+
+std::string robot_state_checksum(const std::string& state_dump) {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64
+  for (unsigned char c : state_dump) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+std::string save_robot_state(const RobotNode& node) {
+  const std::string state = RobotStateAccess::save(node).dump();
+  // The state is dumped once and spliced in, so the checksum covers exactly these bytes' values.
+  json head = {{"format", kRobotStateFormat}, {"version", kRobotStateVersion}, {"fnv1a64", robot_state_checksum(state)}};
+  std::string text = head.dump();
+  text.pop_back();  // '}'
+  return text + ",\"state\":" + state + "}\n";
+}
+
+bool load_robot_state(const std::string& text, RobotNode* node, std::string* why) {
+  try {
+    const json doc = json::parse(text);
+    const json& format = need(doc, "file", "format");
+    if (!format.is_string() || format.get<std::string>() != kRobotStateFormat)
+      fail("format", format.dump() + " is not \"" + kRobotStateFormat + "\" (not a robot state file)");
+    const std::int64_t version = whole(need(doc, "file", "version"), "version", 0, 1e9);
+    if (version != kRobotStateVersion)
+      fail("version", std::to_string(version) + " is not the supported " + std::to_string(kRobotStateVersion));
+    const json& state = need(doc, "file", "state");
+    const json& sum = need(doc, "file", "fnv1a64");
+    if (!sum.is_string() || sum.get<std::string>() != robot_state_checksum(state.dump()))
+      fail("fnv1a64", "checksum mismatch: the file was altered or damaged");
+    RobotNode scratch(node->robot().options(), node->robot_id());
+    RobotStateAccess::load(state, &scratch);
+    *node = std::move(scratch);
+    return true;
+  } catch (const json::parse_error& e) {
+    if (why) *why = std::string("not valid JSON (truncated or damaged?): ") + e.what();
+  } catch (const std::exception& e) {
+    if (why) *why = e.what();
+  }
+  return false;
+}
+
+}  // namespace elaslam

@@ -1,0 +1,434 @@
+// The robot state file (robot_state.hpp): a node restored from it continues exactly
+// as an uninterrupted one; every kind of damaged or foreign file is refused with a
+// message naming the problem and leaves the node as it was; the atomic save never
+// follows a symbolic link and leaves the old file intact when it fails; and a robot
+// that starts late gets an honest prior (dead_reckoning_cov, docs/decisions.md).
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+#include "elaslam/common/atomic_file.hpp"
+#include "elaslam/common/stats.hpp"
+#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/robot_node/robot_state.hpp"
+#include "elaslam/simulator/messages.hpp"
+#include "elaslam/simulator/world.hpp"
+#include "elaslam/team/team_config.hpp"
+
+namespace elaslam {
+namespace {
+
+using json = nlohmann::json;
+constexpr int kRobot = 2;  // the robot under test (index 1 of the paper's three)
+
+TeamConfig paper(Mode mode, int seed) {
+  TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+  c.robot.mode = mode;
+  c.scenario.seed = static_cast<std::uint64_t>(seed);
+  return c;
+}
+
+/// Every sensor frame of a seeded paper run, frame-major (frame k of robot i at k * R + i).
+std::vector<sensor_frame_t> sensor_frames(const TeamConfig& c) {
+  sim::World world(c.scenario);
+  std::vector<sensor_frame_t> frames;
+  for (int k = 0; k < c.scenario.frames; ++k) {
+    if (k > 0) world.step();
+    for (int i = 0; i < world.num_robots(); ++i) frames.push_back(sim::to_message(world.sensor_frame(i), k));
+  }
+  return frames;
+}
+
+template <class Msg>
+std::vector<std::uint8_t> bytes(const Msg& m) {
+  std::vector<std::uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+/// What robot 2 published in one frame, encoded (processing time zeroed: it is the clock's, not the state's).
+std::vector<std::uint8_t> published(const RobotNode& n) {
+  pose_estimate_t p = n.pose_msg();
+  p.processing_us = 0;
+  std::vector<std::uint8_t> out = bytes(p);
+  for (const auto& e : n.event_msgs()) {
+    const auto b = bytes(e);
+    out.insert(out.end(), b.begin(), b.end());
+  }
+  if (n.snapshot_ready())
+    for (int c = 0; c < n.num_snapshot_chunks(); ++c) {
+      const auto b = bytes(n.snapshot_chunk(c));
+      out.insert(out.end(), b.begin(), b.end());
+    }
+  return out;
+}
+
+/// A whole team in the lockstep order (robots in turn, main_robot's notices to
+/// every robot at once). Before each frame k of robot 2 with restart_before(k),
+/// robot 2 is saved and replaced by a fresh node loaded from that text (robot 1
+/// has done frame k by then: notices it caused are held by robot 2, in the file).
+/// `held` (optional) sums the notices the files carried.
+std::vector<std::vector<std::uint8_t>> run_team(const TeamConfig& c, const std::vector<sensor_frame_t>& frames,
+                                                const std::function<bool(int)>& restart_before,
+                                                std::string* final_state, int* held = nullptr) {
+  const int R = static_cast<int>(c.scenario.robots.size());
+  std::vector<std::unique_ptr<RobotNode>> robots;
+  for (int i = 0; i < R; ++i) robots.push_back(std::make_unique<RobotNode>(c.robot, c.scenario.robots[static_cast<std::size_t>(i)].id));
+  MainNode main(c.main);
+  std::vector<std::vector<std::uint8_t>> out;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const int i = static_cast<int>(f % static_cast<std::size_t>(R));
+    RobotNode& node = *robots[static_cast<std::size_t>(i)];
+    if (node.robot_id() == kRobot && restart_before(frames[f].frame)) {
+      const std::string text = save_robot_state(node);
+      if (held) *held += static_cast<int>(json::parse(text)["state"]["node"]["held_notices"].size());
+      auto fresh = std::make_unique<RobotNode>(c.robot, kRobot);
+      std::string why;
+      EXPECT_TRUE(load_robot_state(text, fresh.get(), &why)) << why;
+      robots[static_cast<std::size_t>(i)] = std::move(fresh);
+    }
+    RobotNode& n = *robots[static_cast<std::size_t>(i)];
+    EXPECT_EQ(n.on_sensor(frames[f], 1000 + frames[f].frame), RobotNode::Verdict::kProcessed);
+    if (n.robot_id() == kRobot) out.push_back(published(n));
+    for (const auto& e : n.event_msgs()) main.on_event(e);
+    if (n.snapshot_ready())
+      for (int c = 0; c < n.num_snapshot_chunks(); ++c) main.on_snapshot(n.snapshot_chunk(c));
+    for (const auto& notice : main.take_notices(0))
+      for (auto& r : robots) r->on_notice(notice);
+    const int chunks = main.make_global_map(0);  // the moving set: the notice repair's state is in the file too
+    for (int c = 0; c < chunks; ++c)
+      for (auto& r : robots) r->on_global_map(main.map_chunk(c));
+  }
+  *final_state = save_robot_state(*robots[kRobot - 1]);
+  return out;
+}
+
+// GIVEN a seeded team run WHEN robot 2 is saved after frame 59 and a fresh node
+// loaded from the file runs frames 60..149 (and, more demanding, when it is
+// restarted so before every frame) THEN every message it publishes and its final
+// state are bit-identical to an uninterrupted node's.
+TEST(RobotState, RestoredNodeContinuesBitIdentically) {
+  for (Mode mode : {Mode::kEla, Mode::kConsensus, Mode::kEkf}) {
+    SCOPED_TRACE(to_string(mode));
+    const TeamConfig c = paper(mode, 7);
+    const auto frames = sensor_frames(c);
+    std::string state_a, state_b, state_c;
+    int held = 0;
+    const auto a = run_team(c, frames, [](int) { return false; }, &state_a);
+    const auto b = run_team(c, frames, [](int k) { return k == 60; }, &state_b);
+    const auto every = run_team(c, frames, [](int k) { return k > 0; }, &state_c, &held);
+    ASSERT_EQ(a.size(), 150u);
+    ASSERT_EQ(b.size(), a.size());
+    ASSERT_EQ(every.size(), a.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      EXPECT_EQ(a[k], b[k]) << "frame " << k;
+      EXPECT_EQ(a[k], every[k]) << "frame " << k;
+    }
+    EXPECT_EQ(state_a, state_b);
+    EXPECT_EQ(state_a, state_c);
+    // The files carried notices held for a frame robot 2 had not done yet.
+    if (mode != Mode::kEkf) {
+      EXPECT_GT(held, 0);
+    }
+  }
+}
+
+// Every state a real run goes through loads back (the validation refuses no real
+// state: its covariance passes the PSD check, its L-map agrees with its slots).
+// Prints the largest file and what saving it (text + atomic write) costs.
+TEST(RobotState, EveryStateOfARunLoadsBack) {
+  using Clock = std::chrono::steady_clock;
+  for (Mode mode : {Mode::kEkf, Mode::kGated, Mode::kEla, Mode::kConsensus}) {
+    SCOPED_TRACE(to_string(mode));
+    const TeamConfig c = paper(mode, 3);
+    const auto frames = sensor_frames(c);
+    RobotNode node(c.robot, kRobot);
+    std::size_t largest = 0;
+    double save_ms = 0.0, load_ms = 0.0;
+    for (std::size_t f = kRobot - 1; f < frames.size(); f += c.scenario.robots.size()) {
+      ASSERT_EQ(node.on_sensor(frames[f], 0), RobotNode::Verdict::kProcessed);
+      if (frames[f].frame % 3 != 0) continue;
+      const auto t0 = Clock::now();
+      const std::string text = save_robot_state(node);
+      const auto t1 = Clock::now();
+      RobotNode copy(c.robot, kRobot);
+      std::string why;
+      ASSERT_TRUE(load_robot_state(text, &copy, &why)) << "frame " << frames[f].frame << ": " << why;
+      const auto t2 = Clock::now();
+      EXPECT_EQ(save_robot_state(copy), text);
+      if (text.size() > largest) {
+        largest = text.size();
+        save_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
+        load_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
+      }
+    }
+    std::printf("%s: largest state %zu bytes (%d landmarks in the filter at the end): text %.2f ms, load %.2f ms\n",
+                to_string(mode), largest, node.robot().filter().num_landmarks(), save_ms, load_ms);
+  }
+}
+
+class RobotStateCorrupt : public ::testing::Test {
+ protected:
+  RobotStateCorrupt() : c_(paper(Mode::kEla, 5)), node_(c_.robot, kRobot) {
+    const auto frames = sensor_frames(c_);
+    for (std::size_t f = kRobot - 1; f < 60 * c_.scenario.robots.size(); f += c_.scenario.robots.size())
+      node_.on_sensor(frames[f], 0);
+    good_ = save_robot_state(node_);
+    doc_ = json::parse(good_);
+  }
+  /// The good state with `edit` applied to its "state" object, sealed again.
+  std::string edited(const std::function<void(json&)>& edit) const {
+    json d = doc_;
+    edit(d["state"]);
+    d["fnv1a64"] = robot_state_checksum(d["state"].dump());
+    return d.dump();
+  }
+  /// Refused, with `expect` in the message, and the node unchanged.
+  void expect_refused(const std::string& text, const std::string& expect) {
+    std::string why;
+    EXPECT_FALSE(load_robot_state(text, &node_, &why));
+    EXPECT_NE(why.find(expect), std::string::npos) << "message: " << why << "\nexpected it to name: " << expect;
+    EXPECT_EQ(save_robot_state(node_), good_);
+  }
+  TeamConfig c_;
+  RobotNode node_;
+  std::string good_;
+  json doc_;
+};
+
+TEST_F(RobotStateCorrupt, TheGoodStateLoads) {
+  ASSERT_GT(node_.robot().filter().num_landmarks(), 5);
+  std::string why;
+  EXPECT_TRUE(load_robot_state(good_, &node_, &why)) << why;
+  EXPECT_EQ(save_robot_state(node_), good_);
+}
+
+TEST_F(RobotStateCorrupt, TruncatedOrEmptyFilesAreRefused) {
+  expect_refused("", "not valid JSON");
+  for (std::size_t len : {std::size_t{1}, std::size_t{10}, good_.size() / 3, good_.size() / 2, good_.size() - 3})
+    expect_refused(good_.substr(0, len), "not valid JSON");
+}
+
+TEST_F(RobotStateCorrupt, AFlippedByteIsRefused) {
+  // A digit changed into another keeps the JSON valid: the checksum catches it.
+  std::string text = good_;
+  const std::size_t at = text.find("\"mean\":[") + 12;
+  ASSERT_TRUE(std::isdigit(static_cast<unsigned char>(text[at])));
+  text[at] = text[at] == '7' ? '3' : '7';
+  expect_refused(text, "checksum");
+  // Any other flip: the JSON, the checksum or a field says so.
+  for (std::size_t pos : {good_.size() / 5, good_.size() / 2, good_.size() - 40}) {
+    std::string t = good_;
+    t[pos] = static_cast<char>(t[pos] ^ 0x04);
+    std::string why;
+    EXPECT_FALSE(load_robot_state(t, &node_, &why)) << "flip at " << pos;
+    EXPECT_FALSE(why.empty());
+    EXPECT_EQ(save_robot_state(node_), good_);
+  }
+}
+
+TEST_F(RobotStateCorrupt, BadValuesAreRefusedNamingTheField) {
+  expect_refused(edited([](json& s) { s["filter"]["mean"][4] = std::nan(""); }), "filter.mean[4]");
+  std::string nan_text = good_;
+  nan_text.replace(nan_text.find("\"mean\":[") + 8, 0, "NaN,");
+  expect_refused(nan_text, "not valid JSON");
+  // P(3,3): the first landmark's x variance (lower triangle, row-major: index 3*4/2 + 3).
+  expect_refused(edited([](json& s) { s["filter"]["cov_lower"][9] = -1e-3; }), "negative variance");
+  expect_refused(edited([](json& s) {  // P(1,0) far beyond sqrt(P(0,0) P(1,1))
+    s["filter"]["cov_lower"][1] = 10.0 * std::sqrt(s["filter"]["cov_lower"][0].get<double>() * s["filter"]["cov_lower"][2].get<double>());
+  }), "not positive semi-definite");
+  expect_refused(edited([](json& s) { s["filter"]["cov_lower"][0] = 1e13; }), "filter.cov_lower[0]");
+  expect_refused(edited([](json& s) { s["filter"]["mean"][0] = 2e6; }), "filter.mean[0]");
+  expect_refused(edited([](json& s) { s["filter"]["slot_ids"][0] = 256; }), "filter.slot_ids[0]");
+  expect_refused(edited([](json& s) { s["filter"]["slot_ids"][1] = s["filter"]["slot_ids"][0]; }), "twice");
+  expect_refused(edited([](json& s) { s["filter"]["mean"].erase(0); }), "filter.mean");
+  expect_refused(edited([](json& s) { s["lmap"][0]["id"] = -1; }), "lmap[0].id");
+  expect_refused(edited([](json& s) { s["lmap"][0]["status"] = "flying"; }), "lmap[0].status");
+  expect_refused(edited([](json& s) { s["lmap"][0]["cov"][0] = -2.0; }), "lmap[0].cov");
+  expect_refused(edited([](json& s) { s["node"]["seq"] = 2e15; }), "node.seq");
+  expect_refused(edited([](json& s) { s["node"]["seq"] = -1; }), "node.seq");
+  expect_refused(edited([](json& s) { s["node"]["last_frame"] = -2; }), "node.last_frame");
+  expect_refused(edited([](json& s) { s["node"]["counters"].erase("frames"); }), "node.counters.frames: missing");
+  expect_refused(edited([](json& s) { s["robot"]["last_frame"] = 58; }), "robot.last_frame");
+}
+
+TEST_F(RobotStateCorrupt, InconsistentSlotsAreRefused) {
+  expect_refused(edited([](json& s) {  // a mapped landmark the L-map calls moving
+    const int id = s["filter"]["slot_ids"][0].get<int>();
+    for (auto& e : s["lmap"])
+      if (e["id"] == id) e["status"] = "moving";
+  }), "in the filter but moving");
+  expect_refused(edited([](json& s) {  // a static landmark outside the filter: drop slot 0 of the filter
+    const int dim = static_cast<int>(s["filter"]["mean"].size());
+    s["filter"]["slot_ids"].erase(0);
+    json& m = s["filter"]["mean"];
+    m.erase(4), m.erase(3);
+    json lower = json::array();  // rows/cols 3 and 4 removed
+    int k = 0;
+    for (int i = 0; i < dim; ++i)
+      for (int j = 0; j <= i; ++j, ++k)
+        if (i != 3 && i != 4 && j != 3 && j != 4) lower.push_back(s["filter"]["cov_lower"][static_cast<std::size_t>(k)]);
+    s["filter"]["cov_lower"] = lower;
+  }), "static but not in the filter");
+}
+
+TEST_F(RobotStateCorrupt, AnotherRobotsOrAnotherConfigurationsStateIsRefused) {
+  expect_refused(edited([](json& s) { s["robot_id"] = 3; }), "state.robot_id: 3 is not this robot's (2)");
+  expect_refused(edited([](json& s) { s["mode"] = "ekf"; }), "state.mode");
+  expect_refused(edited([](json& s) { s["capacity"] = 64; }), "state.capacity");
+  expect_refused(edited([](json& s) { s["max_landmark_id"] = 1024; }), "state.max_landmark_id");
+  json d = doc_;
+  d["format"] = "elaslam.global_map";
+  expect_refused(d.dump(), "format");
+  d = doc_;
+  d["version"] = 2;
+  expect_refused(d.dump(), "version");
+  expect_refused("[1, 2, 3]", "not an object");
+  expect_refused("{}", "format: missing");
+}
+
+// ---- the atomic save --------------------------------------------------------------
+
+struct TempDir {
+  TempDir() {
+    char tmpl[] = "/tmp/elaslam_state_test.XXXXXX";
+    path = ::mkdtemp(tmpl);
+  }
+  ~TempDir() { std::filesystem::remove_all(path); }
+  std::string path;
+};
+
+std::string slurp(const std::string& path) {
+  std::string out, why;
+  files::read_all(path, &out, &why);
+  return out;
+}
+
+TEST(AtomicSave, NeverFollowsASymbolicLink) {
+  TempDir dir;
+  const std::string path = dir.path + "/state.json", victim = dir.path + "/victim";
+  std::ofstream(victim) << "precious";
+  // The predictable names a naive writer would use, planted as links to the victim.
+  for (const char* suffix : {".tmp", ".tmp.XXXXXX", ".tmp.000000"})
+    std::filesystem::create_symlink(victim, path + suffix);
+  std::string why;
+  ASSERT_TRUE(files::write_atomic(path, "new", &why)) << why;
+  EXPECT_EQ(slurp(victim), "precious");
+  EXPECT_EQ(slurp(path), "new");
+  EXPECT_FALSE(std::filesystem::is_symlink(path));
+  // PATH itself a link: the rename replaces the link, the victim stays.
+  std::filesystem::remove(path);
+  std::filesystem::create_symlink(victim, path);
+  ASSERT_TRUE(files::write_atomic(path, "newer", &why)) << why;
+  EXPECT_EQ(slurp(victim), "precious");
+  EXPECT_FALSE(std::filesystem::is_symlink(path));
+  EXPECT_EQ(slurp(path), "newer");
+}
+
+TEST(AtomicSave, AFailedWriteLeavesTheOldFileAndNoTemporary) {
+  TempDir dir;
+  const std::string path = dir.path + "/state.json";
+  std::string why;
+  ASSERT_TRUE(files::write_atomic(path, "old", &why)) << why;
+  // A real write failure: the file size limit (EFBIG; SIGXFSZ ignored), also as root.
+  struct rlimit before{};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &before), 0);
+  const auto old_handler = ::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = before;
+  small.rlim_cur = 1000;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  const bool ok = files::write_atomic(path, std::string(100000, 'x'), &why);
+  ::setrlimit(RLIMIT_FSIZE, &before);
+  ::signal(SIGXFSZ, old_handler);
+  EXPECT_FALSE(ok);
+  EXPECT_NE(why.find("cannot write"), std::string::npos) << why;
+  EXPECT_EQ(slurp(path), "old");
+  int entries = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path)) ++entries, (void)e;
+  EXPECT_EQ(entries, 1);  // the temporary file is gone
+  EXPECT_FALSE(files::write_atomic(dir.path + "/no/such/dir/state.json", "x", &why));
+  EXPECT_NE(why.find("temporary"), std::string::npos) << why;
+}
+
+// ---- the honest prior of a late start ---------------------------------------------
+
+// GIVEN robots that start late (first frame 30, 60, 100) on 12 seeds WHEN the first
+// frame sets the prior at the odometer reading THEN the true pose lies within the
+// 3-sigma region of the prior (NEES against chi2(3, 0.9973)) at least at the nominal
+// rate, and the prior is not absurdly wide (mean NEES >= 0.3 of the nominal 3).
+TEST(LateStart, ThePriorContainsTheTruePose) {
+  const double threshold = chi2_quantile(0.9973, 3);
+  int cases = 0, inside = 0, inside_3sigma = 0;
+  double nees_sum = 0.0;
+  for (int seed = 1; seed <= 12; ++seed) {
+    TeamConfig c = paper(Mode::kEla, seed);
+    sim::World world(c.scenario);
+    for (int start : {30, 60, 100}) {
+      while (world.frame() < start) world.step();
+      for (int i = 0; i < world.num_robots(); ++i) {
+        RobotNode node(c.robot, c.scenario.robots[static_cast<std::size_t>(i)].id);
+        ASSERT_EQ(node.on_sensor(sim::to_message(world.sensor_frame(i), start), 0), RobotNode::Verdict::kProcessed);
+        const Pose2 est = node.robot().filter().pose(), truth = world.robot_pose(i);
+        const Eigen::Vector3d e(est.x - truth.x, est.y - truth.y, wrap_angle(est.theta - truth.theta));
+        const Eigen::Matrix3d P = node.robot().filter().pose_cov();
+        const double nees = e.dot(P.ldlt().solve(e));
+        ++cases;
+        nees_sum += nees;
+        inside += nees <= threshold;
+        inside_3sigma += (e.array().abs() <= 3.0 * P.diagonal().array().sqrt()).all();
+      }
+    }
+  }
+  const double mean_nees = nees_sum / cases;
+  std::printf("late start: %d cases, NEES <= chi2(3, 0.9973): %d, every component within 3 sigma: %d, mean NEES %.3f\n",
+              cases, inside, inside_3sigma, mean_nees);
+  EXPECT_GE(inside, static_cast<int>(std::floor(0.97 * cases)));
+  EXPECT_GE(inside_3sigma, static_cast<int>(std::floor(0.97 * cases)));
+  EXPECT_GE(mean_nees, 0.3 * 3.0);
+}
+
+TEST(LateStart, AStartAtFrameZeroKeepsTheKnownPrior) {
+  const TeamConfig c = paper(Mode::kEla, 1);
+  sim::World world(c.scenario);
+  RobotNode node(c.robot, 1);
+  ASSERT_EQ(node.on_sensor(sim::to_message(world.sensor_frame(0), 0), 0), RobotNode::Verdict::kProcessed);
+  const Eigen::Matrix3d P = node.robot().filter().pose_cov();
+  EXPECT_EQ(P(0, 0), c.robot.initial_sigma_xy * c.robot.initial_sigma_xy);
+  EXPECT_EQ(P(2, 2), c.robot.initial_sigma_theta * c.robot.initial_sigma_theta);
+}
+
+TEST(LateStart, ThePriorGrowsWithTheFramesMissed) {
+  const OdometryNoise noise{4e-4, 1e-3, 3e-4};
+  const Eigen::Matrix3d P0 = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
+  double last_xy = 0.0, last_th = 0.0;
+  for (int steps : {1, 10, 100, 1000}) {
+    const Eigen::Matrix3d P = dead_reckoning_cov(P0, steps, 0.15, deg2rad(1.5), noise);
+    EXPECT_GT(P(0, 0), last_xy);
+    EXPECT_GT(P(2, 2), last_th);
+    EXPECT_EQ(P(0, 0), P(1, 1));
+    last_xy = P(0, 0), last_th = P(2, 2);
+  }
+  // Heading: linear in the steps (var_rot_per_m * d + var_rot_per_rad * a per step).
+  const Eigen::Matrix3d P = dead_reckoning_cov(P0, 100, 0.15, deg2rad(1.5), noise);
+  EXPECT_NEAR(P(2, 2), 1e-6 + 100 * (3e-4 * 0.15 + 1e-3 * deg2rad(1.5)), 1e-12);
+  EXPECT_EQ(dead_reckoning_cov(P0, 0, 0.15, 0.1, noise), P0);
+}
+
+}  // namespace
+}  // namespace elaslam

@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# System test `system_robot_restart`: a robot_node killed at any instant and started
+# again with the same command continues from its --state file.
+# For each seed, two live teams in a private namespace (150 frames at 20 Hz; robot 2
+# runs `robot_node --state FILE` in both):
+#   ref:     uninterrupted;
+#   restart: robot 2 gets SIGKILL when its state file says frame >= KILL_FRAME (~60;
+#            the file is saved every node.state_save_interval_s, so the kill lands
+#            a few frames later) and is started again at once with the same command;
+#   fresh:   the same, but its state file is deleted before the restart (it starts
+#            over from its odometer with the late-start prior): for comparison only.
+# Then: robot 2's log says "resumed from FILE at frame F" with F >= KILL_FRAME, and
+# its mean pose error (evaluate, metrics.json robots[].error_mean) is within RATIO
+# of the uninterrupted run's. Prints the figures per seed.
+# Needs root and ip netns (exit 77 otherwise); no Python venv (the state file is
+# read with the system python3's json).
+#   [SEEDS="1 2 3"] [KILL_FRAME=60] [RATIO=1.5] tests/system/robot_restart.sh BUILD_DIR
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+CONFIG="$ROOT/config/paper.yaml"
+SEEDS=${SEEDS:-"1 2 3"}
+KILL_FRAME=${KILL_FRAME:-60}
+RATIO=${RATIO:-1.5}
+SIM_ARGS=(--rate 20)
+
+# The frame of a robot state file (-1 while there is none or it is being replaced).
+state_frame() {
+  python3 -c 'import json, sys
+try: print(json.load(open(sys.argv[1]))["state"]["node"]["last_frame"])
+except Exception: print(-1)' "$1"
+}
+
+if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT SEED ref|restart|fresh
+  BUILD="$2" OUT="$3" SEED="$4" VARIANT="$5"
+  mkdir -p "$OUT/logs"
+  PIDS=()
+  R2=""
+  trap 'for p in "${PIDS[@]}" $R2; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  robot() { "$BUILD/bin/robot_node" --config "$CONFIG" --robot "$@" >> "$OUT/logs/robot_node_$1.log" 2>&1 & }
+  R2_CMD=(2 --state "$OUT/robot2/state.json")
+  mkdir -p "$OUT/robot2"
+  lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
+  "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
+  robot 1; PIDS+=($!)
+  robot 3; PIDS+=($!)
+  robot "${R2_CMD[@]}"; R2=$!
+  "$BUILD/bin/simulator" --config "$CONFIG" --seed "$SEED" "${SIM_ARGS[@]}" --wait-for-nodes 4 \
+    > "$OUT/logs/simulator.log" 2>&1 &
+  SIM=$!
+  if [ "$VARIANT" != ref ]; then
+    deadline=$((SECONDS + 60))
+    while [ "$(state_frame "$OUT/robot2/state.json")" -lt "$KILL_FRAME" ]; do
+      [ $SECONDS -lt $deadline ] || { echo "robot_restart: robot 2 never saved frame $KILL_FRAME"; exit 1; }
+      sleep 0.02
+    done
+    kill -KILL "$R2"; wait "$R2" 2>/dev/null || true
+    echo "--- killed (SIGKILL), state file at frame $(state_frame "$OUT/robot2/state.json")" >> "$OUT/logs/robot_node_2.log"
+    [ "$VARIANT" = restart ] || rm -f "$OUT/robot2/state.json"
+    robot "${R2_CMD[@]}"; R2=$!  # at once, the same command (as systemd's Restart= would)
+  fi
+  rc=0
+  wait "$SIM" || { echo "robot_restart: simulator failed"; rc=1; }
+  sleep 0.3  # the last frame's messages reach the logger
+  for p in "${PIDS[@]}" $R2; do kill -INT "$p" 2>/dev/null || true; done
+  for p in "${PIDS[@]}" $R2; do wait "$p" || { echo "robot_restart: process $p exited with an error"; rc=1; }; done
+  PIDS=(); R2=""
+  exit $rc
+fi
+
+BUILD="$(cd "${1:?usage: robot_restart.sh BUILD_DIR}" && pwd)"
+[ "$(id -u)" -eq 0 ] || { echo "robot_restart: skipped (needs root for network namespaces)"; exit 77; }
+ip netns list >/dev/null 2>&1 || { echo "robot_restart: skipped (no ip netns)"; exit 77; }
+command -v lcm-logger > /dev/null || { echo "robot_restart: skipped (no lcm-logger)"; exit 77; }
+OUT="$(mktemp -d)"
+[ -n "${KEEP_OUT:-}" ] && echo "robot_restart: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+rc=0
+for seed in $SEEDS; do
+  for variant in ref restart fresh; do
+    dir="$OUT/seed$seed/$variant"
+    mkdir -p "$dir"
+    "$ROOT/tools/netns_run.sh" --port 7710 -- "$0" --inner "$BUILD" "$dir" "$seed" "$variant" > "$dir.txt" 2>&1 ||
+      { cat "$dir.txt"; tail -n 3 "$dir"/logs/*.log; exit 1; }
+    "$BUILD/bin/evaluate" --log "$dir/run.lcmlog" --out "$dir/eval" --quiet
+  done
+  resumed="$(grep -h "resumed from" "$OUT/seed$seed/restart/logs/robot_node_2.log" || true)"
+  [ -n "$resumed" ] || { echo "robot_restart: seed $seed: robot 2 did not say it resumed"; cat "$OUT/seed$seed/restart/logs/robot_node_2.log"; exit 1; }
+  python3 - "$OUT/seed$seed/ref/eval/metrics.json" "$OUT/seed$seed/restart/eval/metrics.json" \
+      "$OUT/seed$seed/fresh/eval/metrics.json" "$seed" "$RATIO" "$KILL_FRAME" "$resumed" <<'PY' || rc=1
+import json, re, sys
+ref, rst, fresh = (json.load(open(p)) for p in sys.argv[1:4])
+seed, ratio, kill_frame, resumed = sys.argv[4], float(sys.argv[5]), int(sys.argv[6]), sys.argv[7]
+r2 = lambda m: next(r for r in m["robots"] if r["id"] == 2)
+a, b, c = r2(ref), r2(rst), r2(fresh)
+frame = int(re.search(r"at frame (\d+)", resumed).group(1))
+print(f"robot_restart: seed {seed}: robot 2 mean pose error uninterrupted {a['error_mean']:.4f} m "
+      f"({a['frames']} poses), killed and resumed at frame {frame}: {b['error_mean']:.4f} m ({b['frames']} poses), "
+      f"ratio {b['error_mean'] / a['error_mean']:.3f}; restarted without state: {c['error_mean']:.4f} m "
+      f"(ratio {c['error_mean'] / a['error_mean']:.3f})")
+fails = []
+if frame < kill_frame:
+    fails.append(f"resumed at frame {frame}, before the kill frame {kill_frame}")
+if b["error_mean"] > ratio * a["error_mean"]:
+    fails.append(f"error {b['error_mean']:.4f} m beyond {ratio} x {a['error_mean']:.4f} m")
+if b["frames"] < 150 - 40:
+    fails.append(f"only {b['frames']} poses: down far too long")
+if fails:
+    print("robot_restart: seed " + seed + ": " + "; ".join(fails)); sys.exit(1)
+PY
+done
+exit $rc
