@@ -33,11 +33,12 @@ def read_recording(path, types, kill_robot, restart_time):
     """From a recording (lcm-logger's: complete, whatever the hosts lost): ids some
     robot reported MOVING; of those, the ids whose latest word from the robots (by
     frame, over ADD, MOVING and RETURN events of every robot) is MOVING; the last
-    GLOBAL_MAP's static ids and frame; robot kill_robot's POSEs received after
+    complete GLOBAL_MAP publication's static ids and frame (its chunks); robot kill_robot's POSEs received after
     restart_time (Unix seconds; None: not counted)."""
     import lcm
     E = types.landmark_event_t
     moving, static, last_map_frame, poses_after = set(), None, -1, 0
+    building_key, building = None, {}
     word = {}  # id -> (frame, kind): the robots' latest word on the landmark
     pose_channel = f"POSE_{kill_robot}"
     for ev in lcm.EventLog(path, "r"):
@@ -55,8 +56,15 @@ def read_recording(path, types, kill_robot, restart_time):
                 m = types.global_map_t.decode(ev.data)
             except Exception:  # noqa: BLE001
                 continue
-            static = {m.landmarks[i].id for i in range(m.num_landmarks)}
-            last_map_frame = m.frame
+            # The chunks of one publication share (utime, incarnation, version, frame):
+            # the map is the last publication whose chunks all arrived.
+            key = (m.utime, m.incarnation, m.version, m.frame, m.num_chunks)
+            if key != building_key:
+                building_key, building = key, {}
+            building[m.chunk] = {m.landmarks[i].id for i in range(m.num_landmarks)}
+            if len(building) == m.num_chunks:
+                static = set().union(*building.values())
+                last_map_frame = m.frame
         elif ev.channel == pose_channel and restart_time is not None and ev.timestamp / 1e6 > restart_time:
             poses_after += 1
     still_moving = {i for i in moving if word[i][1] == E.MOVING}
