@@ -52,6 +52,10 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
   return true;
 }
 
+// More event seq numbers than a robot can send in any save interval (at most
+// 2 x 64 + capacity + 8 events a frame).
+constexpr std::int64_t kResumeSeqSkip = std::int64_t{1} << 24;
+
 std::int64_t wall_clock_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
@@ -69,6 +73,11 @@ void resume(const std::string& path, RobotNode* node) {
     return;
   }
   if (load_robot_state(text, node, &why)) {
+    // The events sent after the last save carried the next seq numbers, and
+    // main_robot has them: numbering on from the file would have them refused as
+    // stale. Jump ahead instead: main_robot sees one gap, asks for a snapshot
+    // (LMAP_RESYNC) and refuses none of this run's events.
+    node->skip_seq(kResumeSeqSkip);
     std::fprintf(stderr, "robot_node %d: resumed from %s at frame %d, %d landmarks, seq %lld (incarnation %lld)\n",
                  node->robot_id(), path.c_str(), node->robot().last_frame(), node->robot().filter().num_landmarks(),
                  (long long)node->event_seq(), (long long)node->incarnation());

@@ -95,6 +95,9 @@ class RobotNode {
   /// (robot_node/main.cpp).
   std::int64_t incarnation() const { return incarnation_; }
   void set_incarnation(std::int64_t v) { incarnation_ = v; }
+  /// Leave `n` event seq numbers unused (a resume from a state file saved up to one
+  /// save interval ago: the numbers sent since were seen by main_robot already).
+  void skip_seq(std::int64_t n) { seq_ += n; }
 
   node_status_t status_msg(std::int64_t now_utime) const;
   const RobotNodeCounters& counters() const { return counters_; }
