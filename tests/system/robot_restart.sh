@@ -82,6 +82,17 @@ for seed in $SEEDS; do
       { cat "$dir.txt"; tail -n 3 "$dir"/logs/*.log; exit 1; }
     "$BUILD/bin/evaluate" --log "$dir/run.lcmlog" --out "$dir/eval" --quiet
   done
+  # None of the resumed robot's events refused at main_robot (duplicates/stale: 0),
+  # and main_robot did not take it for a new incarnation (restarts: none said).
+  main_line="$(grep -h "^main_robot: events=" "$OUT/seed$seed/restart/logs/main_robot.log" || true)"
+  echo "robot_restart: seed $seed: $main_line"
+  case "$main_line" in
+    *" duplicates=0 "*) ;;
+    *) echo "robot_restart: seed $seed: main_robot refused events of the resumed robot"; rc=1 ;;
+  esac
+  if grep -q "restarted without its state" "$OUT/seed$seed/restart/logs/main_robot.log"; then
+    echo "robot_restart: seed $seed: main_robot saw a new incarnation, the state's was not kept"; rc=1
+  fi
   resumed="$(grep -h "resumed from" "$OUT/seed$seed/restart/logs/robot_node_2.log" || true)"
   [ -n "$resumed" ] || { echo "robot_restart: seed $seed: robot 2 did not say it resumed"; cat "$OUT/seed$seed/restart/logs/robot_node_2.log"; exit 1; }
   python3 - "$OUT/seed$seed/ref/eval/metrics.json" "$OUT/seed$seed/restart/eval/metrics.json" \
