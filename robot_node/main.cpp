@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 
@@ -60,17 +61,17 @@ std::int64_t wall_clock_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
-/// The state in `path` when there is one; a corrupt one is moved aside to
-/// PATH.corrupt (said why) and the node starts fresh: a bad file must not keep a
-/// robot down. A fresh start takes a new incarnation (later starts: larger ones).
-void resume(const std::string& path, RobotNode* node) {
+/// The state in `path` when there is one (true: resumed); a corrupt one is moved
+/// aside to PATH.corrupt (said why) and the node starts fresh: a bad file must not
+/// keep a robot down. A fresh start takes a new incarnation (later starts: larger ones).
+bool resume(const std::string& path, RobotNode* node) {
   node->set_incarnation(wall_clock_us());
-  if (path.empty()) return;
+  if (path.empty()) return false;
   std::string text, why;
   bool missing = false;
   if (!files::read_all(path, &text, &why, &missing)) {
     if (!missing) std::fprintf(stderr, "robot_node %d: cannot read state %s: %s; starting fresh\n", node->robot_id(), path.c_str(), why.c_str());
-    return;
+    return false;
   }
   if (load_robot_state(text, node, &why)) {
     // The events sent after the last save carried the next seq numbers, and
@@ -81,12 +82,13 @@ void resume(const std::string& path, RobotNode* node) {
     std::fprintf(stderr, "robot_node %d: resumed from %s at frame %d, %d landmarks, seq %lld (incarnation %lld)\n",
                  node->robot_id(), path.c_str(), node->robot().last_frame(), node->robot().filter().num_landmarks(),
                  (long long)node->event_seq(), (long long)node->incarnation());
-    return;
+    return true;
   }
   const std::string aside = path + ".corrupt";
   const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
   std::fprintf(stderr, "robot_node %d: state file %s is corrupt: %s; %s, starting fresh\n", node->robot_id(), path.c_str(),
                why.c_str(), moved ? ("moved aside to " + aside).c_str() : "could not move it aside");
+  return false;
 }
 
 void save(const std::string& path, const RobotNode& node) {
@@ -94,6 +96,63 @@ void save(const std::string& path, const RobotNode& node) {
   if (!files::write_atomic(path, save_robot_state(node), &why))
     std::fprintf(stderr, "robot_node %d: cannot save state: %s\n", node.robot_id(), why.c_str());
 }
+
+/// --state while running, called every turn of the shell (after a frame's messages
+/// went out, never inside Robot::process): saves once a frame was processed, at most
+/// every node.state_save_interval_s (0: after every frame). And a resumed state that
+/// the arriving frames do not continue (a new run from frame 0, or down longer than
+/// node.max_frame_gap: every frame refused as old or too far ahead) is dropped after
+/// kMisfitFrames such refusals with none processed: the node starts fresh.
+class StateKeeper {
+ public:
+  static constexpr std::int64_t kMisfitFrames = 10;
+  using Clock = std::chrono::steady_clock;
+
+  StateKeeper(std::string path, const RobotOptions& o, RobotNode* node, bool resumed)
+      : path_(std::move(path)), options_(o), node_(node), watching_(resumed),
+        period_(std::chrono::microseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1e6))),
+        next_save_(Clock::now()), saved_frames_(node->counters().frames), frames_at_start_(saved_frames_),
+        refused_at_start_(refused()) {}
+
+  void turn() {
+    if (path_.empty()) return;
+    if (watching_) check_fit();
+    const auto now = Clock::now();
+    if (now < next_save_ || node_->counters().frames == saved_frames_) return;
+    save(path_, *node_);
+    saved_frames_ = node_->counters().frames;
+    next_save_ = now + period_;
+  }
+
+ private:
+  std::int64_t refused() const {
+    const RobotNodeCounters& c = node_->counters();
+    return c.frames_out_of_order + c.frames_duplicate + c.rejected_inputs;
+  }
+  void check_fit() {
+    if (node_->counters().frames != frames_at_start_) {  // a frame continued the state: it fits
+      watching_ = false;
+      return;
+    }
+    if (refused() - refused_at_start_ < kMisfitFrames) return;
+    std::fprintf(stderr, "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
+                 "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
+                 (long long)kMisfitFrames);
+    *node_ = RobotNode(options_, node_->robot_id());
+    node_->set_incarnation(wall_clock_us());
+    watching_ = false;
+  }
+
+  const std::string path_;
+  const RobotOptions options_;
+  RobotNode* node_;
+  bool watching_;
+  const Clock::duration period_;
+  Clock::time_point next_save_;
+  std::int64_t saved_frames_;
+  const std::int64_t frames_at_start_;
+  const std::int64_t refused_at_start_;
+};
 
 void final_line(const RobotNode& node) {
   const auto& c = node.counters();
@@ -124,7 +183,7 @@ int run(const Args& a) {
   if (!lcm) return 1;
   transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
   RobotNode node(o, a.robot);
-  resume(a.state, &node);
+  StateKeeper keeper(a.state, o, &node, resume(a.state, &node));
   RobotPorts<transport::NodeShell> ports(shell, node);
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");
@@ -135,19 +194,7 @@ int run(const Args& a) {
   if (a.verbose) std::fprintf(stderr, "%s\n", effective.c_str());
   transport::install_stop_handlers();
   shell.every(std::chrono::milliseconds(static_cast<int>(a.status_period_s * 1000)), [&] { ports.publish_status(); });
-  // Each turn, after the frame's messages went out: the state once a frame was
-  // processed, at most every state_save_interval_s (0: after every frame).
-  using Clock = transport::NodeShell::Clock;
-  const auto save_period = std::chrono::microseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1e6));
-  auto next_save = Clock::now();
-  std::int64_t saved_frames = node.counters().frames;
-  shell.every(Clock::duration::zero(), [&] {
-    const auto now = Clock::now();
-    if (a.state.empty() || now < next_save || node.counters().frames == saved_frames) return;
-    save(a.state, node);
-    saved_frames = node.counters().frames;
-    next_save = now + save_period;
-  });
+  shell.every(transport::NodeShell::Clock::duration::zero(), [&] { keeper.turn(); });
   const bool transport_failed = shell.spin(100) == transport::NodeShell::Exit::kTransportError;
   if (!a.state.empty()) save(a.state, node);  // SIGINT / SIGTERM (and a failed transport): the latest state
   if (!transport_failed) ports.publish_status();
