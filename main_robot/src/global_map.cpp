@@ -38,26 +38,24 @@ int GlobalEntry::contributors() const {
 
 GlobalMap::GlobalMap(const GlobalMapOptions& options)
     : options_(options), entries_(static_cast<std::size_t>(options.max_landmark_id)) {
-  for (auto& c : covered_) c.assign(entries_.size(), 0);
+  for (auto& s : streams_) s.covered.assign(entries_.size(), 0);
 }
 
-void GlobalMap::start_repair(RobotStream& s, int r, std::int64_t repair_seq) {
-  if (!s.gap_pending || repair_seq > s.repair_seq) {
-    std::fill(covered_[static_cast<std::size_t>(r)].begin(), covered_[static_cast<std::size_t>(r)].end(), 0);
-    s.covered = 0;
-    s.repair_seq = repair_seq;
-  }
-  s.gap_pending = true;
+void RobotStream::restart_repair(std::int64_t seq) {
+  std::fill(covered.begin(), covered.end(), 0);
+  covered_ids = 0;
+  repair_seq = seq;
+  gap_pending = true;
 }
 
-void GlobalMap::cover(RobotStream& s, int r, int id_begin, int id_end) {
-  auto& c = covered_[static_cast<std::size_t>(r)];
+void RobotStream::cover(std::int64_t seq, int id_begin, int id_end) {
+  if (!gap_pending || seq < repair_seq) return;
   for (int id = id_begin; id < id_end; ++id) {
-    auto& bit = c[static_cast<std::size_t>(id)];
-    s.covered += bit == 0;
+    auto& bit = covered[static_cast<std::size_t>(id)];
+    covered_ids += bit == 0;
     bit = 1;
   }
-  if (s.covered >= max_landmark_id()) s.gap_pending = false;
+  if (covered_ids >= static_cast<int>(covered.size())) gap_pending = false;
 }
 
 IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t incarnation, int frame) {
@@ -70,14 +68,14 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
     s.previous_incarnation = s.incarnation;
     s.incarnation = incarnation;
     s.last_seq = 0;
-    snapshot_seq_[static_cast<std::size_t>(robot_id - 1)] = 0;
+    s.snapshot_seq = 0;
+    s.previous_heard = 0;
     ++s.restarts;
-    start_repair(s, robot_id - 1, 1);
-    s.repair_seq = 0;  // any snapshot of the new incarnation repairs
+    s.restart_repair(0);
     return IncarnationVerdict::kRestarted;
   }
   ++s.stale_incarnation;
-  if (incarnation == s.previous_incarnation && s.stale_incarnation >= 3)
+  if (incarnation == s.previous_incarnation && ++s.previous_heard >= 3)
     s.duplicate_until_frame = std::max(newest_frame_, frame) + 50;
   return IncarnationVerdict::kStale;
 }
@@ -143,7 +141,7 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
   const bool gap = e.seq > s.last_seq + 1;
   if (gap) {
     ++s.gaps;
-    start_repair(s, e.robot_id - 1, e.seq - 1);  // a snapshot taken after the lost events
+    s.start_repair(e.seq - 1);  // a snapshot taken after the lost events
   }
   s.last_seq = e.seq;
   s.last_frame = std::max(s.last_frame, e.frame);
@@ -174,13 +172,13 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
                                std::vector<Notice>* notices) {
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
   const std::size_t r = static_cast<std::size_t>(robot_id - 1);
-  if (seq < snapshot_seq_[r]) return false;  // an older snapshot than one applied: it would roll the map back
-  snapshot_seq_[r] = seq;
+  if (seq < s.snapshot_seq) return false;  // an older snapshot than one applied: it would roll the map back
+  s.snapshot_seq = seq;
   // Events of r this map has not seen: a gap on r's event stream, or a snapshot
   // ahead of r's last applied event (a restarted main_robot: empty, or resumed from
   // a state file up to state_save_interval_s old). Those events may have been
   // MOVING or RETURN: the snapshot's lists stand in for them, chunk by chunk.
-  if (seq > s.last_seq) start_repair(s, robot_id - 1, seq);
+  if (seq > s.last_seq) s.start_repair(seq);
   const bool missed = s.gap_pending;
   // Moving ids first: a MOVING event lost in a gap is recovered here.
   if (missed) {
@@ -223,7 +221,7 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
     if (g.status == GlobalStatus::kStatic) fuse(g);
   }
   s.last_seq = std::max(s.last_seq, seq);
-  if (s.gap_pending && seq >= s.repair_seq) cover(s, robot_id - 1, id_begin, id_end);
+  s.cover(seq, id_begin, id_end);
   s.last_frame = std::max(s.last_frame, frame);
   newest_frame_ = std::max(newest_frame_, frame);
   ++version_;

@@ -25,6 +25,14 @@ bool finite_cov(const double (&c)[2][2]) {
          c[0][0] * c[1][1] - c[0][1] * c[1][0] >= -1e-18;
 }
 
+// A global map chunk's two kinds of entry (chunks.hpp, prepare_chunks).
+void grow_static(global_map_t* m, int n) { contract::set_count(&m->landmarks, &m->num_landmarks, n); }
+void grow_moving(global_map_t* m, int n) {
+  contract::set_count(&m->moving_ids, &m->num_moving, n);
+  m->moving_frames.resize(static_cast<std::size_t>(n));
+  m->moving_by.resize(static_cast<std::size_t>(n));
+}
+
 Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
   Eigen::Matrix2d m;
   m << c[0][0], c[0][1], c[1][0], c[1][1];
@@ -39,33 +47,15 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   const auto max_id = static_cast<std::size_t>(options.max_landmark_id);
   pending_.reserve(max_id);
   notices_.reserve(max_id);
-  snap_lms_.reserve(contract::kMaxCount);
-  snap_moving_.reserve(contract::kMaxCount);
+  snap_lms_.reserve(max_id);  // a valid chunk lists each id at most once (validate)
+  snap_moving_.reserve(max_id);
   resyncs_.reserve(kMaxTeamRobots * 4);
   taken_.reserve(kMaxTeamRobots * 4);
-  global_map_t m{};
-  chunk_sizes_.fixed_bytes = m.getEncodedSize();
-  contract::set_count(&m.landmarks, &m.num_landmarks, 1);
-  chunk_sizes_.a_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
-  contract::set_count(&m.landmarks, &m.num_landmarks, 0);
-  contract::set_count(&m.moving_ids, &m.num_moving, 1);
-  m.moving_frames.resize(1);
-  m.moving_by.resize(1);
-  chunk_sizes_.b_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
-  chunk_sizes_.budget = contract::kMaxChunkBytes;
   static_ids_.reserve(max_id);
   moving_ids_.reserve(max_id);
-  const int n = max_chunks(chunk_sizes_, options.max_landmark_id, 0);
-  spans_.reserve(static_cast<std::size_t>(n));
-  chunks_.resize(static_cast<std::size_t>(n));
-  for (auto& c : chunks_) {
-    const auto a = static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.a_bytes));
-    const auto b = static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.b_bytes));
-    c.landmarks.reserve(a);
-    c.moving_ids.reserve(b);
-    c.moving_frames.reserve(b);
-    c.moving_by.reserve(b);
-  }
+  // All ids counted as the larger kind of entry: a bound for any mix of the two.
+  prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, options.max_landmark_id, 0, &chunk_sizes_, &chunks_);
+  spans_.reserve(chunks_.size());
 }
 
 std::string MainNode::validate(const landmark_event_t& m) const {
@@ -147,15 +137,13 @@ void MainNode::request_resync(int robot_id, std::int8_t reason) {
 }
 
 const std::vector<resync_request_t>& MainNode::take_resyncs(std::int64_t now_utime) {
-  static const std::vector<resync_request_t> kNone;
-  if (resyncs_.empty()) return kNone;
-  for (auto& q : resyncs_) {
+  taken_.swap(resyncs_);  // both reserved at construction: no allocation
+  resyncs_.clear();
+  for (auto& q : taken_) {
     q.utime = now_utime;
     q.incarnation = incarnation_;
   }
-  counters_.resyncs_requested += static_cast<std::int64_t>(resyncs_.size());
-  taken_.swap(resyncs_);
-  resyncs_.clear();
+  counters_.resyncs_requested += static_cast<std::int64_t>(taken_.size());
   return taken_;
 }
 
@@ -166,12 +154,7 @@ std::string MainNode::take_alert() {
 }
 
 bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
-  const std::string problem = validate(m);
-  if (!problem.empty()) {
-    ++counters_.rejected_inputs;
-    if (why) *why = problem;
-    return false;
-  }
+  if (const std::string problem = validate(m); !problem.empty()) return refused(problem, why);
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
     if (why) *why = "event of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
     return false;
@@ -197,12 +180,7 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
 }
 
 bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
-  const std::string problem = validate(m);
-  if (!problem.empty()) {
-    ++counters_.rejected_inputs;
-    if (why) *why = problem;
-    return false;
-  }
+  if (const std::string problem = validate(m); !problem.empty()) return refused(problem, why);
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
     if (why) *why = "snapshot of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
     return false;
@@ -239,11 +217,14 @@ const std::vector<dynamic_notice_t>& MainNode::take_notices(std::int64_t now_uti
   return notices_;
 }
 
+bool MainNode::refused(const std::string& problem, std::string* why) {
+  ++counters_.rejected_inputs;
+  if (why) *why = problem;
+  return false;
+}
+
 int MainNode::on_pose(const pose_estimate_t& m) {
-  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots || m.frame < 0) {
-    ++counters_.rejected_inputs;
-    return -1;
-  }
+  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots || m.frame < 0) return refused("pose outside the team", nullptr), -1;
   const auto r = static_cast<std::size_t>(m.robot_id - 1);
   const bool first = map_.stream(m.robot_id).incarnation == 0 && robot_frame_[r] < 0;
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) return -1;
@@ -251,16 +232,12 @@ int MainNode::on_pose(const pose_estimate_t& m) {
   // the robot's earlier events never reached this map.
   if (first && m.frame > 0 && map_.stream(m.robot_id).last_seq == 0)
     request_resync(m.robot_id, resync_request_t::MAIN_STARTED);
-  const int done = on_robot_frame(m.robot_id, m.frame);
+  const int done = finished_frame(m.robot_id, m.frame);
   if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // again, rate-limited
   return done;
 }
 
-int MainNode::on_robot_frame(int robot_id, int frame) {
-  if (robot_id < 1 || robot_id > kMaxTeamRobots || frame < 0) {
-    ++counters_.rejected_inputs;
-    return -1;
-  }
+int MainNode::finished_frame(int robot_id, int frame) {
   int& f = robot_frame_[static_cast<std::size_t>(robot_id - 1)];
   f = std::max(f, frame);
   int all = -1;
@@ -294,7 +271,7 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
     c.num_chunks = static_cast<std::int16_t>(n);
     c.id_begin = sp.id_begin;
     c.id_end = sp.id_end;
-    contract::set_count(&c.landmarks, &c.num_landmarks, sp.count_a);
+    grow_static(&c, sp.count_a);
     for (int i = 0; i < sp.count_a; ++i) {
       const int id = static_ids_[static_cast<std::size_t>(sp.first_a + i)];
       const GlobalEntry& g = map_.entry(id);
@@ -308,9 +285,7 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
       l.status = global_landmark_t::STATIC;
       l.status_frame = g.status_frame;
     }
-    contract::set_count(&c.moving_ids, &c.num_moving, sp.count_b);
-    c.moving_frames.resize(static_cast<std::size_t>(sp.count_b));
-    c.moving_by.resize(static_cast<std::size_t>(sp.count_b));
+    grow_moving(&c, sp.count_b);
     for (int i = 0; i < sp.count_b; ++i) {
       const auto j = static_cast<std::size_t>(i);
       const int id = moving_ids_[static_cast<std::size_t>(sp.first_b + i)];

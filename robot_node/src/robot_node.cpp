@@ -34,6 +34,10 @@ std::string str(const char* what, double v) {
   return os.str();
 }
 
+// A snapshot chunk's two kinds of entry (chunks.hpp, prepare_chunks).
+void grow_static(lmap_snapshot_t* m, int n) { contract::set_count(&m->landmarks, &m->num_landmarks, n); }
+void grow_moving(lmap_snapshot_t* m, int n) { contract::set_count(&m->moving_ids, &m->num_moving, n); }
+
 void set_cov2(double (&dst)[2][2], const Eigen::Matrix2d& C) {
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 2; ++c) dst[r][c] = C(r, c);
@@ -50,27 +54,14 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   prepare_snapshot_chunks();
 }
 
-// The encoded sizes of a chunk and of its entries, from the generated code, and a
-// pool of chunks for the largest map this robot can hold.
+// Snapshot chunks, sized from the generated code, a pool for the largest map.
 void RobotNode::prepare_snapshot_chunks() {
-  lmap_snapshot_t m{};
-  chunk_sizes_.fixed_bytes = m.getEncodedSize();
-  contract::set_count(&m.landmarks, &m.num_landmarks, 1);
-  chunk_sizes_.a_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
-  contract::set_count(&m.landmarks, &m.num_landmarks, 0);
-  contract::set_count(&m.moving_ids, &m.num_moving, 1);
-  chunk_sizes_.b_bytes = m.getEncodedSize() - chunk_sizes_.fixed_bytes;
-  chunk_sizes_.budget = contract::kMaxChunkBytes;
   const int max_id = options_.ekf.max_landmark_id;
   static_ids_.reserve(static_cast<std::size_t>(max_id));
   moving_ids_.reserve(static_cast<std::size_t>(max_id));
-  const int n = max_chunks(chunk_sizes_, std::min(options_.ekf.capacity, max_id), max_id);
-  spans_.reserve(static_cast<std::size_t>(n));
-  chunks_.resize(static_cast<std::size_t>(n));
-  for (auto& c : chunks_) {
-    c.landmarks.reserve(static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.a_bytes)));
-    c.moving_ids.reserve(static_cast<std::size_t>(chunk_sizes_.per_chunk(chunk_sizes_.b_bytes)));
-  }
+  prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, std::min(options_.ekf.capacity, max_id), max_id,
+                 &chunk_sizes_, &chunks_);
+  spans_.reserve(chunks_.size());
 }
 
 std::string RobotNode::validate(const sensor_frame_t& m) const {
@@ -110,11 +101,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   }
   if (problem.empty() && last_frame_ >= 0 && msg.frame > last_frame_ + options_.max_frame_gap)
     problem = str("frame jumps further ahead than node.max_frame_gap", msg.frame);
-  if (!problem.empty()) {
-    ++counters_.rejected_inputs;
-    if (why) *why = problem;
-    return Verdict::kInvalid;
-  }
+  if (!problem.empty()) return refused(problem, why), Verdict::kInvalid;
   if (msg.frame == last_frame_) {
     ++counters_.frames_duplicate;
     if (why) *why = "duplicate frame " + std::to_string(msg.frame);
@@ -228,7 +215,7 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
     c.num_chunks = static_cast<int16_t>(num_chunks_);
     c.id_begin = sp.id_begin;
     c.id_end = sp.id_end;
-    contract::set_count(&c.landmarks, &c.num_landmarks, sp.count_a);
+    grow_static(&c, sp.count_a);
     for (int i = 0; i < sp.count_a; ++i) {
       const int id = static_ids_[static_cast<std::size_t>(sp.first_a + i)];
       landmark_estimate_t& l = c.landmarks[static_cast<std::size_t>(i)];
@@ -238,7 +225,7 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
       l.y = p.y();
       set_cov2(l.cov, f.landmark_cov(id));
     }
-    contract::set_count(&c.moving_ids, &c.num_moving, sp.count_b);
+    grow_moving(&c, sp.count_b);
     for (int i = 0; i < sp.count_b; ++i)
       c.moving_ids[static_cast<std::size_t>(i)] = moving_ids_[static_cast<std::size_t>(sp.first_b + i)];
   }
@@ -251,11 +238,7 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
     problem = str("landmark_id outside [0, max_landmark_id)", msg.landmark_id);
   else if (msg.detected_by < 1 || msg.detected_by > contract::kMaxRobots)
     problem = str("detected_by outside [1, 8]", msg.detected_by);
-  if (!problem.empty()) {
-    ++counters_.rejected_inputs;
-    if (why) *why = problem;
-    return false;
-  }
+  if (!problem.empty()) return refused(problem, why);
   auto& had = notice_frame_[static_cast<std::size_t>(msg.landmark_id)];
   had = std::max(had, msg.frame);
   // Ahead of this robot's frames: hold it (a fresh node, one far behind or a full
@@ -289,13 +272,14 @@ std::string RobotNode::validate(const global_map_t& m) const {
   return "";
 }
 
+bool RobotNode::refused(const std::string& problem, std::string* why) {
+  ++counters_.rejected_inputs;
+  if (why) *why = problem;
+  return false;
+}
+
 bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {
-  const std::string problem = validate(msg);
-  if (!problem.empty()) {
-    ++counters_.rejected_inputs;
-    if (why) *why = problem;
-    return false;
-  }
+  if (const std::string problem = validate(msg); !problem.empty()) return refused(problem, why);
   for (int k = 0; k < msg.num_moving; ++k) {
     const auto i = static_cast<std::size_t>(k);
     const int id = msg.moving_ids[i], by = msg.moving_by[i], frame = msg.moving_frames[i];

@@ -65,8 +65,11 @@ bool GlobalMapAssembly::add(const global_map_t& c) {
   if (!consistent) return false;
   const bool same = count_ > 0 && c.utime == building_.utime && c.incarnation == building_.incarnation &&
                     c.version == building_.version && c.frame == building_.frame && c.num_chunks == building_.num_chunks;
-  if (!same) {  // a new publication
-    building_ = global_map_t{};
+  if (!same) {  // a new publication (the arrays keep their capacity)
+    building_.landmarks.clear();
+    building_.moving_ids.clear();
+    building_.moving_frames.clear();
+    building_.moving_by.clear();
     building_.utime = c.utime;
     building_.frame = c.frame;
     building_.incarnation = c.incarnation;

@@ -26,10 +26,37 @@ struct ChunkSizes {
   int per_chunk(int bytes) const { return (budget - fixed_bytes) / bytes; }
 };
 
-/// The most chunks `na` + `nb` entries can need (size `out` for it).
+/// The most chunks `na` + `nb` entries can need (size `out` for it): every chunk but
+/// the last was closed because the next entry did not fit, so it holds more than
+/// room - (the larger entry) bytes.
 inline int max_chunks(const ChunkSizes& s, int na, int nb) {
   const int room = s.budget - s.fixed_bytes;
-  return 1 + (na * s.a_bytes + nb * s.b_bytes) / (room - (s.a_bytes > s.b_bytes ? s.a_bytes : s.b_bytes) + 1) + 1;
+  return 1 + (na * s.a_bytes + nb * s.b_bytes) / (room - (s.a_bytes > s.b_bytes ? s.a_bytes : s.b_bytes) + 1);
+}
+
+/// The sizes of a chunked message type Msg, measured on its generated encoder, and a
+/// pool of `Msg` big enough for `max_a` + `max_b` entries, each chunk's arrays
+/// reserved for a full chunk (filling a chunk then allocates nothing).
+/// `grow_a(&msg, n)` / `grow_b(&msg, n)` give a message n entries of each kind
+/// (arrays and count fields together).
+template <class Msg, class GrowA, class GrowB>
+void prepare_chunks(GrowA grow_a, GrowB grow_b, int budget, int max_a, int max_b, ChunkSizes* sizes,
+                    std::vector<Msg>* pool) {
+  Msg m{};
+  sizes->budget = budget;
+  sizes->fixed_bytes = m.getEncodedSize();
+  grow_a(&m, 1);
+  sizes->a_bytes = m.getEncodedSize() - sizes->fixed_bytes;
+  grow_a(&m, 0);
+  grow_b(&m, 1);
+  sizes->b_bytes = m.getEncodedSize() - sizes->fixed_bytes;
+  pool->resize(static_cast<std::size_t>(max_chunks(*sizes, max_a, max_b)));
+  for (Msg& c : *pool) {  // a resize down keeps the capacity
+    grow_a(&c, sizes->per_chunk(sizes->a_bytes));
+    grow_a(&c, 0);
+    grow_b(&c, sizes->per_chunk(sizes->b_bytes));
+    grow_b(&c, 0);
+  }
 }
 
 /// Cut [0, max_id) into chunks. `a_ids` (na of them) and `b_ids` (nb) are ascending,

@@ -95,15 +95,29 @@ struct RobotStream {
   std::int64_t incarnation = 0;  // the robot's current incarnation, 0: none seen yet
   std::int64_t previous_incarnation = 0;
   std::int64_t last_seq = 0;   // highest seq applied (or covered by a snapshot)
+  std::int64_t snapshot_seq = 0;  // seq of the newest snapshot chunk applied
   bool gap_pending = false;    // a gap was seen and snapshot chunks have not covered every id since
   std::int64_t repair_seq = 0; // chunks with at least this seq repair the pending gap
-  int covered = 0;             // ids covered by such chunks so far (of max_landmark_id)
+  std::vector<std::uint8_t> covered;  // per landmark id: covered by such a chunk (sized max_landmark_id)
+  int covered_ids = 0;         // how many
   std::int64_t gaps = 0;       // gaps seen
   std::int64_t duplicates = 0; // duplicate or stale events ignored
   std::int64_t restarts = 0;   // new incarnations after the first
   std::int64_t stale_incarnation = 0;  // messages of an older incarnation refused
+  std::int64_t previous_heard = 0;     // of those, of previous_incarnation since it was replaced
   int duplicate_until_frame = -1;      // a second live sender was seen: flagged until this frame
   int last_frame = -1;
+
+  /// A gap: chunks with a seq of at least `seq` must cover every id again (a pending
+  /// repair that needs older chunks only is kept).
+  void start_repair(std::int64_t seq) {
+    if (!gap_pending || seq > repair_seq) restart_repair(seq);
+    gap_pending = true;
+  }
+  /// The same, unconditionally (a new incarnation: any of its snapshots repairs).
+  void restart_repair(std::int64_t seq);
+  /// A chunk with seq `seq` covered ids [id_begin, id_end).
+  void cover(std::int64_t seq, int id_begin, int id_end);
 };
 
 class GlobalMap {
@@ -157,12 +171,7 @@ class GlobalMap {
 
   GlobalMapOptions options_;
   std::vector<GlobalEntry> entries_;
-  void start_repair(RobotStream& s, int r, std::int64_t repair_seq);
-  void cover(RobotStream& s, int r, int id_begin, int id_end);
-
   std::array<RobotStream, kMaxTeamRobots> streams_{};
-  std::array<std::vector<std::uint8_t>, kMaxTeamRobots> covered_;  // per robot, per id: covered since the gap
-  std::array<std::int64_t, kMaxTeamRobots> snapshot_seq_{};        // newest snapshot seq applied per robot
   std::int64_t version_ = 0;
   int newest_frame_ = -1;
 };

@@ -59,7 +59,6 @@ class MainNode {
   /// has finished when that advanced with this call, else -1: the moment to publish
   /// GLOBAL_MAP for that frame. A POSE of a stale incarnation returns -1.
   int on_pose(const pose_estimate_t& msg);
-  int on_robot_frame(int robot_id, int frame);
 
   /// The global map in chunks that each fit one datagram (global_map_t), stamped
   /// with `frame` (default: the newest frame every robot has finished, or before any
@@ -86,6 +85,11 @@ class MainNode {
   /// The incarnation check of every robot message: false when it must be refused.
   bool accept_incarnation(int robot_id, std::int64_t incarnation, int frame);
   void request_resync(int robot_id, std::int8_t reason);
+  /// Robot `robot_id` (valid) finished `frame`: the newest frame the whole team has
+  /// finished when that advanced, else -1.
+  int finished_frame(int robot_id, int frame);
+  /// A refused message: counted, `why` (when given) says why; returns false.
+  bool refused(const std::string& problem, std::string* why);
   GlobalMap map_;
   MainCounters counters_;
   std::vector<Notice> pending_;

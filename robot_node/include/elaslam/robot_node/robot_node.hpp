@@ -118,6 +118,8 @@ class RobotNode {
   void apply_notice(const dynamic_notice_t& msg);
   void prepare_snapshot_chunks();
   std::string validate(const global_map_t& msg) const;
+  /// A refused message: counted, `why` (when given) says why; returns false.
+  bool refused(const std::string& problem, std::string* why);
 
   RobotOptions options_;
   int robot_id_;
