@@ -15,6 +15,7 @@
 
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/dataset/mrclam.hpp"
 #include "elaslam/run_info_t.hpp"
 
@@ -65,24 +66,18 @@ run_info_t run_info(const mrclam::FrameSource& src, const mrclam::Options& o, co
   m.landmark_speed_mps = -1.0;
   m.rate_hz = o.rate_hz;
   m.frames = src.num_frames();
-  m.num_robots = static_cast<std::int16_t>(std::min<std::size_t>(src.robot_ids().size(), 8));
+  m.num_robots = static_cast<std::int16_t>(std::min<std::size_t>(src.robot_ids().size(), contract::kMaxRobots));
   for (int i = 0; i < m.num_robots; ++i) m.robot_ids[i] = static_cast<std::int16_t>(src.robot_ids()[static_cast<std::size_t>(i)]);
-  YAML::Node root;
-  try {
-    root = YAML::Load(effective_yaml);
-  } catch (const YAML::Exception&) {
-  }
-  if (!root.IsMap()) root = YAML::Node(YAML::NodeType::Map);
-  root["dataset"]["rate_hz"] = o.rate_hz;
-  root["dataset"]["start_s"] = o.start_s;
-  root["dataset"]["duration_s"] = o.duration_s;
-  root["dataset"]["with_robot_barcodes"] = o.with_robot_barcodes;
-  std::string robots;
-  for (int id : o.robots) robots += (robots.empty() ? "" : ",") + std::to_string(id);
-  root["dataset"]["robots"] = robots;
-  YAML::Emitter out;
-  out << root;
-  m.config_yaml = out.c_str();
+  m.config_yaml = config::edit_yaml(effective_yaml, [&o](YAML::Node& root) {  // the overrides, recorded
+    YAML::Node d = root["dataset"];
+    d["rate_hz"] = o.rate_hz;
+    d["start_s"] = o.start_s;
+    d["duration_s"] = o.duration_s;
+    d["with_robot_barcodes"] = o.with_robot_barcodes;
+    std::string robots;
+    for (int id : o.robots) robots += (robots.empty() ? "" : ",") + std::to_string(id);
+    d["robots"] = robots;
+  });
   return m;
 }
 

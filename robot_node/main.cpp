@@ -17,6 +17,7 @@
 
 #include "elaslam/common/atomic_file.hpp"
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
 #include "elaslam/transport/node_shell.hpp"
@@ -210,7 +211,7 @@ int main(int argc, char** argv) {
   CLI::App app{"elaslam robot_node: one robot's EKF-SLAM with the ELA gate, on LCM"};
   elaslam::cli::add_version_flag(app, "robot_node");
   elaslam::cli::add_config_option(app, &a.config, "its robot: section");
-  app.add_option("--robot", a.robot, "this robot's id (1-8)")->required()->check(CLI::Range(1, 8));
+  app.add_option("--robot", a.robot, "this robot's id (1 to 8: the team's capacity)")->required()->check(CLI::Range(1, elaslam::contract::kMaxRobots));
   app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");
   app.add_option("--state", a.state, "file to keep this robot's state in (resumed at start, saved atomically)");
   elaslam::transport::add_transport_options(app, &a.transport);

@@ -95,11 +95,10 @@ int run(const Args& a, const ScenarioOptions& o) {
   namespace transport = elaslam::transport;
   const auto lcm = transport::open_lcm(a.transport.lcm_url, "simulator");
   if (!lcm) return 1;
-  const std::string url = transport::effective_url(a.transport.lcm_url);
   const std::string& suffix = a.transport.channel_suffix;
   std::cerr << elaslam::cli::version_line("simulator") << ", config " << a.run.config_path << " ("
             << a.config_choice.origin << ")\n"
-            << elaslam::sim::describe(o) << "simulator: lcm " << (url.empty() ? "(LCM default)" : url)
+            << elaslam::sim::describe(o) << "simulator: lcm " << transport::describe_url(a.transport.lcm_url)
             << (suffix.empty() ? "" : ", channel suffix " + suffix)
             << (a.run.lockstep ? ", lockstep (timeout " + std::to_string(a.run.lockstep_timeout_ms) + " ms)"
                                : ", free running")

@@ -110,16 +110,6 @@ void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   d->first_map_receive.emplace(g.frame, received);
 }
 
-/// The robot id of a per-robot channel "<prefix><id><suffix>" (channels.hpp), -1 when
-/// `channel` is not one.
-int robot_of(const std::string& channel, const std::string& prefix, const std::string& suffix) {
-  if (channel.size() <= prefix.size() + suffix.size() || channel.rfind(prefix, 0) != 0 ||
-      channel.compare(channel.size() - suffix.size(), suffix.size(), suffix) != 0)
-    return -1;
-  const std::string id = channel.substr(prefix.size(), channel.size() - prefix.size() - suffix.size());
-  if (id.size() > 6 || id.find_first_not_of("0123456789") != std::string::npos) return -1;
-  return std::stoi(id);
-}
 
 // One event of the log: the team's channels (with its suffix) are decoded (an
 // undecodable one is counted), others ignored.
@@ -134,20 +124,20 @@ void on_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
   } else if (ch == channels::global_map(sfx)) {
     global_map_t m;
     if (decode(ev, &m, d) && d->map_assembly.add(m)) on_map(d->map_assembly.map(), ev.timestamp, d);
-  } else if (robot_of(ch, "POSE_", sfx) > 0) {
+  } else if (channels::robot_of(ch, "POSE_", sfx) > 0) {
     pose_estimate_t m;
     if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev.timestamp};
   } else if (ch == channels::run_info(sfx)) {
     run_info_t m;
     if (decode(ev, &m, d)) d->run_info = m;
-  } else if (robot_of(ch, "SENSOR_", sfx) > 0) {
+  } else if (channels::robot_of(ch, "SENSOR_", sfx) > 0) {
     sensor_frame_t m;
     if (!decode(ev, &m, d)) return;
     d->sensor_frames[m.robot_id].push_back(m.frame);
     auto& t = d->sensor_utime[m.frame];
     t = std::max(t, m.utime);
     add_observed(m, &d->observed[m.frame]);
-  } else if (robot_of(ch, "STATUS_ROBOT_", sfx) > 0) {
+  } else if (channels::robot_of(ch, "STATUS_ROBOT_", sfx) > 0) {
     node_status_t m;
     if (!decode(ev, &m, d)) return;
     d->status[m.node_id].push_back({m.frame, m.frames, m.frames_dropped});
@@ -491,17 +481,8 @@ int main(int argc, char** argv) {
   add_log_figures(d, x, &j);
   const std::vector<RobotFrameAccount> accounts = account(d, x, &j);
   if (!a.quiet) print_report(d, x, info, j, accounts);
-  if (!a.baseline.empty()) {  // the same scenario and seed in process, with the baseline's mode
-    RunOverrides bo;
-    bo.mode = Mode::kEkf;
-    parse_mode(a.baseline, &*bo.mode);
-    const TeamConfig bc = apply_overrides(team, bo);
-    const RunResult base = run_team(bc);
-    const RunInfo base_info{a.baseline, info.dynamism_percent, info.speed_mps, info.seed, a.config, bc.effective_yaml,
-                            command};
-    j["baseline"] = baseline_json(base_info, base, "in process, same scenario and seed");
-    if (!a.quiet) print_comparison(std::cout, info, x.r, base_info, base, "in process");
-  }
+  if (!a.baseline.empty())  // the same scenario and seed in process, with the baseline's mode
+    j["baseline"] = run_baseline(team, a.config, a.baseline, info, x.r, a.quiet ? nullptr : &std::cout);
   if (!a.out_dir.empty()) {
     try {
       write_outputs(a.out_dir, j, x.r);

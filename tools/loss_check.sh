@@ -68,18 +68,11 @@ for n in "$TX" "$RX"; do
   ip -n "$n" route add 224.0.0.0/4 dev eth0
   i=$((i + 1))
 done
-# The rule of run_team.sh's add_loss (receiver 10.78.0.2).
-permille=$(awk -v p="$LOSS" 'BEGIN { printf "%d", p * 10 + 0.5 }')
+# The rule every receiving host of run_team.sh --hosts --loss P gets (receiver 10.78.0.2).
+# shellcheck source=tools/loss_rule.sh
+. "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/loss_rule.sh"
 ip netns exec "$RX" sysctl -q -w net.ipv4.ipfrag_time=1
-ip netns exec "$RX" nft -f - <<EOF
-table inet elaslam_loss {
-  chain pre {
-    type filter hook prerouting priority -450; policy accept;
-    ip protocol udp ip saddr != 10.78.0.2 counter comment "incoming"
-    ip protocol udp ip saddr != 10.78.0.2 numgen random mod 1000 < $permille counter drop comment "dropped"
-  }
-}
-EOF
+install_loss_rule "$RX" 10.78.0.2 "$LOSS"
 
 RESULT="$(mktemp)"
 trap 'cleanup; rm -f "$RESULT"' EXIT

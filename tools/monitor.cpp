@@ -41,10 +41,10 @@ class Progress {
     on<run_info_t>(channels::run_info(sfx), 10, [this](const run_info_t& m) {
       if (m.frames > 0) frames_ = m.frames;
     });
-    on<sensor_frame_t>("SENSOR_[0-9]+" + sfx, 200, [this](const sensor_frame_t& m) {
+    on<sensor_frame_t>(channels::any_sensor(sfx), 200, [this](const sensor_frame_t& m) {
       if (m.frame > frame_) frame_ = m.frame;
     });
-    on<pose_estimate_t>("POSE_[0-9]+" + sfx, 200, [this](const pose_estimate_t& m) {
+    on<pose_estimate_t>(channels::any_pose(sfx), 200, [this](const pose_estimate_t& m) {
       ++poses_;
       pose_robots_.insert(m.robot_id);
     });
@@ -56,7 +56,7 @@ class Progress {
       ++notices_;
       moving_.insert(m.landmark_id);
     });
-    on<node_status_t>("STATUS_ROBOT_[0-9]+" + sfx, 50, [this](const node_status_t& m) {
+    on<node_status_t>(channels::any_status_robot(sfx), 50, [this](const node_status_t& m) {
       dropped_by_robot_[m.node_id] = m.frames_dropped;
       dropped_ = 0;
       for (const auto& [id, n] : dropped_by_robot_) dropped_ += n;

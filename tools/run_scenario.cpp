@@ -95,17 +95,8 @@ int main(int argc, char** argv) {
   print_summary(std::cout, info, r);
   std::cout << "  run time: " << ms << " ms (" << r.bus_messages << " messages on the in-process bus)\n";
   nlohmann::json metrics = metrics_json(info, r);
-  if (!a.baseline.empty()) {  // the same scenario and seed with the baseline's mode
-    RunOverrides bo;
-    bo.mode = Mode::kEkf;
-    parse_mode(a.baseline, &*bo.mode);
-    const TeamConfig bc = apply_overrides(cfg, bo);
-    const RunResult br = run_team(bc);
-    const RunInfo binfo{a.baseline, info.dynamism_percent, info.speed_mps, info.seed, a.config_path,
-                        bc.effective_yaml, command};
-    print_comparison(std::cout, info, r, binfo, br, "in process");
-    metrics["baseline"] = baseline_json(binfo, br, "in process, same scenario and seed");
-  }
+  if (!a.baseline.empty())  // the same scenario and seed with the baseline's mode
+    metrics["baseline"] = run_baseline(cfg, a.config_path, a.baseline, info, r, &std::cout);
   if (!a.out_dir.empty()) {
     try {
       write_outputs(a.out_dir, metrics, r);

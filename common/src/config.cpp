@@ -253,8 +253,12 @@ Document Document::from_file(const std::string& path) {
   return from_string(ss.str(), path);
 }
 
+void Document::know(const std::string& key) {
+  if (std::find(known_.begin(), known_.end(), key) == known_.end()) known_.push_back(key);
+}
+
 void Document::section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional) {
-  known_.push_back(key);
+  know(key);
   const YAML::Node& root = root_;
   YAML::Node n = root[key];
   if (!n.IsDefined() || n.IsNull()) {
@@ -271,11 +275,11 @@ void Document::section(const std::string& key, const std::function<void(Reader&)
 }
 
 void Document::allow(std::initializer_list<const char*> keys) {
-  for (const char* k : keys) known_.emplace_back(k);
+  for (const char* k : keys) know(k);
 }
 
 void Document::allow_sections() {
-  for (const char* k : kSections) known_.emplace_back(k);
+  for (const char* k : kSections) know(k);
 }
 
 void Document::finish() {
@@ -283,9 +287,7 @@ void Document::finish() {
     const std::string k = kv.first.as<std::string>();
     if (std::find(known_.begin(), known_.end(), k) == known_.end()) {
       std::string known;
-      for (std::size_t i = 0; i < known_.size(); ++i)
-        if (std::find(known_.begin(), known_.begin() + static_cast<std::ptrdiff_t>(i), known_[i]) == known_.begin() + static_cast<std::ptrdiff_t>(i))
-          known += (known.empty() ? "" : ", ") + known_[i];
+      for (const std::string& name : known_) known += (known.empty() ? "" : ", ") + name;
       state_->problems.push_back(k + ": unknown section (known sections: " + known + ")");
     }
   }
@@ -295,6 +297,22 @@ void Document::finish() {
 std::string Document::effective_yaml() const {
   YAML::Emitter out;
   out << state_->effective;
+  return out.c_str();
+}
+
+std::string edit_yaml(const std::string& text, const std::function<void(YAML::Node& root)>& edit, bool create) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception&) {  // our own loader's output: not expected
+  }
+  if (!root.IsMap()) {
+    if (!create) return text;
+    root = YAML::Node(YAML::NodeType::Map);
+  }
+  edit(root);
+  YAML::Emitter out;
+  out << root;
   return out.c_str();
 }
 

@@ -2,19 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include "elaslam/common/contract.hpp"
 
 namespace elaslam {
 namespace {
 
-template <typename T>
-std::string str(const char* what, T v) {
-  std::ostringstream os;
-  os << what << " (got " << v << ")";
-  return os.str();
-}
 
 bool finite_cov(const double (&c)[2][2]) {
   for (const auto& row : c)
@@ -59,12 +52,12 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
 }
 
 std::string MainNode::validate(const landmark_event_t& m) const {
-  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return str("robot_id outside [1, 8]", m.robot_id);
-  if (m.seq < 1) return str("seq must be >= 1", m.seq);
-  if (m.frame < 0) return str("frame is negative", m.frame);
-  if (m.kind < landmark_event_t::ADD || m.kind > landmark_event_t::RETURN) return str("unknown kind", int(m.kind));
+  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return contract::got(contract::outside("robot_id", 1, kMaxTeamRobots), m.robot_id);
+  if (m.seq < 1) return contract::got("seq must be >= 1", m.seq);
+  if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  if (m.kind < landmark_event_t::ADD || m.kind > landmark_event_t::RETURN) return contract::got("unknown kind", int(m.kind));
   if (m.landmark_id < 0 || m.landmark_id >= map_.max_landmark_id())
-    return str("landmark_id outside [0, max_landmark_id)", m.landmark_id);
+    return contract::got("landmark_id outside [0, max_landmark_id)", m.landmark_id);
   if (m.kind != landmark_event_t::MOVING) {
     if (!std::isfinite(m.x) || !std::isfinite(m.y) || std::fabs(m.x) > 1e6 || std::fabs(m.y) > 1e6)
       return "position is not finite or beyond 1e6 m";
@@ -74,27 +67,27 @@ std::string MainNode::validate(const landmark_event_t& m) const {
 }
 
 std::string MainNode::validate(const lmap_snapshot_t& m) const {
-  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return str("robot_id outside [1, 8]", m.robot_id);
-  if (m.seq < 0) return str("seq is negative", m.seq);
-  if (m.frame < 0) return str("frame is negative", m.frame);
-  if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks) return str("chunk outside [0, num_chunks)", m.chunk);
+  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return contract::got(contract::outside("robot_id", 1, kMaxTeamRobots), m.robot_id);
+  if (m.seq < 0) return contract::got("seq is negative", m.seq);
+  if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks) return contract::got("chunk outside [0, num_chunks)", m.chunk);
   if (m.id_begin < 0 || m.id_end <= m.id_begin || m.id_end > map_.max_landmark_id())
-    return str("id range not within [0, max_landmark_id), id_begin", m.id_begin);
-  if (!contract::count_fits(m.landmarks, m.num_landmarks)) return str("num_landmarks does not match the array", m.num_landmarks);
-  if (!contract::count_fits(m.moving_ids, m.num_moving)) return str("num_moving does not match the array", m.num_moving);
+    return contract::got("id range not within [0, max_landmark_id), id_begin", m.id_begin);
+  if (!contract::count_fits(m.landmarks, m.num_landmarks)) return contract::got("num_landmarks does not match the array", m.num_landmarks);
+  if (!contract::count_fits(m.moving_ids, m.num_moving)) return contract::got("num_moving does not match the array", m.num_moving);
   int previous = -1;
   for (int k = 0; k < m.num_landmarks; ++k) {
     const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
-    if (l.id < m.id_begin || l.id >= m.id_end) return str("landmark id outside the chunk's range", l.id);
-    if (l.id <= previous) return str("landmark ids not ascending (or repeated), id", l.id);
+    if (l.id < m.id_begin || l.id >= m.id_end) return contract::got("landmark id outside the chunk's range", l.id);
+    if (l.id <= previous) return contract::got("landmark ids not ascending (or repeated), id", l.id);
     previous = l.id;
     if (!std::isfinite(l.x) || !std::isfinite(l.y) || std::fabs(l.x) > 1e6 || std::fabs(l.y) > 1e6)
-      return str("landmark position not finite or beyond 1e6 m, id", l.id);
-    if (!finite_cov(l.cov)) return str("landmark covariance invalid, id", l.id);
+      return contract::got("landmark position not finite or beyond 1e6 m, id", l.id);
+    if (!finite_cov(l.cov)) return contract::got("landmark covariance invalid, id", l.id);
   }
   for (int k = 0; k < m.num_moving; ++k) {
     const int id = m.moving_ids[static_cast<std::size_t>(k)];
-    if (id < m.id_begin || id >= m.id_end) return str("moving id outside the chunk's range", id);
+    if (id < m.id_begin || id >= m.id_end) return contract::got("moving id outside the chunk's range", id);
   }
   return "";
 }

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include "elaslam/common/contract.hpp"
 
@@ -28,11 +27,6 @@ constexpr std::size_t kMaxHeldNotices = 256;  // notices held for frames not pro
 
 bool finite(double v) { return std::isfinite(v); }
 
-std::string str(const char* what, double v) {
-  std::ostringstream os;
-  os << what << " (got " << v << ")";
-  return os.str();
-}
 
 // A snapshot chunk's two kinds of entry (chunks.hpp, prepare_chunks).
 void grow_static(lmap_snapshot_t* m, int n) { contract::set_count(&m->landmarks, &m->num_landmarks, n); }
@@ -65,22 +59,22 @@ void RobotNode::prepare_snapshot_chunks() {
 }
 
 std::string RobotNode::validate(const sensor_frame_t& m) const {
-  if (m.robot_id != robot_id_) return str("robot_id is not this robot's", m.robot_id);
-  if (m.frame < 0) return str("frame is negative", m.frame);
-  if (m.num_obs < 0 || m.num_obs > kMaxObservations) return str(contract::count_outside("num_obs", kMaxObservations).c_str(), m.num_obs);
-  if (!contract::count_fits(m.obs, m.num_obs)) return str("num_obs larger than the obs array", m.num_obs);
+  if (m.robot_id != robot_id_) return contract::got("robot_id is not this robot's", m.robot_id);
+  if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  if (m.num_obs < 0 || m.num_obs > kMaxObservations) return contract::got(contract::count_outside("num_obs", kMaxObservations), m.num_obs);
+  if (!contract::count_fits(m.obs, m.num_obs)) return contract::got("num_obs larger than the obs array", m.num_obs);
   if (!finite(m.odom_x) || !finite(m.odom_y) || !finite(m.odom_theta)) return "odometer reading is not finite";
   if (std::fabs(m.odom_x) > 1e6 || std::fabs(m.odom_y) > 1e6) return "odometer position beyond 1e6 m";
   for (double v : {m.odom_var_trans_per_m, m.odom_var_rot_per_rad, m.odom_var_rot_per_m})
-    if (!finite(v) || v < 0.0 || v > kMaxOdomVar) return str("odometry noise variance not in [0, 1e3]", v);
+    if (!finite(v) || v < 0.0 || v > kMaxOdomVar) return contract::got("odometry noise variance not in [0, 1e3]", v);
   for (int k = 0; k < m.num_obs; ++k) {
     const range_bearing_t& o = m.obs[k];
     if (o.landmark_id < 0 || o.landmark_id >= options_.ekf.max_landmark_id)
-      return str("observation landmark_id outside [0, max_landmark_id)", o.landmark_id);
+      return contract::got("observation landmark_id outside [0, max_landmark_id)", o.landmark_id);
     if (!finite(o.range) || o.range <= 0.0 || o.range > kMaxRange)
-      return str("observation range not in (0, 1e4] m", o.range);
+      return contract::got("observation range not in (0, 1e4] m", o.range);
     if (!finite(o.bearing) || std::fabs(o.bearing) > kPi + kBearingSlack)
-      return str("observation bearing not in [-pi, pi]", o.bearing);
+      return contract::got("observation bearing not in [-pi, pi]", o.bearing);
   }
   return "";
 }
@@ -92,7 +86,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   // Two observations of one landmark in a frame: the contract allows one.
   for (int k = 0; problem.empty() && k < msg.num_obs; ++k) {
     auto& seen = id_seen_[static_cast<std::size_t>(msg.obs[k].landmark_id)];
-    if (seen) problem = str("landmark observed twice in one frame", msg.obs[k].landmark_id);
+    if (seen) problem = contract::got("landmark observed twice in one frame", msg.obs[k].landmark_id);
     seen = 1;
   }
   for (int k = 0; k < msg.num_obs && k < kMaxObservations; ++k) {
@@ -100,7 +94,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
   }
   if (problem.empty() && last_frame_ >= 0 && msg.frame > last_frame_ + options_.max_frame_gap)
-    problem = str("frame jumps further ahead than node.max_frame_gap", msg.frame);
+    problem = contract::got("frame jumps further ahead than node.max_frame_gap", msg.frame);
   if (!problem.empty()) return refused(problem, why), Verdict::kInvalid;
   if (msg.frame == last_frame_) {
     ++counters_.frames_duplicate;
@@ -235,9 +229,9 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
 bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
   std::string problem;
   if (msg.landmark_id < 0 || msg.landmark_id >= options_.ekf.max_landmark_id)
-    problem = str("landmark_id outside [0, max_landmark_id)", msg.landmark_id);
+    problem = contract::got("landmark_id outside [0, max_landmark_id)", msg.landmark_id);
   else if (msg.detected_by < 1 || msg.detected_by > contract::kMaxRobots)
-    problem = str("detected_by outside [1, 8]", msg.detected_by);
+    problem = contract::got(contract::outside("detected_by", 1, contract::kMaxRobots), msg.detected_by);
   if (!problem.empty()) return refused(problem, why);
   auto& had = notice_frame_[static_cast<std::size_t>(msg.landmark_id)];
   had = std::max(had, msg.frame);
@@ -262,12 +256,12 @@ std::string RobotNode::validate(const global_map_t& m) const {
   const int max_id = options_.ekf.max_landmark_id;
   if (m.num_moving < 0 || !contract::count_fits(m.moving_ids, m.num_moving) ||
       !contract::count_fits(m.moving_frames, m.num_moving) || !contract::count_fits(m.moving_by, m.num_moving))
-    return str("num_moving does not match the moving arrays", m.num_moving);
+    return contract::got("num_moving does not match the moving arrays", m.num_moving);
   for (int k = 0; k < m.num_moving; ++k) {
     const auto i = static_cast<std::size_t>(k);
-    if (m.moving_ids[i] < 0 || m.moving_ids[i] >= max_id) return str("moving id outside [0, max_landmark_id)", m.moving_ids[i]);
-    if (m.moving_by[i] < 0 || m.moving_by[i] > contract::kMaxRobots) return str("moving_by outside [0, 8]", m.moving_by[i]);
-    if (m.moving_frames[i] < 0) return str("moving frame is negative", m.moving_frames[i]);
+    if (m.moving_ids[i] < 0 || m.moving_ids[i] >= max_id) return contract::got("moving id outside [0, max_landmark_id)", m.moving_ids[i]);
+    if (m.moving_by[i] < 0 || m.moving_by[i] > contract::kMaxRobots) return contract::got(contract::outside("moving_by", 0, contract::kMaxRobots), m.moving_by[i]);
+    if (m.moving_frames[i] < 0) return contract::got("moving frame is negative", m.moving_frames[i]);
   }
   return "";
 }

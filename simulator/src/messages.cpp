@@ -7,8 +7,8 @@
 
 namespace elaslam::sim {
 
-elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime) {
-  elaslam::sensor_frame_t m{};
+void to_message(const SensorFrame& f, std::int64_t utime, elaslam::sensor_frame_t* out) {
+  elaslam::sensor_frame_t& m = *out;
   m.utime = utime;
   m.frame = f.frame;
   m.robot_id = static_cast<std::int16_t>(f.robot_id);
@@ -26,6 +26,11 @@ elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime) {
     o.range = z.range_m;
     o.bearing = z.bearing_rad;
   }
+}
+
+elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime) {
+  elaslam::sensor_frame_t m{};
+  to_message(f, utime, &m);
   return m;
 }
 
@@ -74,22 +79,14 @@ elaslam::run_info_t to_run_info(const ScenarioOptions& o, const std::string& sce
   m.frames = o.frames;
   m.num_robots = static_cast<std::int16_t>(o.robots.size());  // <= kMaxRobots: checked by check_scenario
   for (std::size_t i = 0; i < o.robots.size() && i < static_cast<std::size_t>(contract::kMaxRobots); ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
-  YAML::Node root;
-  try {
-    root = YAML::Load(effective_yaml);
-  } catch (const YAML::Exception&) {
-    root = YAML::Node(YAML::NodeType::Map);  // the loader produced it: cannot happen; record the facts anyway
-  }
-  if (!root.IsMap()) root = YAML::Node(YAML::NodeType::Map);
-  YAML::Node sc = root["scenario"];
-  sc["frames"] = o.frames;
-  sc["rate_hz"] = o.rate_hz;
-  sc["seed"] = o.seed;
-  sc["dynamism_percent"] = o.dynamism_percent;
-  sc["landmark_speed_mps"] = o.landmark_speed_mps;
-  YAML::Emitter out;
-  out << root;
-  m.config_yaml = out.c_str();
+  m.config_yaml = config::edit_yaml(effective_yaml, [&o](YAML::Node& root) {  // the overrides, recorded
+    YAML::Node sc = root["scenario"];
+    sc["frames"] = o.frames;
+    sc["rate_hz"] = o.rate_hz;
+    sc["seed"] = o.seed;
+    sc["dynamism_percent"] = o.dynamism_percent;
+    sc["landmark_speed_mps"] = o.landmark_speed_mps;
+  });
   return m;
 }
 

@@ -61,25 +61,22 @@ TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
   }
   const auto problems = sim::check_scenario(c.scenario);
   if (!problems.empty()) throw std::invalid_argument("scenario." + problems.front().key + ": " + problems.front().what);
-  // The echo of the effective config follows the overrides.
-  YAML::Node root;
-  try {
-    root = YAML::Load(c.effective_yaml);
-  } catch (const YAML::Exception&) {
-  }
-  if (!root.IsMap()) return c;  // a config built in code (tests): nothing to echo
-  if (root["scenario"].IsMap()) {
-    YAML::Node s = root["scenario"];
-    s["dynamism_percent"] = c.scenario.dynamism_percent;
-    s["landmark_speed_mps"] = c.scenario.landmark_speed_mps;
-    s["seed"] = c.scenario.seed;
-    s["rate_hz"] = c.scenario.rate_hz;
-    s["frames"] = c.scenario.frames;
-  }
-  if (root["robot"].IsMap()) root["robot"]["mode"] = to_string(c.robot.mode);
-  YAML::Emitter out;
-  out << root;
-  c.effective_yaml = out.c_str();
+  // The echo of the effective config follows the overrides (a config built in code,
+  // in tests, has none to echo).
+  c.effective_yaml = config::edit_yaml(
+      c.effective_yaml,
+      [&c](YAML::Node& root) {
+        if (root["scenario"].IsMap()) {
+          YAML::Node s = root["scenario"];
+          s["dynamism_percent"] = c.scenario.dynamism_percent;
+          s["landmark_speed_mps"] = c.scenario.landmark_speed_mps;
+          s["seed"] = c.scenario.seed;
+          s["rate_hz"] = c.scenario.rate_hz;
+          s["frames"] = c.scenario.frames;
+        }
+        if (root["robot"].IsMap()) root["robot"]["mode"] = to_string(c.robot.mode);
+      },
+      /*create=*/false);
   return c;
 }
 
@@ -99,7 +96,7 @@ class SimulatorFrames : public FrameProvider {
     *gt = sim::to_message(world_, utime);
     sensors->resize(static_cast<std::size_t>(world_.num_robots()));
     for (int i = 0; i < world_.num_robots(); ++i)
-      (*sensors)[static_cast<std::size_t>(i)] = sim::to_message(world_.sensor_frame(i), utime);
+      sim::to_message(world_.sensor_frame(i), utime, &(*sensors)[static_cast<std::size_t>(i)]);
   }
 
  private:
@@ -201,7 +198,7 @@ InProcessTeam::InProcessTeam(const RobotOptions& robot_options, const GlobalMapO
     });
   }
   world_.subscribe<ground_truth_t>(channels::ground_truth(), on_truth(), transport::kUnboundedQueue);
-  world_.subscribe<pose_estimate_t>("POSE_[0-9]+", on_pose(), transport::kUnboundedQueue);
+  world_.subscribe<pose_estimate_t>(channels::any_pose(), on_pose(), transport::kUnboundedQueue);
   world_.subscribe<global_map_t>(
       channels::global_map(),
       [this](const global_map_t& g, const std::string&) {

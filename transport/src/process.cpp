@@ -48,16 +48,21 @@ void add_transport_options(CLI::App& app, TransportArgs* args) {
           "[A-Za-z0-9_]*", "channel suffix"));
 }
 
-std::string describe_url(const std::string& url) {
-  if (!url.empty()) return url;
-  const char* env = std::getenv("LCM_DEFAULT_URL");
-  return env ? std::string(env) + " (LCM_DEFAULT_URL)" : std::string("LCM default (udpm://239.255.76.67:7667?ttl=0)");
-}
+namespace {
 
+/// The URL LCM opens: `url`, else $LCM_DEFAULT_URL, else "" (LCM's own default).
 std::string effective_url(const std::string& url) {
   if (!url.empty()) return url;
   const char* env = std::getenv("LCM_DEFAULT_URL");
   return env ? env : "";
+}
+
+}  // namespace
+
+std::string describe_url(const std::string& url) {
+  const std::string used = effective_url(url);
+  if (used.empty()) return "LCM default (udpm://239.255.76.67:7667?ttl=0)";
+  return url.empty() ? used + " (LCM_DEFAULT_URL)" : used;
 }
 
 std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& who) {

@@ -132,7 +132,14 @@ class Document {
   YAML::Node root_;
   std::string source_;
   std::shared_ptr<ParseState> state_;
+  void know(const std::string& key);  // a section name accepted at the top level (once)
   std::vector<std::string> known_;
 };
+
+/// An effective configuration (YAML text) with overrides written into it, so that
+/// what a run records is what ran: `edit` gets the parsed root map. Text that is not
+/// a map (a config built in code has none) is returned unchanged unless `create`,
+/// then the edit starts from an empty map.
+std::string edit_yaml(const std::string& text, const std::function<void(YAML::Node& root)>& edit, bool create = true);
 
 }  // namespace elaslam::config

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <sstream>
 #include <string>
 #include <type_traits>
 
@@ -46,6 +47,19 @@ void set_count(Vec* array, Count* count, int n) {
 template <class Vec>
 bool count_fits(const Vec& array, int count) {
   return count >= 0 && static_cast<std::size_t>(count) <= array.size();
+}
+
+/// "<what> (got <value>)": a refusal that names the offending value.
+template <class T>
+std::string got(const std::string& what, T value) {
+  std::ostringstream os;
+  os << what << " (got " << value << ")";
+  return os.str();
+}
+
+/// "<field> outside [<lo>, <hi>]" (e.g. a robot id against [1, kMaxRobots]).
+inline std::string outside(const char* field, int lo, int hi) {
+  return std::string(field) + " outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
 }
 
 /// "<field> outside [0, <capacity>]": the refusal of a count field, from the constant.

@@ -19,10 +19,11 @@
 #include <Eigen/Core>
 
 #include "elaslam/common/config.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace elaslam {
 
-constexpr int kMaxTeamRobots = 8;
+constexpr int kMaxTeamRobots = contract::kMaxRobots;
 
 enum class Fusion { kInformation, kCovarianceIntersection };
 

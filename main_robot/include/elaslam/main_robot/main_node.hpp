@@ -148,7 +148,7 @@ class MainPorts {
         channels::lmap_snapshot(sfx), [this](const lmap_snapshot_t& m, const std::string&) { on_snapshot(m); },
         queues.snapshot);
     const int p = shell_.template subscribe<pose_estimate_t>(
-        "POSE_[0-9]+" + sfx, [this](const pose_estimate_t& m, const std::string&) { on_pose(m); }, queues.pose);
+        channels::any_pose(sfx), [this](const pose_estimate_t& m, const std::string&) { on_pose(m); }, queues.pose);
     return e > 0 && s > 0 && p > 0;
   }
 

@@ -14,6 +14,9 @@ namespace elaslam::sim {
 
 /// SENSOR_<robot_id>: odometer reading, noise model and observations.
 elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime);
+/// The same into `m`, reusing its observation array (no allocation once it has
+/// held kMaxObsPerFrame observations): a frame source's per-frame path.
+void to_message(const SensorFrame& f, std::int64_t utime, elaslam::sensor_frame_t* m);
 
 /// GROUND_TRUTH: true robot poses (in the order of the scenario's robots) and true
 /// landmark positions with the moving flags, for the world's current frame.

@@ -51,4 +51,10 @@ void print_comparison(std::ostream& out, const RunInfo& info, const RunResult& r
 /// the config and command line (the same as the run's but for the mode), plus `how`.
 nlohmann::json baseline_json(const RunInfo& base_info, const RunResult& base, const std::string& how);
 
+/// The baseline of a run, in process: `config` (the run's scenario and seed, read
+/// from `config_path`) with the robots' mode `mode`, run now; printed beside the run
+/// to `out` (nullptr: not printed). Returns its baseline_json for metrics.json.
+nlohmann::json run_baseline(const TeamConfig& config, const std::string& config_path, const std::string& mode,
+                            const RunInfo& info, const RunResult& r, std::ostream* out);
+
 }  // namespace elaslam

@@ -36,8 +36,6 @@ void add_transport_options(CLI::App& app, TransportArgs* args);
 /// The URL for start-up lines: the given one, else $LCM_DEFAULT_URL (so marked), else
 /// LCM's default.
 std::string describe_url(const std::string& url);
-/// The URL LCM will use: the given one, else $LCM_DEFAULT_URL, else "" (LCM's default).
-std::string effective_url(const std::string& url);
 
 /// The LCM transport for `url`; nullptr, after printing why to stderr as `who`, when
 /// it cannot be opened.
