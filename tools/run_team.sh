@@ -180,9 +180,11 @@ BIN="$BUILD_DIR/bin"
 "$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" --check >"$OUT/logs/check.log" 2>&1 ||
   { sed 's/^/  /' "$OUT/logs/check.log" >&2; die "the configuration with these arguments is not valid"; }
 
-# The mode for the report: the override, else the config's robot.mode.
-config_mode() { awk '/^robot:/ {r = 1; next} /^[^ #]/ {r = 0} r && $1 == "mode:" {print $2; exit}' "$CONFIG"; }
-MODE_NAME="${MODE:-$(config_mode)}"
+# The robots' mode (the override, else the config's robot.mode) as robot_node reads
+# it: its --check validates the robot section and says "valid, mode M".
+"$BIN/robot_node" --config "$CONFIG" --robot 1 ${MODE:+--mode "$MODE"} --check >"$OUT/logs/check_robot.log" 2>&1 ||
+  { sed 's/^/  /' "$OUT/logs/check_robot.log" >&2; die "the robots' configuration is not valid"; }
+MODE_NAME="$(sed -n 's/.*: valid, mode \([a-z]*\)$/\1/p' "$OUT/logs/check_robot.log")"
 BASE_ARGS=()
 [ "$BASELINE" -eq 1 ] && [ "$MODE_NAME" != ekf ] && BASE_ARGS=(--baseline ekf)
 
@@ -251,25 +253,10 @@ make_host() {
   ip -n "$ns" route add 224.0.0.0/4 dev eth0
 }
 
-# add_loss HOST: drop LOSS % of the host's incoming IPv4 UDP packets. Prerouting at
-# priority -450, before defragmentation (-400) and conntrack (-200): each IP fragment
-# is a packet of its own, lost independently, as on a lossy link; every fragment has
-# `ip protocol udp` in its header (the UDP header is in the first one only). The
-# host's own multicast, looped back to it, is not incoming (ip saddr). Two counters:
-# every incoming UDP packet, and those dropped (loss_report).
-add_loss() {
-  local ns="${HOST_NS[$1]}" ip="${HOST_IP[$1]}" permille
-  permille=$(awk -v p="$LOSS" 'BEGIN { printf "%d", p * 10 + 0.5 }')
-  ip netns exec "$ns" nft -f - <<EOF
-table inet elaslam_loss {
-  chain pre {
-    type filter hook prerouting priority -450; policy accept;
-    ip protocol udp ip saddr != $ip counter comment "incoming"
-    ip protocol udp ip saddr != $ip numgen random mod 1000 < $permille counter drop comment "dropped"
-  }
-}
-EOF
-}
+# add_loss HOST: drop LOSS % of the host's incoming UDP packets (tools/loss_rule.sh).
+# shellcheck source=tools/loss_rule.sh
+. "$ROOT/tools/loss_rule.sh"
+add_loss() { install_loss_rule "${HOST_NS[$1]}" "${HOST_IP[$1]}" "$LOSS"; }
 
 # loss_report: per host, incoming UDP packets and those dropped (DIR/loss.csv), and a
 # line; also the host's IP reassembly: datagrams reassembled from fragments, and

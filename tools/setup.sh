@@ -4,7 +4,7 @@
 # Idempotent and fast when everything is there.
 #   tools/setup.sh [--build-dir DIR] [--sanitize] [--no-python] [--with-test-tools] [--with-spy]
 # --with-test-tools: also what the tests need beyond building and running the team
-#   (Debian packaging, systemd-analyze, Xvfb, a Java runtime for lcm-spy);
+#   (Debian packaging, systemd-analyze, Xvfb, a Java runtime for lcm-spy, nftables);
 #   tools/run_tests.sh passes it. --with-spy: what tools/spy.sh needs (Java, Xlibs).
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
@@ -21,7 +21,7 @@ while [ $# -gt 0 ]; do
     --no-python) PYTHON=0; shift ;;
     --with-test-tools) TEST_TOOLS=1; SPY=1; shift ;;
     --with-spy) SPY=1; shift ;;
-    -h|--help) sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "setup.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/simulator/lockstep.hpp"
 #include "elaslam/simulator/messages.hpp"
@@ -25,7 +26,13 @@ class SimNode {
   SimNode(transport::NodeShell& shell, const ScenarioOptions& o, const SimRunOptions& r)
       : shell_(shell), o_(o), r_(r), world_(o), sensor_msgs_(o.robots.size()),
         truth_(std::make_unique<ground_truth_t>()),  // ~10 KB: off the stack
-        info_(to_run_info(o, r.config_path, r.effective_yaml, r.team_mode, shell.now_utime())) {}
+        info_(to_run_info(o, r.config_path, r.effective_yaml, r.team_mode, shell.now_utime())),
+        truth_channel_(channels::ground_truth(shell.suffix())) {
+    for (std::size_t i = 0; i < o.robots.size(); ++i) {  // built once: no allocation in a frame's burst
+      sensor_channels_.push_back(channels::sensor(o.robots[i].id, shell.suffix()));
+      sensor_msgs_[i].obs.reserve(contract::kMaxObsPerFrame);
+    }
+  }
 
   int run();
 
@@ -49,6 +56,8 @@ class SimNode {
   std::vector<sensor_frame_t> sensor_msgs_;
   std::unique_ptr<ground_truth_t> truth_;
   run_info_t info_;
+  const std::string truth_channel_;
+  std::vector<std::string> sensor_channels_;  // per robot, in the scenario's order
 };
 
 int SimNode::run() {
@@ -105,7 +114,7 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
   const std::int64_t t_work = mono_ns();
   if (k > 0) world_.step();
   for (int r = 0; r < world_.num_robots(); ++r)
-    sensor_msgs_[static_cast<std::size_t>(r)] = to_message(world_.sensor_frame(r), 0);
+    to_message(world_.sensor_frame(r), 0, &sensor_msgs_[static_cast<std::size_t>(r)]);
   *truth_ = to_message(world_, 0);
   stats_.processing.add((mono_ns() - t_work) / 1000);
   const std::int64_t deadline = schedule.deadline_ns(k);
@@ -113,12 +122,12 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
 
   const std::int64_t t_pub = mono_ns();
   const std::int64_t utime = shell_.now_utime();  // one stamp for the whole frame
-  for (auto& m : sensor_msgs_) {
-    m.utime = utime;
-    if (!shell_.publish(channels::sensor(m.robot_id, shell_.suffix()), m)) ++publish_errors_;
+  for (std::size_t i = 0; i < sensor_msgs_.size(); ++i) {
+    sensor_msgs_[i].utime = utime;
+    if (!shell_.publish(sensor_channels_[i], sensor_msgs_[i])) ++publish_errors_;
   }
   truth_->utime = utime;
-  if (!shell_.publish(channels::ground_truth(shell_.suffix()), *truth_)) ++publish_errors_;
+  if (!shell_.publish(truth_channel_, *truth_)) ++publish_errors_;
   const std::int64_t late_ns = stats_.record(k, t_pub, deadline, schedule.period_ns());
   if (late_ns > ScheduleStats::kLateNs && stats_.late <= kLateReported) {
     char buf[160];

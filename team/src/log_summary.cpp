@@ -108,27 +108,16 @@ struct ChannelClass {
   const char* type = "other";
 };
 
-// <prefix><r> with r a positive decimal robot id (no sign, no suffix), else -1.
-int robot_suffix(const std::string& ch, const std::string& prefix) {
-  if (ch.size() <= prefix.size() || ch.size() > prefix.size() + 6 || ch.compare(0, prefix.size(), prefix) != 0)
-    return -1;
-  int id = 0;
-  for (std::size_t i = prefix.size(); i < ch.size(); ++i) {
-    if (ch[i] < '0' || ch[i] > '9') return -1;
-    id = id * 10 + (ch[i] - '0');
-  }
-  return id > 0 ? id : -1;
-}
-
 // Channel names of channels.hpp without a suffix; anything else is "other".
 ChannelClass classify(const std::string& ch) {
-  if (int r = robot_suffix(ch, "SENSOR_"); r > 0) return {Kind::kSensor, r, "sensor_frame_t"};
-  if (int r = robot_suffix(ch, "POSE_"); r > 0) return {Kind::kPose, r, "pose_estimate_t"};
-  if (int r = robot_suffix(ch, "STATUS_ROBOT_"); r > 0) return {Kind::kStatusRobot, r, "node_status_t"};
+  if (int r = channels::robot_of(ch, "SENSOR_"); r > 0) return {Kind::kSensor, r, "sensor_frame_t"};
+  if (int r = channels::robot_of(ch, "POSE_"); r > 0) return {Kind::kPose, r, "pose_estimate_t"};
+  if (int r = channels::robot_of(ch, "STATUS_ROBOT_"); r > 0) return {Kind::kStatusRobot, r, "node_status_t"};
   if (ch == channels::status_main() || ch == channels::status_sim()) return {Kind::kStatus, -1, "node_status_t"};
   if (ch == channels::ground_truth()) return {Kind::kGroundTruth, -1, "ground_truth_t"};
   if (ch == channels::lmap_event()) return {Kind::kLmapEvent, -1, "landmark_event_t"};
   if (ch == channels::lmap_snapshot()) return {Kind::kLmapSnapshot, -1, "lmap_snapshot_t"};
+  if (ch == channels::lmap_resync()) return {Kind::kOther, -1, "resync_request_t"};
   if (ch == channels::global_map()) return {Kind::kGlobalMap, -1, "global_map_t"};
   if (ch == channels::dynamic_notice()) return {Kind::kDynamicNotice, -1, "dynamic_notice_t"};
   if (ch == channels::run_info()) return {Kind::kRunInfo, -1, "run_info_t"};

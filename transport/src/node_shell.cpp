@@ -90,6 +90,7 @@ NodeShell::Exit NodeShell::spin(int slice_ms) {
       if (now < t.next) continue;
       t.fn();
       t.next += t.period;
+      if (t.next <= now) t.next = now + t.period;  // after a stall: once, not once per missed period
     }
   }
   return Exit::kStopped;
