@@ -8,18 +8,18 @@
 #     measured loss near 20 %), the lossless run has no loss table;
 #   - robot 2 was killed and restarted once (faults.log, evaluate's restarts) and
 #     published POSE_2 again after the restart.
-# The targets (the table's pass/fail: static landmarks within 2 of the lossless run,
-# map error within 1.2x, moving landmarks deleted, robot 2 within 1.5x) are asserted
-# only with ASSERT_TARGETS=1: switch it on once the fault-tolerance work has landed.
+# The fault-tolerance targets (docs/faults.md): with 20 % loss and after the kill every
+# moving landmark the robots detected is deleted from the map and its static
+# landmarks are within 2 of the lossless run's; the killed robot (resumed from its
+# state file) meets every target. The map error within 1.2x under loss only with
+# ASSERT_TARGETS=1 (not met yet: the robots' own SENSOR frames are lost too).
 # Ports 7711-7713 (one per run; each run has namespaces of its own anyway).
 # Exit 77 (skip) without root, ip netns, nft or the Python venv.
 #   tests/system/fault_loss.sh BUILD_DIR
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD="$(cd "${1:?usage: fault_loss.sh BUILD_DIR}" && pwd)"
-# ---- switch on when the protocol changes (fault tolerance) have landed ----------
 ASSERT_TARGETS=${ASSERT_TARGETS:-0}
-# ----------------------------------------------------------------------------------
 [ "$(id -u)" -eq 0 ] || { echo "fault_loss: skipped (needs root for network namespaces)"; exit 77; }
 ip netns list >/dev/null 2>&1 || { echo "fault_loss: skipped (no ip netns)"; exit 77; }
 command -v nft >/dev/null || { echo "fault_loss: skipped (no nft: Debian package nftables)"; exit 77; }
@@ -57,12 +57,22 @@ if int(kill.get("robot2_poses_after_restart") or 0) < 10:
     fails.append(f"kill: robot 2 published {kill.get('robot2_poses_after_restart')} poses after its restart")
 else:
     print(f"fault_loss: robot 2 killed after frame 60, restarted, {kill['robot2_poses_after_restart']} poses after")
-if assert_targets:  # the targets of docs/faults.md (the table's pass/fail)
-    for r in (lossy, kill):
-        if r.get("result") != "pass":
-            fails.append(f"{r.get('run')}: targets not met: {r.get('failed_targets')}")
+# The targets the message protocol meets (docs/faults.md): under loss and after the
+# kill, every moving landmark the robots detected is deleted from the final map and
+# its static landmarks are within 2 of the lossless run's; the robot resumed from
+# its state file: its error and the map's within the targets too.
+for r in (lossy, kill):
+    if r.get("moving_deleted") != r.get("moving_detected"):
+        fails.append(f"{r.get('run')}: {r.get('moving_deleted')} of {r.get('moving_detected')} moving landmarks deleted")
+    if abs(int(r.get("map_static_vs_lossless") or 99)) > 2:
+        fails.append(f"{r.get('run')}: static landmarks {r.get('map_static_vs_lossless')} against the lossless run")
+if kill.get("result") != "pass":
+    fails.append(f"kill: targets not met: {kill.get('failed_targets')}")
+if assert_targets:  # also the map error under loss (1.2x), not met at 20 % (lost SENSOR frames: docs/faults.md)
+    if lossy.get("result") != "pass":
+        fails.append(f"loss: targets not met: {lossy.get('failed_targets')}")
 else:
-    print("fault_loss: targets not asserted (ASSERT_TARGETS=0; the table above says pass/fail)")
+    print("fault_loss: the map error under loss not asserted (ASSERT_TARGETS=0; the table above has it)")
 if fails:
     print("\n".join("fault_loss: " + f for f in fails)); sys.exit(1)
 print("fault_loss: ok")
