@@ -24,6 +24,10 @@ import os
 import re
 import sys
 
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import add_version, parse_args  # noqa: E402  (standard library only)
+
 STATIC_TOL = 2
 ERROR_FACTOR = 1.2
 ROBOT_FACTOR = 1.5
@@ -160,12 +164,13 @@ def judge(row, ref, fault):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="fault_summary.py", description=__doc__.split("\n\n")[0])
+    add_version(ap)
     ap.add_argument("--out", required=True)
     ap.add_argument("--build-dir", required=True)
     ap.add_argument("--kill-robot", type=int, default=2)
     ap.add_argument("names", nargs="+")
-    args = ap.parse_args()
+    args = parse_args(ap)
     sys.path.insert(0, os.path.join(args.build_dir, "lcmgen", "python"))
     import elaslam as types
 
