@@ -169,7 +169,7 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
 
 bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id_begin, int id_end,
                                const std::vector<std::pair<int, RobotEstimate>>& lms, const std::vector<int>& moving_ids,
-                               std::vector<Notice>* notices) {
+                               const std::vector<int>& moving_frames, std::vector<Notice>* notices) {
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
   const std::size_t r = static_cast<std::size_t>(robot_id - 1);
   if (seq < s.snapshot_seq) return false;  // an older snapshot than one applied: it would roll the map back
@@ -182,20 +182,26 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
   const bool missed = s.gap_pending;
   // Moving ids first: a MOVING event lost in a gap is recovered here.
   if (missed) {
-    for (int id : moving_ids) {
+    for (std::size_t k = 0; k < moving_ids.size(); ++k) {
+      const int id = moving_ids[k];
+      const int found = k < moving_frames.size() ? moving_frames[k] : -1;  // -1: unknown
       const GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
       if (g.status == GlobalStatus::kMoving || g.status_frame > frame) continue;
-      if (g.by_robot[r].valid || (g.status == GlobalStatus::kStatic && !g.history_unknown && g.moving_by == 0)) {
-        // r held it here and now lists it as moving, or it has never moved as far as
-        // this map knows (events or the state file): r's MOVING event was lost.
+      const bool newer = g.status == GlobalStatus::kStatic && found > g.status_frame;
+      if (g.by_robot[r].valid || newer ||
+          (g.status == GlobalStatus::kStatic && !g.history_unknown && g.moving_by == 0)) {
+        // r held it here and now lists it as moving, r found it moving after this map
+        // last changed its status, or it has never moved as far as this map knows
+        // (events or the state file): r's MOVING event was lost.
         remove_as_moving(id, robot_id, frame, notices);
       } else if (g.contributors() == 0) {
         // r's opinion of unknown age, about a landmark no robot holds here (also one
         // this map has not seen: its ADD was lost too, as after a restart).
         remove_as_moving(id, robot_id, frame, notices, /*unconfirmed=*/true);
       }
-      // Else another robot holds it static: r's listing may be stale (a robot lists
-      // a landmark as moving until it sees it again, after others took it back).
+      // Else another robot holds it static since before r's finding, or r's finding
+      // is of unknown age: r's listing may be stale (a robot lists a landmark as moving
+      // until it sees it again, after others took it back).
     }
   }
   for (int id = id_begin; id < id_end; ++id) entries_[static_cast<std::size_t>(id)].by_robot[r].valid = false;

@@ -42,6 +42,7 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   notices_.reserve(max_id);
   snap_lms_.reserve(max_id);  // a valid chunk lists each id at most once (validate)
   snap_moving_.reserve(max_id);
+  snap_moving_frames_.reserve(max_id);
   resyncs_.reserve(kMaxTeamRobots * 4);
   taken_.reserve(kMaxTeamRobots * 4);
   static_ids_.reserve(max_id);
@@ -74,7 +75,8 @@ std::string MainNode::validate(const lmap_snapshot_t& m) const {
   if (m.id_begin < 0 || m.id_end <= m.id_begin || m.id_end > map_.max_landmark_id())
     return contract::got("id range not within [0, max_landmark_id), id_begin", m.id_begin);
   if (!contract::count_fits(m.landmarks, m.num_landmarks)) return contract::got("num_landmarks does not match the array", m.num_landmarks);
-  if (!contract::count_fits(m.moving_ids, m.num_moving)) return contract::got("num_moving does not match the array", m.num_moving);
+  if (!contract::count_fits(m.moving_ids, m.num_moving) || !contract::count_fits(m.moving_frames, m.num_moving))
+    return contract::got("num_moving does not match the arrays", m.num_moving);
   int previous = -1;
   for (int k = 0; k < m.num_landmarks; ++k) {
     const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
@@ -88,6 +90,8 @@ std::string MainNode::validate(const lmap_snapshot_t& m) const {
   for (int k = 0; k < m.num_moving; ++k) {
     const int id = m.moving_ids[static_cast<std::size_t>(k)];
     if (id < m.id_begin || id >= m.id_end) return contract::got("moving id outside the chunk's range", id);
+    const int found = m.moving_frames[static_cast<std::size_t>(k)];
+    if (found < -1 || found > m.frame) return contract::got("moving frame not in [-1, the snapshot's frame]", found);
   }
   return "";
 }
@@ -180,12 +184,17 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
   }
   snap_lms_.clear();
   snap_moving_.clear();
+  snap_moving_frames_.clear();
   for (int k = 0; k < m.num_landmarks; ++k) {
     const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
     snap_lms_.push_back({l.id, RobotEstimate{true, {l.x, l.y}, to_matrix(l.cov), m.frame}});
   }
-  for (int k = 0; k < m.num_moving; ++k) snap_moving_.push_back(m.moving_ids[static_cast<std::size_t>(k)]);
-  if (!map_.apply_snapshot(m.robot_id, m.seq, m.frame, m.id_begin, m.id_end, snap_lms_, snap_moving_, &pending_)) {
+  for (int k = 0; k < m.num_moving; ++k) {
+    snap_moving_.push_back(m.moving_ids[static_cast<std::size_t>(k)]);
+    snap_moving_frames_.push_back(m.moving_frames[static_cast<std::size_t>(k)]);
+  }
+  if (!map_.apply_snapshot(m.robot_id, m.seq, m.frame, m.id_begin, m.id_end, snap_lms_, snap_moving_,
+                           snap_moving_frames_, &pending_)) {
     ++counters_.stale_snapshots;
     return true;
   }

@@ -57,8 +57,9 @@ void LMap::restart_streak(LMapEntry* e, int sightings) {
 // or missing, a candidate inconsistent moving_after times, a dynamic notice): from
 // now on it needs return_frames consistent sightings to come back, and coming back
 // is a RETURN.
-void LMap::become_moving(LMapEntry* e) {
+void LMap::become_moving(LMapEntry* e, int frame) {
   e->was_moving = e->reported_moving = true;
+  e->moving_frame = frame;
   ++e->times_moving;
 }
 
@@ -92,7 +93,7 @@ bool LMap::candidate_consistent(int id) {
 bool LMap::candidate_inconsistent(int id) {
   LMapEntry& e = at(id);
   if (++e.outside_streak < rules_.moving_after || e.reported_moving) return false;
-  become_moving(&e);
+  become_moving(&e, e.last_seen_frame);  // seen in this frame (seen() comes first)
   return true;
 }
 
@@ -132,7 +133,7 @@ const Eigen::Vector2d& LMap::add_drift(int id, double lambda, const Eigen::Vecto
 
 void LMap::found_moving(int id, int frame, bool reanchored) {
   LMapEntry& e = at(id);
-  become_moving(&e);
+  become_moving(&e, frame);
   e.missing_frames = 0;
   e.outside_streak = 0;
   e.moved_frame = frame;
@@ -145,7 +146,7 @@ void LMap::found_moving(int id, int frame, bool reanchored) {
 
 void LMap::told_moving(int id, int frame, bool left_filter) {
   LMapEntry& e = at(id);
-  become_moving(&e);
+  become_moving(&e, frame);
   if (!left_filter) return;
   set_status(id, LandmarkStatus::kMoving, frame);
   restart_streak(&e, 0);

@@ -30,7 +30,10 @@ bool finite(double v) { return std::isfinite(v); }
 
 // A snapshot chunk's two kinds of entry (chunks.hpp, prepare_chunks).
 void grow_static(lmap_snapshot_t* m, int n) { contract::set_count(&m->landmarks, &m->num_landmarks, n); }
-void grow_moving(lmap_snapshot_t* m, int n) { contract::set_count(&m->moving_ids, &m->num_moving, n); }
+void grow_moving(lmap_snapshot_t* m, int n) {
+  contract::set_count(&m->moving_ids, &m->num_moving, n);
+  m->moving_frames.resize(static_cast<std::size_t>(n));
+}
 
 void set_cov2(double (&dst)[2][2], const Eigen::Matrix2d& C) {
   for (int r = 0; r < 2; ++r)
@@ -220,8 +223,11 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
       set_cov2(l.cov, f.landmark_cov(id));
     }
     grow_moving(&c, sp.count_b);
-    for (int i = 0; i < sp.count_b; ++i)
-      c.moving_ids[static_cast<std::size_t>(i)] = moving_ids_[static_cast<std::size_t>(sp.first_b + i)];
+    for (int i = 0; i < sp.count_b; ++i) {
+      const int id = moving_ids_[static_cast<std::size_t>(sp.first_b + i)];
+      c.moving_ids[static_cast<std::size_t>(i)] = id;
+      c.moving_frames[static_cast<std::size_t>(i)] = lm[id].moving_frame;
+    }
   }
   return num_chunks_;
 }

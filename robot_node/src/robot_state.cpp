@@ -125,6 +125,7 @@ const IntField kEntryInts[] = {
     {"status_frame", &LMapEntry::status_frame, -1},
     {"reported_frame", &LMapEntry::reported_frame, kMinReportedFrame},
     {"moved_frame", &LMapEntry::moved_frame, -1},
+    {"moving_frame", &LMapEntry::moving_frame, -1},
     {"times_moving", &LMapEntry::times_moving, 0},
     {"innovations", &LMapEntry::innovations, 0},
 };

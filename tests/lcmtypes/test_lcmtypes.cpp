@@ -52,7 +52,8 @@ struct TwoArrays {
   static void fill(T* m) {
     contract::set_count(&m->landmarks, &m->num_landmarks, 3);
     contract::set_count(&m->moving_ids, &m->num_moving, 2);
-    if constexpr (std::is_same_v<T, global_map_t>) m->moving_frames.resize(2), m->moving_by.resize(2);
+    m->moving_frames.resize(2);
+    if constexpr (std::is_same_v<T, global_map_t>) m->moving_by.resize(2);
   }
   static std::vector<std::size_t> counts(const T& m) {
     T empty{};

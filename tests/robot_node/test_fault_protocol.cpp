@@ -184,10 +184,10 @@ TEST(GlobalMapChunks, OrderDoesNotMatterAndAGapNeedsEveryRange) {
   ASSERT_TRUE(chunked.stream(1).gap_pending);
   whole.apply_snapshot(1, 5, 10, {{3, est(3)}, {12, est(12)}, {25, est(25)}}, {}, &notices);
   EXPECT_FALSE(whole.stream(1).gap_pending);
-  chunked.apply_snapshot(1, 5, 10, 20, 30, {{25, est(25)}}, {}, &notices);  // the last range first
-  chunked.apply_snapshot(1, 5, 10, 0, 10, {{3, est(3)}}, {}, &notices);
+  chunked.apply_snapshot(1, 5, 10, 20, 30, {{25, est(25)}}, {}, {}, &notices);  // the last range first
+  chunked.apply_snapshot(1, 5, 10, 0, 10, {{3, est(3)}}, {}, {}, &notices);
   EXPECT_TRUE(chunked.stream(1).gap_pending);  // ids 10..19 not covered yet
-  chunked.apply_snapshot(1, 5, 10, 10, 20, {{12, est(12)}}, {}, &notices);
+  chunked.apply_snapshot(1, 5, 10, 10, 20, {{12, est(12)}}, {}, {}, &notices);
   EXPECT_FALSE(chunked.stream(1).gap_pending);
   for (int id = 0; id < 30; ++id) {
     EXPECT_EQ(whole.entry(id).status, chunked.entry(id).status) << id;
@@ -195,8 +195,47 @@ TEST(GlobalMapChunks, OrderDoesNotMatterAndAGapNeedsEveryRange) {
   }
   EXPECT_FALSE(chunked.entry(4).by_robot[0].valid);  // not in the snapshot: no longer in robot 1's map
   // An older snapshot after a newer one is ignored (it would roll the map back).
-  EXPECT_FALSE(chunked.apply_snapshot(1, 4, 9, 0, 10, {}, {}, &notices));
+  EXPECT_FALSE(chunked.apply_snapshot(1, 4, 9, 0, 10, {}, {}, {}, &notices));
   EXPECT_TRUE(chunked.entry(3).by_robot[0].valid);
+}
+
+// A MOVING event lost for a landmark the finder never had static (a candidate found
+// moving), while another robot holds it: the finder's snapshot lists it with the frame
+// it was found moving. Newer than the map's last status change: the event's stand-in;
+// older (the other robot took it back since): a stale listing, kept static.
+TEST(GlobalMapChunks, AListedFindingNewerThanTheMapStandsInForALostMovingEvent) {
+  GlobalMapOptions o;
+  o.max_landmark_id = 30;
+  std::vector<Notice> notices;
+  for (const int found : {40, 10}) {
+    SCOPED_TRACE(found);
+    GlobalMap m(o);
+    GlobalEvent g;  // 7 moved before: robot 3 found it moving at 15, robot 2 took it back at 20
+    g.landmark_id = 7, g.cov = Eigen::Matrix2d::Identity() * 0.01;
+    g.robot_id = 2, g.seq = 1, g.kind = landmark_event_t::ADD, g.frame = 5;
+    m.apply(g, &notices);
+    g.robot_id = 3, g.seq = 1, g.kind = landmark_event_t::MOVING, g.frame = 15;
+    m.apply(g, &notices);
+    g.robot_id = 2, g.seq = 2, g.kind = landmark_event_t::RETURN, g.frame = 20;
+    m.apply(g, &notices);
+    ASSERT_EQ(m.entry(7).status, GlobalStatus::kStatic);
+    GlobalEvent e;
+    e.robot_id = 1, e.seq = 1, e.kind = landmark_event_t::ADD, e.landmark_id = 3, e.frame = 5;
+    e.cov = Eigen::Matrix2d::Identity() * 0.01;
+    m.apply(e, &notices);
+    e.seq = 3, e.landmark_id = 4, e.frame = 41;  // robot 1's seq 2 (MOVING of 7) lost
+    m.apply(e, &notices);
+    notices.clear();
+    m.apply_snapshot(1, 3, 42, 0, 30, {}, {7}, {found}, &notices);
+    if (found > 20) {
+      EXPECT_EQ(m.entry(7).status, GlobalStatus::kMoving);
+      ASSERT_EQ(notices.size(), 1u);  // the other robots are told
+      EXPECT_EQ(notices[0].landmark_id, 7);
+    } else {
+      EXPECT_EQ(m.entry(7).status, GlobalStatus::kStatic);
+      EXPECT_TRUE(notices.empty());
+    }
+  }
 }
 
 landmark_event_t event(int robot, std::int64_t incarnation, std::int64_t seq, int id, int frame) {

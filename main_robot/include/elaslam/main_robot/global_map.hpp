@@ -132,14 +132,17 @@ class GlobalMap {
   /// ids it holds as moving (applied only while a gap is pending for r).
   void apply_snapshot(int robot_id, std::int64_t seq, int frame, const std::vector<std::pair<int, RobotEstimate>>& lms,
                       const std::vector<int>& moving_ids, std::vector<Notice>* notices) {
-    apply_snapshot(robot_id, seq, frame, 0, max_landmark_id(), lms, moving_ids, notices);
+    apply_snapshot(robot_id, seq, frame, 0, max_landmark_id(), lms, moving_ids, {}, notices);
   }
   /// The same within the ids [id_begin, id_end) only (one chunk of a snapshot); `lms`
-  /// and `moving_ids` lie in that range. A chunk older than the robot's newest
-  /// applied snapshot is ignored (returns false).
+  /// and `moving_ids` lie in that range; `moving_frames` (when given, one per moving
+  /// id) the frame the robot found each one moving: newer than this map's last
+  /// status change, it stands in for a lost MOVING event even when another robot
+  /// still holds the landmark. A chunk older than the robot's newest applied snapshot
+  /// is ignored (returns false).
   bool apply_snapshot(int robot_id, std::int64_t seq, int frame, int id_begin, int id_end,
                       const std::vector<std::pair<int, RobotEstimate>>& lms, const std::vector<int>& moving_ids,
-                      std::vector<Notice>* notices);
+                      const std::vector<int>& moving_frames, std::vector<Notice>* notices);
 
   /// Robot r's messages carry `incarnation`; `frame` is the message's frame. A newer
   /// incarnation than the current one starts r's stream over (its seq restarts at 1,

@@ -108,7 +108,7 @@ class MainNode {
   std::vector<ChunkSpan> spans_;
   std::vector<global_map_t> chunks_;
   std::vector<std::pair<int, RobotEstimate>> snap_lms_;
-  std::vector<int> snap_moving_;
+  std::vector<int> snap_moving_, snap_moving_frames_;
 };
 
 /// Receive queue bounds of main_robot's inputs (LCM's default of 30 drops silently:

@@ -20,6 +20,7 @@ inline void reserve_arrays(sensor_frame_t* m) { m->obs.reserve(kMaxCount); }
 inline void reserve_arrays(lmap_snapshot_t* m) {
   m->landmarks.reserve(kMaxCount);
   m->moving_ids.reserve(kMaxCount);
+  m->moving_frames.reserve(kMaxCount);
 }
 inline void reserve_arrays(global_map_t* m) {
   m->landmarks.reserve(kMaxCount);
