@@ -92,8 +92,10 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     if (seen) problem = contract::got("landmark observed twice in one frame", msg.obs[k].landmark_id);
     seen = 1;
   }
-  for (int k = 0; k < msg.num_obs && k < kMaxObservations; ++k) {
-    const int id = msg.obs[k].landmark_id;
+  // Clear the marks; a refused count may exceed the array (the obs are variable-length).
+  const int marked = contract::bounded(msg.num_obs, static_cast<int>(std::min<std::size_t>(msg.obs.size(), kMaxObservations)));
+  for (int k = 0; k < marked; ++k) {
+    const int id = msg.obs[static_cast<std::size_t>(k)].landmark_id;
     if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
   }
   if (problem.empty() && last_frame_ >= 0 && msg.frame > last_frame_ + options_.max_frame_gap)

@@ -44,8 +44,8 @@ void set_pose(std::size_t index, const pose_estimate_t& p, FrameData* f) {
 }
 
 void add_observed(const sensor_frame_t& s, std::vector<int>* observed) {
-  for (int o = 0; o < contract::bounded(s.num_obs, contract::kMaxObsPerFrame); ++o)
-    observed->push_back(s.obs[o].landmark_id);
+  for (int o = 0; o < contract::bounded(s.num_obs, static_cast<int>(s.obs.size())); ++o)
+    observed->push_back(s.obs[static_cast<std::size_t>(o)].landmark_id);
 }
 
 void read_map(const global_map_t& g, std::vector<std::pair<int, Eigen::Vector2d>>* landmarks, std::vector<int>* moving) {
