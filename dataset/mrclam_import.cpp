@@ -1,7 +1,7 @@
 // mrclam_import: one UTIAS MRCLAM recording as an LCM log of the system's messages
 // (GROUND_TRUTH, then SENSOR_<id> per robot, every frame; event time = frame utime).
 //   mrclam_import --dataset DIR [--config FILE] [--rate F] [--robots 1,2,3,4,5]
-//                 [--with-robot-barcodes] [--start S] [--duration T] --out FILE.lcmlog
+//                 [--with-robot-barcodes] [--start S] [--duration T] [--check] --out FILE.lcmlog
 // Exit codes: 0 done, 1 bad data or an output error, 2 bad arguments or config.
 #include <algorithm>
 #include <cstdio>
@@ -83,47 +83,46 @@ run_info_t run_info(const mrclam::FrameSource& src, const mrclam::Options& o, co
 
 struct Args {
   std::string dataset_dir, config_path, robots, out_path;
-  double rate = -1.0, start = -1.0, duration = -1.0;
-  bool with_robot_barcodes = false;
+  double rate = 0.0, start = 0.0, duration = 0.0;
+  bool rate_given = false, start_given = false, duration_given = false;  // the options given override the config
+  bool with_robot_barcodes = false, check = false;
 };
 
 /// -1 to go on, else the exit code.
 int parse_args(int argc, char** argv, Args* a) {
+  namespace lim = mrclam::limits;
   CLI::App app{"elaslam mrclam_import: a UTIAS MRCLAM recording as an LCM log (SENSOR_<id>, GROUND_TRUTH)"};
   app.add_option("--dataset", a->dataset_dir, "dataset directory (RobotN_*.dat, Barcodes.dat, ...)")
       ->required()
       ->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "mrclam_import");
   cli::add_config_option(app, &a->config_path, "its dataset: section", "mrclam.yaml");
-  app.add_option("--rate", a->rate, "frames per second (default dataset.rate_hz)")->check(CLI::Range(0.1, 1000.0));
+  auto* rate = app.add_option("--rate", a->rate, "frames per second (default dataset.rate_hz)")
+                    ->check(cli::range(lim::kRateMinHz, lim::kRateMaxHz));
   app.add_option("--robots", a->robots, "robots to import, e.g. 1,2,3,4,5 (default dataset.robots)");
   app.add_flag("--with-robot-barcodes", a->with_robot_barcodes, "keep other robots' barcodes as moving landmarks");
-  app.add_option("--start", a->start, "[s] first frame after the common start (default dataset.start_s)")
-      ->check(CLI::Range(0.0, 1e5));
-  app.add_option("--duration", a->duration, "[s] length, 0 = to the common end (default dataset.duration_s)")
-      ->check(CLI::Range(0.0, 1e5));
+  auto* start = app.add_option("--start", a->start, "[s] first frame after the common start (default dataset.start_s)")
+                     ->check(cli::range(0.0, lim::kStartMaxS));
+  auto* duration =
+      app.add_option("--duration", a->duration, "[s] length, 0 = to the common end (default dataset.duration_s)")
+          ->check(cli::range(0.0, lim::kDurationMaxS));
   app.add_option("--out", a->out_path, "output LCM log")->required();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  app.add_flag("--check", a->check, "check the configuration with the overrides and exit (0: valid); reads no data");
+  if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
+  a->rate_given = rate->count() > 0;
+  a->start_given = start->count() > 0;
+  a->duration_given = duration->count() > 0;
   return -1;
 }
 
 /// The config's dataset section with the command line's overrides; false (the
-/// reason printed) on a bad config or argument.
+/// reason printed) on a bad argument. A bad config throws ConfigError.
 bool options(Args* a, mrclam::Options* o, std::string* effective_yaml) {
-  try {
-    a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
-    *o = mrclam::load_options(a->config_path, effective_yaml);
-  } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "mrclam_import: %s\n", e.what());
-    return false;
-  }
-  if (a->rate > 0.0) o->rate_hz = a->rate;
-  if (a->start >= 0.0) o->start_s = a->start;
-  if (a->duration >= 0.0) o->duration_s = a->duration;
+  a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
+  *o = mrclam::load_options(a->config_path, effective_yaml);
+  if (a->rate_given) o->rate_hz = a->rate;
+  if (a->start_given) o->start_s = a->start;
+  if (a->duration_given) o->duration_s = a->duration;
   if (a->with_robot_barcodes) o->with_robot_barcodes = true;
   std::string why;
   if (!a->robots.empty() && !mrclam::parse_robot_list(a->robots, &o->robots, &why)) {
@@ -164,31 +163,39 @@ bool write_log(const mrclam::FrameSource& src, const run_info_t& info0, double r
   return true;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int import_main(int argc, char** argv) {
   Args a;
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
   mrclam::Options o;
   std::string effective_yaml;
-  if (!options(&a, &o, &effective_yaml)) return 2;
+  if (!options(&a, &o, &effective_yaml)) return cli::kExitBadInput;
+  if (a.check) {
+    std::cout << "mrclam_import: " << a.config_path << ": valid\n";
+    return 0;
+  }
   try {
     const mrclam::Dataset d = mrclam::Dataset::load(a.dataset_dir, o.robots);
     const mrclam::FrameSource src(d, o);
     lcm::LogFile log(a.out_path, "w");
     if (!log.good()) {
       std::fprintf(stderr, "mrclam_import: cannot open %s for writing\n", a.out_path.c_str());
-      return 1;
+      return cli::kExitFailure;
     }
-    if (!write_log(src, run_info(src, o, a.dataset_dir, effective_yaml), o.rate_hz, &log, a.out_path)) return 1;
+    if (!write_log(src, run_info(src, o, a.dataset_dir, effective_yaml), o.rate_hz, &log, a.out_path)) return cli::kExitFailure;
     std::cout << "mrclam_import: " << a.dataset_dir << " -> " << a.out_path << "\n";
     print_stats(std::cout, src.stats(), o.rate_hz);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "mrclam_import: %s\n", e.what());
-    return 1;
+    return cli::kExitFailure;
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "mrclam_import: %s\n", e.what());
-    return 2;
+    return cli::kExitBadInput;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return cli::guarded_main("mrclam_import", [&] { return import_main(argc, argv); });
 }

@@ -345,6 +345,8 @@ struct Args {
   double rate = 10.0;
   double detect_range = 3.5, detect_half_deg = 17.0;
   std::vector<int> ids;
+  bool check = false;
+  mrclam::Options frame_options;  // --config's dataset section, read before any data
 };
 
 /// -1 to go on, else the exit code.
@@ -353,25 +355,23 @@ int parse_args(int argc, char** argv, Args* a) {
   cli::add_version_flag(app, "mrclam_stats");
   app.add_option("--dataset", a->dataset_dir, "dataset directory")->required()->check(CLI::ExistingDirectory);
   app.add_option("--robots", a->robots, "robots, e.g. 1,2,3,4,5")->capture_default_str();
-  app.add_option("--rate", a->rate, "frame rate for the odometry analysis [Hz]")->capture_default_str()->check(CLI::Range(0.1, 1000.0));
+  app.add_option("--rate", a->rate, "frame rate for the odometry analysis [Hz]")
+      ->capture_default_str()
+      ->check(cli::range(mrclam::limits::kRateMinHz, mrclam::limits::kRateMaxHz));
   app.add_option("--json", a->json_path, "also write the numbers as JSON");
   app.add_option("--detect-range", a->detect_range, "detection statistics: in view within this range [m]")
-      ->capture_default_str()->check(CLI::Range(0.1, 100.0));
+      ->capture_default_str()->check(cli::range(0.1, 100.0));
   app.add_option("--detect-half-angle", a->detect_half_deg, "... and this half-angle of the heading [deg]")
-      ->capture_default_str()->check(CLI::Range(1.0, 180.0));
+      ->capture_default_str()->check(cli::range(1.0, 180.0));
   app.add_option("--config", a->config_path,
                  "also measure the residuals of the frames as the filter receives them, imported with this "
-                 "config's dataset section (calibration, motion compensation, odometry delay)")
-      ->check(CLI::ExistingFile);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+                 "config's dataset section (calibration, motion compensation, odometry delay)");
+  app.add_flag("--check", a->check, "check the command line and --config and exit (0: valid); reads no data");
+  if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
   std::string why;
   if (!mrclam::parse_robot_list(a->robots, &a->ids, &why)) {
     std::fprintf(stderr, "mrclam_stats: --robots: %s\n", why.c_str());
-    return 2;
+    return cli::kExitBadInput;
   }
   return -1;
 }
@@ -433,7 +433,7 @@ void report_range_scale_and_lag(const PerRobot& p, json* out) {
 // The frames as the robots get them (imported with the config's dataset section):
 // observations against the Vicon pose at the frame time and the landmarks' positions.
 void report_frame_residuals(const mrclam::Dataset& d, const Args& a, json* out) {
-  mrclam::Options fo = mrclam::load_options(a.config_path);
+  mrclam::Options fo = a.frame_options;
   fo.robots = a.ids;
   fo.with_robot_barcodes = false;
   const mrclam::FrameSource src(d, fo);
@@ -526,11 +526,16 @@ void report_odometry(const PerRobot& p, const Args& a, json* out) {
                          {"fit_odom_var_rot_per_m", fit_m}};
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int stats_main(int argc, char** argv) {
   Args a;
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  // --config before the data: a bad one is refused (ConfigError: exit 2 through
+  // guarded_main) before minutes of analysis.
+  if (!a.config_path.empty()) a.frame_options = mrclam::load_options(a.config_path);
+  if (a.check) {
+    std::printf("mrclam_stats: valid%s%s\n", a.config_path.empty() ? "" : ", --config ", a.config_path.c_str());
+    return 0;
+  }
   json out;
   out["dataset"] = a.dataset_dir;
   out["rate_hz"] = a.rate;
@@ -543,21 +548,24 @@ int main(int argc, char** argv) {
     report_odometry(p, a, &out);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
-    return 1;
-  } catch (const config::ConfigError& e) {  // --config
-    std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
-    return 2;
+    return cli::kExitFailure;
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
-    return 2;
+    return cli::kExitBadInput;
   }
   if (!a.json_path.empty()) {
     std::ofstream f(a.json_path);
     f << out.dump(2) << "\n";
     if (!f) {
       std::fprintf(stderr, "mrclam_stats: cannot write %s\n", a.json_path.c_str());
-      return 1;
+      return cli::kExitFailure;
     }
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return cli::guarded_main("mrclam_stats", [&] { return stats_main(argc, argv); });
 }

@@ -130,18 +130,18 @@ int run(const Args& a) {
 }  // namespace elaslam
 
 int main(int argc, char** argv) {
-  elaslam::Args a;
-  CLI::App app{"elaslam main_robot: the team's global map, on LCM"};
-  elaslam::cli::add_version_flag(app, "main_robot");
-  elaslam::cli::add_config_option(app, &a.config, "its main: section");
-  app.add_option("--state", a.state, "file to persist the global map in (reloaded at start)");
-  elaslam::transport::add_transport_options(app, &a.transport);
-  app.add_option("--event-queue", a.queues.event, "LMAP_EVENT subscription queue capacity")->check(CLI::Range(1, 1000000));
-  app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  return elaslam::run(a);
+  return elaslam::cli::guarded_main("main_robot", [&] {
+    namespace cli = elaslam::cli;
+    elaslam::Args a;
+    CLI::App app{"elaslam main_robot: the team's global map, on LCM"};
+    cli::add_version_flag(app, "main_robot");
+    cli::add_config_option(app, &a.config, "its main: section");
+    app.add_option("--state", a.state, "file to persist the global map in (reloaded at start)");
+    elaslam::transport::add_transport_options(app, &a.transport);
+    app.add_option("--event-queue", a.queues.event, "LMAP_EVENT subscription queue capacity")
+        ->check(cli::range(1, 1000000));
+    app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
+    if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
+    return elaslam::run(a);
+  });
 }

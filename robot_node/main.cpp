@@ -207,23 +207,25 @@ int run(const Args& a) {
 }  // namespace elaslam
 
 int main(int argc, char** argv) {
-  elaslam::Args a;
-  CLI::App app{"elaslam robot_node: one robot's EKF-SLAM with the ELA gate, on LCM"};
-  elaslam::cli::add_version_flag(app, "robot_node");
-  elaslam::cli::add_config_option(app, &a.config, "its robot: section");
-  app.add_option("--robot", a.robot, "this robot's id (1 to 8: the team's capacity)")->required()->check(CLI::Range(1, elaslam::contract::kMaxRobots));
-  app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");
-  app.add_option("--state", a.state, "file to keep this robot's state in (resumed at start, saved atomically)");
-  elaslam::transport::add_transport_options(app, &a.transport);
-  app.add_option("--sensor-queue", a.queues.sensor, "SENSOR_<R> subscription queue capacity")->check(CLI::Range(1, 100000));
-  app.add_option("--notice-queue", a.queues.notice, "DYNAMIC_NOTICE queue capacity")->check(CLI::Range(1, 100000));
-  app.add_option("--status-period", a.status_period_s, "seconds between STATUS_ROBOT messages")->check(CLI::Range(0.05, 60.0));
-  app.add_flag("--verbose", a.verbose, "print the effective configuration");
-  app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  return elaslam::run(a);
+  return elaslam::cli::guarded_main("robot_node", [&] {
+    namespace cli = elaslam::cli;
+    elaslam::Args a;
+    CLI::App app{"elaslam robot_node: one robot's EKF-SLAM with the ELA gate, on LCM"};
+    cli::add_version_flag(app, "robot_node");
+    cli::add_config_option(app, &a.config, "its robot: section");
+    app.add_option("--robot", a.robot, "this robot's id (1 to 8: the team's capacity)")
+        ->required()
+        ->check(cli::range(1, elaslam::contract::kMaxRobots));
+    app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");
+    app.add_option("--state", a.state, "file to keep this robot's state in (resumed at start, saved atomically)");
+    elaslam::transport::add_transport_options(app, &a.transport);
+    app.add_option("--sensor-queue", a.queues.sensor, "SENSOR_<R> subscription queue capacity")->check(cli::range(1, 100000));
+    app.add_option("--notice-queue", a.queues.notice, "DYNAMIC_NOTICE queue capacity")->check(cli::range(1, 100000));
+    app.add_option("--status-period", a.status_period_s, "seconds between STATUS_ROBOT messages")
+        ->check(cli::range(0.05, 60.0));
+    app.add_flag("--verbose", a.verbose, "print the effective configuration");
+    app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
+    if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
+    return elaslam::run(a);
+  });
 }

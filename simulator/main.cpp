@@ -8,7 +8,6 @@
 //
 // Exit codes: 0 done (also after SIGINT/SIGTERM), 1 runtime failure (LCM),
 // 2 bad command line or configuration.
-#include <climits>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -42,31 +41,34 @@ struct Args {
 };
 
 void add_options(CLI::App& app, Args* a) {
+  namespace lim = elaslam::sim::limits;
+  using elaslam::cli::range;
   elaslam::cli::add_version_flag(app, "simulator");
   elaslam::cli::add_config_option(app, &a->config, "its scenario: section");
   app.add_option("--team-mode", a->run.team_mode, "the robots' mode, recorded in RUN_INFO (the simulator has none)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
-  a->rate = app.add_option("--rate", a->rate_hz, "override scenario.rate_hz [frames/s]")->check(CLI::Range(1e-3, 100000.0));
-  a->frames_opt = app.add_option("--frames", a->frames, "override scenario.frames")->check(CLI::Range(1, 100000000));
+  a->rate = app.add_option("--rate", a->rate_hz, "override scenario.rate_hz [frames/s]")
+                ->check(range(lim::kRateMinHz, lim::kRateMaxHz));
+  a->frames_opt = app.add_option("--frames", a->frames, "override scenario.frames")->check(range(1, lim::kFramesMax));
   a->dynamism = app.add_option("--dynamism", a->dynamism_percent, "override scenario.dynamism_percent [%]")
-                    ->check(CLI::Range(0.0, 100.0));
+                    ->check(range(0.0, lim::kDynamismMaxPercent));
   a->speed = app.add_option("--speed", a->speed_mps, "override scenario.landmark_speed_mps [m/s]")
-                 ->check(CLI::Range(0.0, 1000.0));
-  a->seed_opt = app.add_option("--seed", a->seed, "override scenario.seed")->check(CLI::Range(0, INT_MAX));
+                 ->check(range(0.0, lim::kLandmarkSpeedMaxMps));
+  a->seed_opt = app.add_option("--seed", a->seed, "override scenario.seed")->check(range(0, lim::kSeedMax));
   app.add_flag("--lockstep", a->run.lockstep, "after each frame wait for every robot's POSE_<r> of that frame");
   app.add_option("--lockstep-timeout-ms", a->run.lockstep_timeout_ms, "lockstep wait bound per frame [ms]")
       ->capture_default_str()
-      ->check(CLI::Range(1, 3600000));
+      ->check(range(1, 3600000));
   elaslam::transport::add_transport_options(app, &a->transport);
   app.add_option("--wait-for-nodes", a->run.wait_for_nodes,
                  "before frame 0, wait until this many nodes announced themselves on STATUS_* (robots + main)")
-      ->check(CLI::Range(0, 64));
-  app.add_option("--wait-timeout-ms", a->run.wait_timeout_ms, "bound of --wait-for-nodes [ms]")->check(CLI::Range(1, 600000));
+      ->check(range(0, 64));
+  app.add_option("--wait-timeout-ms", a->run.wait_timeout_ms, "bound of --wait-for-nodes [ms]")->check(range(1, 600000));
   app.add_flag("--list-robots", a->list_robots, "print the scenario's robot ids (one line) and exit");
   app.add_flag("--check", a->check, "check the configuration with the overrides, print the scenario and exit (0: valid)");
   app.add_option("--start-delay-ms", a->run.start_delay_ms, "wait before frame 0 so subscribers can join [ms]")
       ->capture_default_str()
-      ->check(CLI::Range(0, 3600000));
+      ->check(range(0, 3600000));
 }
 
 /// Load the scenario and apply the command-line overrides; false (said why) on error.
@@ -107,19 +109,13 @@ int run(const Args& a, const ScenarioOptions& o) {
   return elaslam::sim::run_simulator(shell, o, a.run);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int simulator_main(int argc, char** argv) {
   Args args;
   CLI::App app{"elaslam simulator: publishes SENSOR_<r> and GROUND_TRUTH for the configured scenario"};
   add_options(app, &args);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;  // help (0) or the error
-  }
+  if (const int rc = elaslam::cli::parse(app, argc, argv); rc >= 0) return rc;
   ScenarioOptions options;
-  if (!load(&args, &options)) return 2;
+  if (!load(&args, &options)) return elaslam::cli::kExitBadInput;
   if (args.check) {
     std::cout << "simulator: " << args.run.config_path << " (" << args.config_choice.origin << "): valid\n"
               << elaslam::sim::describe(options);
@@ -132,4 +128,10 @@ int main(int argc, char** argv) {
   }
   elaslam::transport::install_stop_handlers();
   return run(args, options);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return elaslam::cli::guarded_main("simulator", [&] { return simulator_main(argc, argv); });
 }

@@ -1,7 +1,7 @@
 // scenario_dump: the ground truth of a whole run as CSV, for plots
 // (tools/plot_scenario.py) and for eyeballing a scenario without LCM.
 //
-//   scenario_dump --config config/paper.yaml [--dynamism P] [--speed V] [--seed S] --out FILE.csv
+//   scenario_dump --config config/paper.yaml [--dynamism P] [--speed V] [--seed S] [--check] --out FILE.csv
 //
 // Output: '#' lines with key=value metadata (world bounds, D, rate, ...), then
 // rows "frame,kind,id,x,y,theta,moving" with kind robot (pose T_WB, theta [rad]),
@@ -43,42 +43,44 @@ void write_frame(std::FILE* f, const elaslam::sim::World& w) {
                  p[static_cast<std::size_t>(i)].y(), w.is_moving(i) ? 1 : 0);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int dump_main(int argc, char** argv) {
+  namespace cli = elaslam::cli;
+  namespace lim = elaslam::sim::limits;
   CLI::App app{"elaslam scenario_dump: ground truth of a whole run as CSV"};
   std::string config, out;
   double dynamism = 0.0, speed = 0.0;
   int seed = 0;
-  elaslam::cli::add_version_flag(app, "scenario_dump");
-  elaslam::cli::add_config_option(app, &config, "its scenario: section");
-  auto* o_dyn = app.add_option("--dynamism", dynamism, "override scenario.dynamism_percent [%]");
-  auto* o_speed = app.add_option("--speed", speed, "override scenario.landmark_speed_mps [m/s]");
-  auto* o_seed = app.add_option("--seed", seed, "override scenario.seed");
+  bool check = false;
+  cli::add_version_flag(app, "scenario_dump");
+  cli::add_config_option(app, &config, "its scenario: section");
+  // The simulator's ranges (sim::limits): the same override means the same here.
+  auto* o_dyn = app.add_option("--dynamism", dynamism, "override scenario.dynamism_percent [%]")
+                    ->check(cli::range(0.0, lim::kDynamismMaxPercent));
+  auto* o_speed = app.add_option("--speed", speed, "override scenario.landmark_speed_mps [m/s]")
+                      ->check(cli::range(0.0, lim::kLandmarkSpeedMaxMps));
+  auto* o_seed = app.add_option("--seed", seed, "override scenario.seed")->check(cli::range(0, lim::kSeedMax));
   app.add_option("--out", out, "output CSV file")->required();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  elaslam::sim::ScenarioOptions o;
-  try {
-    o = elaslam::sim::load_scenario(elaslam::cli::find_config(config).path);
-  } catch (const elaslam::config::ConfigError& e) {
-    std::cerr << "scenario_dump: " << e.what() << "\n";
-    return 2;
-  }
+  app.add_flag("--check", check, "check the configuration with the overrides and exit (0: valid); writes nothing");
+  if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
+  const std::string path = cli::find_config(config).path;  // a ConfigError: exit 2 (guarded_main)
+  elaslam::sim::ScenarioOptions o = elaslam::sim::load_scenario(path);
   if (o_dyn->count()) o.dynamism_percent = dynamism;
   if (o_speed->count()) o.landmark_speed_mps = speed;
   if (o_seed->count()) o.seed = seed;
   const auto problems = elaslam::sim::check_scenario(o);
-  for (const auto& p : problems) std::cerr << "scenario_dump: scenario." << p.key << ": " << p.what << "\n";
-  if (!problems.empty()) return 2;
+  for (const auto& p : problems)
+    std::cerr << "scenario_dump: " << path << " with command-line overrides: scenario." << p.key << ": " << p.what
+              << "\n";
+  if (!problems.empty()) return cli::kExitBadInput;
+  if (check) {
+    std::cout << "scenario_dump: " << path << ": valid\n";
+    return 0;
+  }
 
   std::FILE* f = std::fopen(out.c_str(), "w");
   if (!f) {
     std::cerr << "scenario_dump: cannot write " << out << "\n";
-    return 1;
+    return cli::kExitFailure;
   }
   std::fprintf(f, "# x_min_m=%g\n# x_max_m=%g\n# y_min_m=%g\n# y_max_m=%g\n# fov_diameter_m=%g\n", o.world.x_min_m,
                o.world.x_max_m, o.world.y_min_m, o.world.y_max_m, o.sensor.fov_diameter_m);
@@ -92,5 +94,11 @@ int main(int argc, char** argv) {
   }
   const bool ok = std::fclose(f) == 0;
   if (!ok) std::cerr << "scenario_dump: error writing " << out << "\n";
-  return ok ? 0 : 1;
+  return ok ? 0 : cli::kExitFailure;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return elaslam::cli::guarded_main("scenario_dump", [&] { return dump_main(argc, argv); });
 }

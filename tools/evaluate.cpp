@@ -349,10 +349,10 @@ RunInfo run_facts(const Args& a, const LogData& d, const std::string& command) {
   return info;
 }
 
-/// The team config that ran: --config with the log's run facts over it (mode,
-/// dynamism, speed, seed, rate, frames). Throws on a bad config.
-TeamConfig team_config_of_run(const std::string& path, const RunInfo& info, const LogData& d) {
-  TeamConfig cfg = load_team_config(path);
+/// The team config that ran: --config's (`cfg`) with the log's run facts over it
+/// (mode, dynamism, speed, seed, rate, frames). Throws std::invalid_argument when
+/// the log's facts do not fit the config.
+TeamConfig team_config_of_run(const TeamConfig& cfg, const RunInfo& info, const LogData& d) {
   RunOverrides ov;
   Mode m;
   if (parse_mode(info.mode, &m)) ov.mode = m;
@@ -457,48 +457,47 @@ void print_report(const LogData& d, const Assembled& x, const RunInfo& info, con
 
 /// -1 to go on, else the exit code.
 int parse_args(int argc, char** argv, Args* a) {
+  namespace lim = sim::limits;
   CLI::App app{"elaslam evaluate: metrics of a recorded LCM log against its ground truth"};
   cli::add_version_flag(app, "evaluate");
   app.add_option("--log", a->log_path, "LCM log (lcm-logger)")->required();
   app.add_option("--out", a->out_dir, "directory for metrics.json, frames.csv, trajectories/");
   app.add_option("--config", a->config, "the team's config file: its sections with the log's run facts become the "
-                                        "effective config in metrics.json")
-      ->check(CLI::ExistingFile);
+                                        "effective config in metrics.json");
   app.add_option("--baseline", a->baseline, "also run this mode in process on the same scenario and seed and compare "
                                             "(needs --config)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--quiet", a->quiet, "no summary on stdout");
   app.add_option("--channel-suffix", a->channel_suffix, "the team's channel suffix (its processes' --channel-suffix)");
-  // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed).
+  // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed),
+  // in the simulator's ranges.
   app.add_option("--mode", a->mode, "mode to record when the robots' STATUS does not say");
   app.add_option("--dynamism", a->dynamism, "dynamism [%] to record when the log has no RUN_INFO "
-                                            "(default: from the ground truth's moving flags)");
-  app.add_option("--speed", a->speed, "landmark speed [m/s] to record when the log has no RUN_INFO");
-  app.add_option("--seed", a->seed, "seed to record when the log has no RUN_INFO");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+                                            "(default: from the ground truth's moving flags)")
+      ->check(cli::range(0.0, lim::kDynamismMaxPercent));
+  app.add_option("--speed", a->speed, "landmark speed [m/s] to record when the log has no RUN_INFO")
+      ->check(cli::range(0.0, lim::kLandmarkSpeedMaxMps));
+  app.add_option("--seed", a->seed, "seed to record when the log has no RUN_INFO")->check(cli::range(0, lim::kSeedMax));
+  if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
   if (!a->baseline.empty() && a->config.empty()) {
     std::fprintf(stderr, "evaluate: --baseline needs --config (the team's config file)\n");
-    return 2;
+    return cli::kExitBadInput;
   }
   return -1;
 }
 
-}  // namespace
-}  // namespace elaslam
-
-int main(int argc, char** argv) {
-  using namespace elaslam;
+int evaluate_main(int argc, char** argv) {
   Args a;
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
+  // The config first: a bad one is refused (ConfigError, exit 2 through guarded_main)
+  // before a long log is read.
+  TeamConfig file_config;
+  if (!a.config.empty()) file_config = load_team_config(a.config);
   LogData d;
   std::string why;
   if (!read_log(a.log_path, a.channel_suffix, &d, &why)) {
     std::fprintf(stderr, "evaluate: %s\n", why.c_str());
-    return 2;
+    return cli::kExitBadInput;
   }
   const Assembled x = assemble(d);
   const std::string command = cli::command_line(argc, argv);
@@ -506,11 +505,11 @@ int main(int argc, char** argv) {
   TeamConfig team;
   if (!a.config.empty()) {
     try {
-      team = team_config_of_run(a.config, info, d);
+      team = team_config_of_run(file_config, info, d);
       info.effective_config = team.effective_yaml;
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "evaluate: --config %s: %s\n", a.config.c_str(), e.what());
-      return 2;
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "evaluate: --config %s with the log's run facts: %s\n", a.config.c_str(), e.what());
+      return cli::kExitBadInput;
     }
   } else if (d.run_info) {
     info.effective_config = d.run_info->config_yaml;  // the frame source's section only
@@ -530,8 +529,15 @@ int main(int argc, char** argv) {
       write_outputs(a.out_dir, j, x.r);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "evaluate: %s\n", e.what());
-      return 1;
+      return cli::kExitFailure;
     }
   }
   return 0;
+}
+
+}  // namespace
+}  // namespace elaslam
+
+int main(int argc, char** argv) {
+  return elaslam::cli::guarded_main("evaluate", [&] { return elaslam::evaluate_main(argc, argv); });
 }

@@ -16,18 +16,16 @@
 #include "elaslam/common/cli.hpp"
 #include "elaslam/team/log_summary.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int log_info_main(int argc, char** argv) {
   std::string path;
   bool json = false;
   CLI::App app{"elaslam log_info: summary of a recorded LCM log (channels, run info, frames per robot)"};
   elaslam::cli::add_version_flag(app, "log_info");
   app.add_option("LOG", path, "LCM log (lcm-logger, mrclam_import)")->required();
   app.add_flag("--json", json, "print the summary as JSON (units in the keys) instead of text");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  if (const int rc = elaslam::cli::parse(app, argc, argv); rc >= 0) return rc;
   try {
     const elaslam::LogSummary s = elaslam::summarize_log(path);
     if (json)
@@ -36,7 +34,13 @@ int main(int argc, char** argv) {
       elaslam::print_log_summary(std::cout, s);
   } catch (const std::runtime_error& e) {
     std::fprintf(stderr, "log_info: %s\n", e.what());
-    return 2;
+    return elaslam::cli::kExitBadInput;
   }
-  return std::cout.good() ? 0 : 1;
+  return std::cout.good() ? 0 : elaslam::cli::kExitFailure;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return elaslam::cli::guarded_main("log_info", [&] { return log_info_main(argc, argv); });
 }

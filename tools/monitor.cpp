@@ -117,7 +117,9 @@ class Progress {
 }  // namespace
 }  // namespace elaslam
 
-int main(int argc, char** argv) {
+namespace {
+
+int monitor_main(int argc, char** argv) {
   using namespace elaslam;
   transport::TransportArgs targs;
   double interval_s = 5.0;
@@ -126,12 +128,8 @@ int main(int argc, char** argv) {
   transport::add_transport_options(app, &targs);
   app.add_option("--interval", interval_s, "seconds between lines when not on a terminal")
       ->capture_default_str()
-      ->check(CLI::Range(0.1, 3600.0));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+      ->check(cli::range(0.1, 3600.0));
+  if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
   const auto lcm = transport::open_lcm(targs.lcm_url, "monitor");
   if (!lcm) return 1;
   // No log: the line is the monitor's output; bad messages show in it as "undecodable".
@@ -158,4 +156,10 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr, tty ? "\r\033[K%s\n" : "%s\n", progress.line().c_str());
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return elaslam::cli::guarded_main("monitor", [&] { return monitor_main(argc, argv); });
 }

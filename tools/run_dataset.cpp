@@ -2,13 +2,15 @@
 // simulator (in-process, like run_scenario), its metrics against Vicon ground
 // truth and its output files.
 //   run_dataset --dataset DIR [--config FILE] [--mode M] [--with-robot-barcodes]
-//               [--robots 1,2,3] [--rate F] [--start S] [--duration T] --out DIR
+//               [--robots 1,2,3] [--rate F] [--start S] [--duration T] [--check] --out DIR
 //   run_dataset --dataset DIR --report [--modes ekf,gated,ela,consensus] --out DIR
 // --report runs dead reckoning and every mode without and with the robots'
 // barcodes (in parallel) and writes DIR/report.md, DIR/report.json and each run's
 // files under DIR/<mode>/ and DIR/<mode>_barcodes/.
 #include <algorithm>
 #include <atomic>
+#include <exception>
+#include <mutex>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -116,8 +118,9 @@ void write_report(const std::string& path, const mrclam::FrameSource& src, const
 
 struct Args {
   std::string dataset_dir, config_path, mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
-  bool barcodes = false, report = false, no_plots = false;
-  double rate = -1.0, start = -1.0, duration = -1.0;
+  bool barcodes = false, report = false, no_plots = false, check = false;
+  double rate = 0.0, start = 0.0, duration = 0.0;
+  bool rate_given = false, start_given = false, duration_given = false;  // the options given override the config
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 };
 
@@ -132,41 +135,39 @@ int parse_args(int argc, char** argv, Args* a) {
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--with-robot-barcodes", a->barcodes, "keep other robots' barcodes (moving landmarks)");
   app.add_option("--robots", a->robots_text, "robots to use, e.g. 1,2,3,4,5 (default: dataset.robots)");
-  app.add_option("--rate", a->rate, "frames per second")->check(CLI::Range(0.1, 1000.0));
-  app.add_option("--start", a->start, "first frame this many seconds after the common start")->check(CLI::Range(0.0, 1e6));
-  app.add_option("--duration", a->duration, "seconds to run (0: to the end)")->check(CLI::Range(0.0, 1e6));
+  namespace lim = mrclam::limits;
+  auto* rate = app.add_option("--rate", a->rate, "frames per second")->check(cli::range(lim::kRateMinHz, lim::kRateMaxHz));
+  auto* start = app.add_option("--start", a->start, "first frame this many seconds after the common start")
+                     ->check(cli::range(0.0, lim::kStartMaxS));
+  auto* duration = app.add_option("--duration", a->duration, "seconds to run (0: to the end)")
+                        ->check(cli::range(0.0, lim::kDurationMaxS));
   app.add_flag("--report", a->report, "every mode without and with robot barcodes, and report.md");
   app.add_option("--modes", a->modes_text, "modes for --report");
-  app.add_option("--jobs", a->jobs, "parallel runs for --report")->check(CLI::Range(1, 256));
+  app.add_option("--jobs", a->jobs, "parallel runs for --report")->check(cli::range(1, 256));
   app.add_option("--out", a->out_dir, "output directory")->required();
   app.add_flag("--no-plots", a->no_plots, "do not call tools/plot_dataset.py (paths.png per run)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
+  app.add_flag("--check", a->check, "check the configuration with the overrides and exit (0: valid); reads no data");
+  if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
+  a->rate_given = rate->count() > 0;
+  a->start_given = start->count() > 0;
+  a->duration_given = duration->count() > 0;
   return -1;
 }
 
 /// The config with the command line's dataset overrides, and the modes to run.
-/// False (the reason printed) on a bad config or argument.
+/// False (the reason printed) on a bad argument; a bad config throws ConfigError.
 bool configure(Args* a, DatasetConfig* cfg, std::vector<std::string>* modes) {
-  try {
-    a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
-    *cfg = load_dataset_config(a->config_path);
-  } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return false;
-  }
+  a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
+  *cfg = load_dataset_config(a->config_path);
   mrclam::Options& o = cfg->dataset;
   std::string why;
   if (!a->robots_text.empty() && !mrclam::parse_robot_list(a->robots_text, &o.robots, &why)) {
     std::fprintf(stderr, "run_dataset: --robots: %s\n", why.c_str());
     return false;
   }
-  if (a->rate > 0.0) o.rate_hz = a->rate;
-  if (a->start >= 0.0) o.start_s = a->start;
-  if (a->duration >= 0.0) o.duration_s = a->duration;
+  if (a->rate_given) o.rate_hz = a->rate;
+  if (a->start_given) o.start_s = a->start;
+  if (a->duration_given) o.duration_s = a->duration;
   if (!a->report) {
     modes->push_back(a->mode.empty() ? to_string(cfg->robot.mode) : a->mode);
     return true;
@@ -192,19 +193,28 @@ struct Sources {
 
 void run_all(const DatasetConfig& cfg, const Sources& src, int jobs, std::vector<DatasetRun>* runs) {
   std::atomic<std::size_t> next{0};
+  std::mutex failed;
+  std::exception_ptr failure;  // the first exception of any worker, rethrown after the join
   auto worker = [&] {
-    for (std::size_t i; (i = next++) < runs->size();) {
-      DatasetRun& run = (*runs)[i];
-      RobotOptions ro = cfg.robot;
-      parse_mode(run.mode, &ro.mode);
-      DatasetFrames frames(run.barcodes ? *src.with : *src.without);
-      run.result = run_team(ro, cfg.main, frames);
-      run.robot_corrections = robot_corrections(run.result);
+    try {
+      for (std::size_t i; (i = next++) < runs->size();) {
+        DatasetRun& run = (*runs)[i];
+        RobotOptions ro = cfg.robot;
+        parse_mode(run.mode, &ro.mode);
+        DatasetFrames frames(run.barcodes ? *src.with : *src.without);
+        run.result = run_team(ro, cfg.main, frames);
+        run.robot_corrections = robot_corrections(run.result);
+      }
+    } catch (...) {  // escaping a thread would std::terminate the process
+      std::lock_guard<std::mutex> lock(failed);
+      if (!failure) failure = std::current_exception();
+      next = runs->size();
     }
   };
   std::vector<std::thread> pool;
   for (int t = 0; t < std::min<int>(jobs, static_cast<int>(runs->size())); ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 /// Every run's output files (a directory per run with --report), the summaries, and
@@ -254,14 +264,16 @@ void plot(const std::vector<std::string>& dirs) {
   std::printf("plots: <run dir>/paths.png\n");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run_dataset_main(int argc, char** argv) {
   Args a;
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
   DatasetConfig cfg;
   std::vector<std::string> modes;
-  if (!configure(&a, &cfg, &modes)) return 2;
+  if (!configure(&a, &cfg, &modes)) return cli::kExitBadInput;
+  if (a.check) {
+    std::cout << "run_dataset: " << a.config_path << ": valid\n";
+    return 0;
+  }
   Sources src;
   try {
     src.data = std::make_unique<mrclam::Dataset>(mrclam::Dataset::load(a.dataset_dir, cfg.dataset.robots));
@@ -272,10 +284,10 @@ int main(int argc, char** argv) {
     if (a.report || a.barcodes) src.with = std::make_unique<mrclam::FrameSource>(*src.data, with);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return 1;
+    return cli::kExitFailure;
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return 2;
+    return cli::kExitBadInput;
   }
   const std::vector<DeadReckoning> dr = dead_reckoning(src.any());
   std::vector<DatasetRun> runs;
@@ -291,8 +303,14 @@ int main(int argc, char** argv) {
     dirs = write_runs(a, cfg, src, dr, runs, command);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return 1;
+    return cli::kExitFailure;
   }
   if (!a.no_plots) plot(dirs);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return cli::guarded_main("run_dataset", [&] { return run_dataset_main(argc, argv); });
 }

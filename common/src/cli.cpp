@@ -1,11 +1,16 @@
 #include "elaslam/common/cli.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <new>
+#include <stdexcept>
 #include <system_error>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "elaslam/common/config.hpp"
 #include "elaslam/common/version.hpp"
@@ -36,7 +41,79 @@ std::string shell_quote(const std::string& s) {
   return out + "'";
 }
 
+/// The number `text` holds, when all of it is one (strtod's syntax, as CLI11's).
+bool to_number(const std::string& text, double* v) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  *v = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size();
+}
+
+std::string shortest(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.15g", v);
+  return buf;
+}
+
+CLI::Validator number_range(double lo, double hi, const char* type_name) {
+  const std::string range = "[" + shortest(lo) + ", " + shortest(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) {
+        double v = 0.0;
+        if (!to_number(text, &v)) return text + " is not a number";
+        if (!std::isfinite(v)) return text + " is not a finite number";
+        if (!(v >= lo && v <= hi)) return text + " is out of range: expected a number in " + range;
+        return std::string();
+      },
+      std::string(type_name) + " in " + range);
+}
+
 }  // namespace
+
+int guarded_main(const std::string& program, const std::function<int()>& body) {
+  const auto say = [&](const std::string& what) { std::fprintf(stderr, "%s: %s\n", program.c_str(), what.c_str()); };
+  try {
+    return body();
+  } catch (const config::ConfigError& e) {
+    say(e.what());
+    return kExitBadInput;
+  } catch (const YAML::Exception& e) {  // the loader refuses what would throw this: a guard, not a path
+    say(std::string("configuration: ") + e.what());
+    return kExitBadInput;
+  } catch (const std::invalid_argument& e) {  // the libraries' bad-argument errors name the value
+    say(e.what());
+    return kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    say("out of memory");
+    return kExitFailure;
+  } catch (const std::exception& e) {
+    say(std::string("error: ") + e.what());
+    return kExitFailure;
+  } catch (...) {
+    say("error: an exception of unknown type");
+    return kExitFailure;
+  }
+}
+
+int parse(CLI::App& app, int argc, const char* const* argv) {
+  try {
+    app.parse(argc, argv);
+    for (const CLI::Option* o : app.get_options()) {
+      if (o->get_type_name().rfind("FLOAT", 0) != 0) continue;  // CLI11 names double options FLOAT
+      for (const std::string& v : o->results()) {
+        double x = 0.0;
+        if (to_number(v, &x) && !std::isfinite(x))
+          throw CLI::ValidationError(o->get_name(), v + " is not a finite number");
+      }
+    }
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? kExitOk : kExitBadInput;
+  }
+  return -1;
+}
+
+CLI::Validator range(double lo, double hi) { return number_range(lo, hi, "FLOAT"); }
+CLI::Validator range(int lo, int hi) { return number_range(lo, hi, "INT"); }
 
 std::string version_line(const std::string& program) {
   return program + " (elaslam " + version() + ", git " + git_commit() + ")";

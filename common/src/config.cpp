@@ -1,9 +1,12 @@
 #include "elaslam/common/config.hpp"
 
+#include "config_input.hpp"
+
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <cstdlib>
 #include <sstream>
+#include <type_traits>
 
 namespace elaslam::config {
 namespace {
@@ -21,6 +24,20 @@ std::string scalar_text(const YAML::Node& n) {
   if (n.IsSequence()) return "a list";
   if (n.IsMap()) return "a map";
   return "nothing";
+}
+
+/// A map key as text, also when it is not a scalar (from_string refuses those; a
+/// Reader built on another node must not throw YAML::TypedBadConversion).
+std::string key_text(const YAML::Node& key) {
+  return key.IsScalar() ? key.Scalar() : "<" + scalar_text(key) + " as a key>";
+}
+
+/// True when `text` is all a number that is not finite ("nan", "-inf", "1e999").
+bool non_finite_text(const std::string& text) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && !std::isfinite(v);
 }
 
 template <typename T>
@@ -104,6 +121,12 @@ bool Reader::scalar(const std::string& key, T* out, bool optional, const char* t
   try {
     *out = n.as<T>();
   } catch (const YAML::Exception&) {
+    if constexpr (std::is_floating_point_v<T>) {
+      if (non_finite_text(n.Scalar())) {  // nan, inf, 1e999: C's spellings, not YAML's .nan and .inf
+        fail(key, "not a finite number: got " + scalar_text(n));
+        return false;
+      }
+    }
     fail(key, std::string("wrong type: expected ") + type_name + ", got " + scalar_text(n));
     return false;
   }
@@ -111,13 +134,19 @@ bool Reader::scalar(const std::string& key, T* out, bool optional, const char* t
   return true;
 }
 
+void Reader::check_range(const std::string& key, double v, double lo, double hi) {
+  const std::string range = "a value in [" + num(lo) + ", " + num(hi) + "]";
+  if (!std::isfinite(v))  // .nan passes every comparison test, .inf any open bound
+    fail(key, "not a finite number: got " + num(v) + ", expected " + range);
+  else if (!(v >= lo && v <= hi))
+    fail(key, "out of range: got " + num(v) + ", expected " + range);
+}
+
 void Reader::read(const std::string& key, double* out, double lo, double hi) {
-  if (scalar(key, out, false, "a number") && !(std::isfinite(*out) && *out >= lo && *out <= hi))
-    fail(key, "out of range: got " + num(*out) + ", expected a value in [" + num(lo) + ", " + num(hi) + "]");
+  if (scalar(key, out, false, "a number")) check_range(key, *out, lo, hi);
 }
 void Reader::read_optional(const std::string& key, double* out, double lo, double hi) {
-  if (scalar(key, out, true, "a number") && !(std::isfinite(*out) && *out >= lo && *out <= hi))
-    fail(key, "out of range: got " + num(*out) + ", expected a value in [" + num(lo) + ", " + num(hi) + "]");
+  if (scalar(key, out, true, "a number")) check_range(key, *out, lo, hi);
 }
 void Reader::read(const std::string& key, int* out, int lo, int hi) {
   if (scalar(key, out, false, "an integer") && !(*out >= lo && *out <= hi))
@@ -157,12 +186,12 @@ void Reader::read_vector(const std::string& key, std::vector<double>* out, std::
     try {
       v[i] = n[i].as<double>();
     } catch (const YAML::Exception&) {
-      fail(key + "[" + num(i) + "]", "wrong type: expected a number, got " + scalar_text(n[i]));
+      const bool non_finite = n[i].IsScalar() && non_finite_text(n[i].Scalar());
+      fail(key + "[" + num(i) + "]", (non_finite ? "not a finite number: got " : "wrong type: expected a number, got ") +
+                                         scalar_text(n[i]));
       return;
     }
-    if (!(std::isfinite(v[i]) && v[i] >= lo && v[i] <= hi))
-      fail(key + "[" + num(i) + "]",
-           "out of range: got " + num(v[i]) + ", expected a value in [" + num(lo) + ", " + num(hi) + "]");
+    check_range(key + "[" + num(i) + "]", v[i], lo, hi);
   }
   *out = v;
   YAML::Node rec(YAML::NodeType::Sequence);
@@ -220,7 +249,7 @@ void Reader::list(const std::string& key, const std::function<void(Reader&, std:
 void Reader::finish() {
   if (!node_.IsMap()) return;
   for (const auto& kv : node_) {
-    const std::string k = kv.first.as<std::string>();
+    const std::string k = key_text(kv.first);
     if (std::find(seen_.begin(), seen_.end(), k) == seen_.end()) {
       std::string known;
       for (const auto& s : seen_) known += (known.empty() ? "" : ", ") + s;
@@ -233,24 +262,33 @@ Document::Document(YAML::Node root, std::string source)
     : root_(std::move(root)), source_(std::move(source)), state_(std::make_shared<ParseState>()) {}
 
 Document Document::from_string(const std::string& text, const std::string& source) {
-  YAML::Node root;
+  std::vector<std::string> problems = input::text_problems(text);
+  if (!problems.empty()) throw ConfigError(source, problems);
+  std::vector<YAML::Node> docs;
   try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
+    docs = YAML::LoadAll(text);
+  } catch (const YAML::Exception& e) {  // ParserException, and DeepRecursion (nesting beyond yaml-cpp's bound)
     throw ConfigError(source, {"malformed YAML at line " + std::to_string(e.mark.line + 1) + ", column " +
                                    std::to_string(e.mark.column + 1) + ": " + e.msg});
   }
+  if (docs.size() > 1) {
+    const YAML::Mark m = docs[1].Mark();
+    throw ConfigError(source, {"a second YAML document" +
+                               (m.is_null() ? std::string() : " at line " + std::to_string(m.line + 1)) +
+                               " (after a '---' line): a configuration is one document; merge the two or remove one"});
+  }
+  const YAML::Node root = docs.empty() ? YAML::Node() : docs.front();
   if (!root.IsMap())
     throw ConfigError(source, {"expected a map of sections at the top level, got " + scalar_text(root)});
+  problems = input::structure_problems(root);
+  if (!problems.empty()) throw ConfigError(source, problems);
   return Document(root, source);
 }
 
 Document Document::from_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path, {"cannot open the file (does it exist and is it readable?)"});
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return from_string(ss.str(), path);
+  std::string text, why;
+  if (!input::read_file(path, &text, &why)) throw ConfigError(path, {why});
+  return from_string(text, path);
 }
 
 void Document::know(const std::string& key) {
@@ -284,7 +322,7 @@ void Document::allow_sections() {
 
 void Document::finish() {
   for (const auto& kv : root_) {
-    const std::string k = kv.first.as<std::string>();
+    const std::string k = key_text(kv.first);
     if (std::find(known_.begin(), known_.end(), k) == known_.end()) {
       std::string known;
       for (const std::string& name : known_) known += (known.empty() ? "" : ", ") + name;

@@ -165,15 +165,15 @@ bool parse_robot_list(const std::string& text, std::vector<int>* out, std::strin
 }
 
 void parse(config::Reader& r, Options* o) {
-  r.read("rate_hz", &o->rate_hz, 0.1, 1000.0);
+  r.read("rate_hz", &o->rate_hz, limits::kRateMinHz, limits::kRateMaxHz);
   std::string robots;
   for (int id : o->robots) robots += (robots.empty() ? "" : ",") + std::to_string(id);
   r.read("robots", &robots);
   std::string why;
   if (!parse_robot_list(robots, &o->robots, &why)) r.fail("robots", why);
   r.read("with_robot_barcodes", &o->with_robot_barcodes);
-  r.read("start_s", &o->start_s, 0.0, 1e5);
-  r.read("duration_s", &o->duration_s, 0.0, 1e5);
+  r.read("start_s", &o->start_s, 0.0, limits::kStartMaxS);
+  r.read("duration_s", &o->duration_s, 0.0, limits::kDurationMaxS);
   r.read("odom_var_trans_per_m", &o->odom_var_trans_per_m, 0.0, 100.0);
   r.read("odom_var_rot_per_rad", &o->odom_var_rot_per_rad, 0.0, 100.0);
   r.read("odom_var_rot_per_m", &o->odom_var_rot_per_m, 0.0, 100.0);

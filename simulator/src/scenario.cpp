@@ -134,18 +134,24 @@ std::vector<Problem> check_scenario(const ScenarioOptions& o) {
   const OdometryOptions& od = o.odometry;
   if (!(od.var_trans_per_m >= 0.0 && od.var_rot_per_rad >= 0.0 && od.var_rot_per_m >= 0.0))
     out.push_back({"odometry", "variances must be >= 0"});
-  if (!(o.rate_hz > 0.0)) out.push_back({"rate_hz", "must be positive"});
+  // Written so that nan fails every test (overrides reach here without the reader's checks).
+  if (!(o.rate_hz >= limits::kRateMinHz && o.rate_hz <= limits::kRateMaxHz))
+    out.push_back({"rate_hz", "must be in [" + num(limits::kRateMinHz) + ", " + num(limits::kRateMaxHz) + "] Hz, got " +
+                                  num(o.rate_hz)});
   if (!(o.rate_hz > 0.0) || !(s.fov_diameter_m > 0.0)) return out;  // the checks below divide by them
   if (o.sensor.min_range_m >= o.sensor.max_range_m())
     out.push_back({"sensor.min_range_m", "must be below the sensor range D/2 = " + num(o.sensor.max_range_m()) + " m"});
   const double lm_step = o.landmark_speed_mps / o.rate_hz;
   const double min_side = std::min(w.x_max_m - w.x_min_m, w.y_max_m - w.y_min_m);
-  if (lm_step >= o.sensor.fov_diameter_m || lm_step >= min_side)
+  if (!(o.landmark_speed_mps >= 0.0 && o.landmark_speed_mps <= limits::kLandmarkSpeedMaxMps))
+    out.push_back({"landmark_speed_mps", "must be in [0, " + num(limits::kLandmarkSpeedMaxMps) + "] m/s, got " +
+                                             num(o.landmark_speed_mps)});
+  else if (lm_step >= o.sensor.fov_diameter_m || lm_step >= min_side)
     out.push_back({"landmark_speed_mps", "moving landmarks would move " + num(lm_step) +
                                              " m per frame, which must stay below D = " +
                                              num(o.sensor.fov_diameter_m) +
                                              " m (paper section 3.2) and below the world's size"});
-  if (o.dynamism_percent < 0.0 || o.dynamism_percent > 100.0)
+  if (!(o.dynamism_percent >= 0.0 && o.dynamism_percent <= limits::kDynamismMaxPercent))
     out.push_back({"dynamism_percent", "must be in [0, 100], got " + num(o.dynamism_percent)});
   if (o.robots.empty() || o.robots.size() > static_cast<std::size_t>(contract::kMaxRobots))
     out.push_back({"robots", "need 1 to " + std::to_string(contract::kMaxRobots) + " robots"});
@@ -163,14 +169,14 @@ void parse(config::Reader& r, ScenarioOptions* o) {
     s.read("y_min_m", &o->world.y_min_m, -kBig, kBig);
     s.read("y_max_m", &o->world.y_max_m, -kBig, kBig);
   });
-  r.read("frames", &o->frames, 1, 100000000);
-  r.read("rate_hz", &o->rate_hz, 1e-3, 100000.0);
-  r.read("seed", &o->seed, 0, 2147483647);
+  r.read("frames", &o->frames, 1, limits::kFramesMax);
+  r.read("rate_hz", &o->rate_hz, limits::kRateMinHz, limits::kRateMaxHz);
+  r.read("seed", &o->seed, 0, limits::kSeedMax);
   r.section("sensor", [&](config::Reader& s) { parse_sensor(s, &o->sensor); });
   r.section("odometry", [&](config::Reader& s) { parse_odometry(s, &o->odometry); });
   r.section("landmarks", [&](config::Reader& s) { parse_landmarks(s, &o->landmarks); });
-  r.read("dynamism_percent", &o->dynamism_percent, 0.0, 100.0);
-  r.read("landmark_speed_mps", &o->landmark_speed_mps, 0.0, 1000.0);
+  r.read("dynamism_percent", &o->dynamism_percent, 0.0, limits::kDynamismMaxPercent);
+  r.read("landmark_speed_mps", &o->landmark_speed_mps, 0.0, limits::kLandmarkSpeedMaxMps);
   r.read("reversal_period_frames", &o->reversal_period_frames, 1, 100000000);
   o->robots.clear();
   r.list(

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -37,26 +38,34 @@ void remove_moving(const FrameData& f, sensor_frame_t* s) {
 TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
   TeamConfig c = base;
   if (o.mode) c.robot.mode = *o.mode;
+  // Each override within the config reader's bounds (sim::limits); written so that nan fails.
+  namespace lim = sim::limits;
+  const auto refuse = [](const std::string& what, double v) {
+    std::ostringstream os;
+    os << what << ", got " << v;
+    throw std::invalid_argument(os.str());
+  };
   if (o.dynamism_percent) {
-    if (!(*o.dynamism_percent >= 0.0 && *o.dynamism_percent <= 100.0))
-      throw std::invalid_argument("dynamism must be in [0, 100] percent");
+    if (!(*o.dynamism_percent >= 0.0 && *o.dynamism_percent <= lim::kDynamismMaxPercent))
+      refuse("dynamism must be in [0, 100] percent", *o.dynamism_percent);
     c.scenario.dynamism_percent = *o.dynamism_percent;
   }
   if (o.landmark_speed_mps) {
-    if (!(*o.landmark_speed_mps >= 0.0 && *o.landmark_speed_mps <= 100.0))
-      throw std::invalid_argument("speed must be in [0, 100] m/s");
+    if (!(*o.landmark_speed_mps >= 0.0 && *o.landmark_speed_mps <= lim::kLandmarkSpeedMaxMps))
+      refuse("speed must be in [0, 1000] m/s", *o.landmark_speed_mps);
     c.scenario.landmark_speed_mps = *o.landmark_speed_mps;
   }
   if (o.seed) {
-    if (*o.seed < 0) throw std::invalid_argument("seed must be >= 0");
+    if (*o.seed < 0) refuse("seed must be >= 0", *o.seed);
     c.scenario.seed = *o.seed;
   }
   if (o.rate_hz) {
-    if (!(*o.rate_hz >= 1e-3 && *o.rate_hz <= 100000.0)) throw std::invalid_argument("rate must be in [0.001, 100000] Hz");
+    if (!(*o.rate_hz >= lim::kRateMinHz && *o.rate_hz <= lim::kRateMaxHz))
+      refuse("rate must be in [0.001, 100000] Hz", *o.rate_hz);
     c.scenario.rate_hz = *o.rate_hz;
   }
   if (o.frames) {
-    if (*o.frames < 1) throw std::invalid_argument("frames must be at least 1");
+    if (!(*o.frames >= 1 && *o.frames <= lim::kFramesMax)) refuse("frames must be in [1, 100000000]", *o.frames);
     c.scenario.frames = *o.frames;
   }
   const auto problems = sim::check_scenario(c.scenario);

@@ -1,6 +1,8 @@
 // Config loading: every bad-config case is reported with its key path, all at once.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -109,7 +111,7 @@ TEST(Config, OutOfRangeNamed) {
   EXPECT_NE(e.find("robot.sigma_m: out of range: got -1, expected a value in [1e-06, 10]"), std::string::npos)
       << e;
   const std::string e2 = errors_of(replace(kGood, "sigma_m: 0.1", "sigma_m: .nan"));
-  EXPECT_NE(e2.find("robot.sigma_m: out of range"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("robot.sigma_m: not a finite number"), std::string::npos) << e2;
   const std::string e3 = errors_of(replace(kGood, "{id: 2}", "{id: 9}"));
   EXPECT_NE(e3.find("robot.robots[1].id: out of range: got 9"), std::string::npos) << e3;
 }
@@ -173,6 +175,140 @@ TEST(Config, FromFileReadsAFile) {
   EXPECT_NO_THROW(doc.finish());
   EXPECT_EQ(o.capacity, 128);
   std::remove(path.c_str());
+}
+
+// ---- what the loader refuses before any key is read (config_input.cpp) ----------
+
+// The problems of loading `text` ("" when it loads), whatever section reads it.
+std::string load_errors(const std::string& text) {
+  try {
+    Document::from_string(text, "test.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string file_errors(const std::string& path) {
+  try {
+    Document::from_file(path);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+#define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "want: " << (part) << "\n got: " << (text)
+
+TEST(ConfigInput, NonScalarKeysAreRefusedWithTheirPlace) {
+  // yaml-cpp accepts them; reading the key as a name threw YAML::TypedBadConversion
+  // out of every program (SIGABRT).
+  EXPECT_HAS(load_errors(std::string(kGood) + "? [a, b]\n: 1\n"), "a non-scalar key (a list) at line 11, column 3");
+  EXPECT_HAS(load_errors(replace(kGood, "  joseph: true\n", "  joseph: true\n  {x: 1}: 2\n")),
+             "robot: a non-scalar key (a map) at line 6");
+  EXPECT_HAS(load_errors(replace(kGood, "    - {id: 2}\n", "    - {id: 2, [1]: 3}\n")),
+             "robot.robots[1]: a non-scalar key (a list)");
+  EXPECT_HAS(load_errors(replace(kGood, "  joseph: true\n", "  joseph: true\n  ~: 2\n")), "robot: a non-scalar key (null)");
+  // And a Reader never throws on one, should it be given such a map.
+  EXPECT_HAS(errors_of(std::string(kGood) + "? [a, b]\n: 1\n"), "non-scalar key");
+}
+
+TEST(ConfigInput, DuplicateKeysAreRefusedAtEveryLevel) {
+  // yaml-cpp keeps the first silently: the second value would be ignored.
+  EXPECT_HAS(load_errors(replace(kGood, "  capacity: 128\n", "  capacity: 128\n  capacity: 64\n")),
+             "robot.capacity: duplicate key (lines 4 and 5)");
+  EXPECT_HAS(load_errors(std::string(kGood) + "robot:\n  sigma_m: 1\n"), "robot: duplicate key (lines 2 and 11)");
+  EXPECT_HAS(load_errors(replace(kGood, "{id: 1}", "{id: 1, id: 3}")), "robot.robots[0].id: duplicate key");
+  EXPECT_HAS(load_errors(replace(kGood, "  joseph: true\n", "  joseph: true\n  \"joseph\": false\n")),
+             "robot.joseph: duplicate key");  // quoting does not make another key
+}
+
+TEST(ConfigInput, ASecondDocumentIsRefused) {
+  EXPECT_HAS(load_errors(std::string(kGood) + "---\nrobot: {capacity: 1}\n"), "a second YAML document at line 12");
+  EXPECT_HAS(load_errors(std::string(kGood) + "...\n---\n"), "a second YAML document");
+  EXPECT_EQ(load_errors("---\n" + std::string(kGood)), "") << "one document with its marker is fine";
+}
+
+TEST(ConfigInput, EveryProblemOfTheDocumentAtOnce) {
+  std::string text = replace(kGood, "  capacity: 128\n", "  capacity: 128\n  capacity: 64\n");
+  text += "? [a]\n: 1\n";
+  try {
+    Document::from_string(text, "test.yaml");
+    FAIL() << "loaded";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.problems().size(), 2u) << e.what();
+    EXPECT_HAS(std::string(e.what()), "test.yaml: 2 configuration problems");
+  }
+}
+
+TEST(ConfigInput, NonFiniteNumbersAreRefusedForEveryNumericKey) {
+  for (const char* v : {".nan", ".NaN", ".NAN", ".inf", "-.inf", "+.inf", ".Inf"}) {
+    EXPECT_HAS(errors_of(replace(kGood, "sigma_m: 0.1", std::string("sigma_m: ") + v)), "robot.sigma_m: not a finite number");
+    EXPECT_HAS(errors_of(replace(kGood, "start: [1, 2, 0.5]", std::string("start: [1, ") + v + ", 0.5]")),
+               "robot.start[1]: not a finite number");
+    EXPECT_HAS(errors_of(replace(kGood, "{id: 2}", std::string("{id: ") + v + "}")), "robot.robots[1].id: wrong type");
+  }
+  for (const char* v : {"nan", "inf", "-inf", "1e999", "NaN", "infinity"}) {  // C's spellings, not YAML's
+    EXPECT_HAS(errors_of(replace(kGood, "sigma_m: 0.1", std::string("sigma_m: ") + v)),
+               std::string("robot.sigma_m: not a finite number: got '") + v + "'");
+    EXPECT_HAS(errors_of(replace(kGood, "start: [1, 2, 0.5]", std::string("start: [1, 2, ") + v + "]")),
+               "robot.start[2]: not a finite number");
+  }
+  Opts o;
+  o.gate_probability = 0.0;
+  EXPECT_HAS(errors_of(replace(kGood, "  mode: gated\n", "  mode: gated\n  gate_probability: .nan\n"), &o),
+             "robot.gate_probability: not a finite number");
+}
+
+TEST(ConfigInput, TextMustBeUtf8WithoutNul) {
+  const char nul[] = "robot:\n  sigma_m: 1\0\1garbage\n";
+  EXPECT_HAS(load_errors(std::string(nul, sizeof nul - 1)), "a NUL byte at line 2, column 13");
+  EXPECT_HAS(load_errors("robot:\n  mode: \xc3\x28\n"), "not valid UTF-8 at line 2, column 9 (byte 0xc3)");
+  EXPECT_HAS(load_errors("robot:\n  mode: \xed\xa0\x80\n"), "not valid UTF-8");  // a surrogate
+  EXPECT_HAS(load_errors("robot:\n  mode: \xc0\xaf\n"), "not valid UTF-8");      // an overlong '/'
+  EXPECT_EQ(load_errors("# caf\xc3\xa9, \xe2\x82\xac, \xf0\x9f\x98\x80\nrobot: {mode: \"\xc3\xbc\"}\n"), "");
+}
+
+TEST(ConfigInput, DepthAndSizeOfTheTreeAreBounded) {
+  std::string deep = "robot:\n  x: ";
+  for (int i = 0; i < 100; ++i) deep += "[";
+  for (int i = 0; i < 100; ++i) deep += "]";
+  EXPECT_HAS(load_errors(deep), "nested deeper than 64 levels");
+  std::string deeper = "robot:\n  x: ";  // beyond yaml-cpp's own bound: its DeepRecursion, as malformed YAML
+  for (int i = 0; i < 5000; ++i) deeper += "[";
+  EXPECT_HAS(load_errors(deeper), "test.yaml: 1 configuration problem");
+  // A billion laughs: 9^7 values through aliases from a few hundred bytes.
+  std::string bomb = "a0: &a0 [x, x, x, x, x, x, x, x, x]\n";
+  for (int k = 1; k < 7; ++k) {
+    bomb += "a" + std::to_string(k) + ": &a" + std::to_string(k) + " [";
+    for (int i = 0; i < 9; ++i) bomb += std::string(i ? ", " : "") + "*a" + std::to_string(k - 1);
+    bomb += "]\n";
+  }
+  EXPECT_HAS(load_errors(bomb), "more than 100000 values once aliases are expanded");
+}
+
+TEST(ConfigInput, OnlyRegularFilesUpToTheLimitAreRead) {
+  const std::string dir = ::testing::TempDir();
+  EXPECT_HAS(file_errors(dir + "/no-such-config.yaml"), "no-such-config.yaml: 1 configuration problem:\n  cannot open the file: no such file");
+  EXPECT_HAS(file_errors(dir), "not a regular file (a directory)");
+  EXPECT_HAS(file_errors("/dev/zero"), "/dev/zero: 1 configuration problem:\n  not a regular file (a device)");
+  const std::string fifo = dir + "/elaslam_cfg_fifo";
+  std::remove(fifo.c_str());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_HAS(file_errors(fifo), "not a regular file (a FIFO)");  // refused without waiting for a writer
+  std::remove(fifo.c_str());
+  const std::string huge = dir + "/elaslam_cfg_huge.yaml";
+  {
+    std::ofstream out(huge);
+    out << kGood << "# " << std::string(kMaxFileBytes, 'x') << "\n";
+  }
+  EXPECT_HAS(file_errors(huge), "larger than the limit of 1048576 bytes (1 MiB)");
+  {
+    std::ofstream out(huge, std::ios::trunc);
+    out << kGood << "# " << std::string(kMaxFileBytes - std::string(kGood).size() - 3, 'x') << "\n";
+  }
+  EXPECT_EQ(file_errors(huge), "") << "a file of exactly the limit is read";
+  std::remove(huge.c_str());
 }
 
 }  // namespace

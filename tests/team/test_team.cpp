@@ -2,6 +2,8 @@
 // under dynamism, notices between robots, determinism.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "../robot_node/scene.hpp"
 #include "elaslam/common/version.hpp"
 #include "elaslam/main_robot/main_node.hpp"
@@ -152,6 +154,26 @@ TEST(TeamRun, OverridesAreCheckedAgainstTheWholeScenario) {
   o.rate_hz.reset();
   o.frames = 0;
   EXPECT_THROW(apply_overrides(paper(), o), std::invalid_argument);
+}
+
+// nan fails every comparison: an override range check written as "refuse when below
+// or above" would let it through into the world (landmarks at nan).
+TEST(TeamRun, NonFiniteOverridesAreRefusedNamingTheValue) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  for (double v : {nan, inf, -inf, -5.0}) {
+    RunOverrides speed, dynamism, rate;
+    speed.landmark_speed_mps = v;
+    dynamism.dynamism_percent = v;
+    rate.rate_hz = v;
+    for (const auto& [o, what] : {std::pair{speed, "speed"}, {dynamism, "dynamism"}, {rate, "rate"}}) {
+      try {
+        apply_overrides(paper(), o);
+        ADD_FAILURE() << what << " " << v << " was accepted";
+      } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+      }
+    }
+  }
 }
 
 // A landmark that one robot sees moving is dropped by the other after main_robot's

@@ -1,16 +1,55 @@
-// What every program's command line shares: --version, the config lookup rule, the
-// command line as text (provenance in metrics.json), and where the installed data
-// (configs, Python tools, message definitions) lives.
+// What every program's command line shares: the one way out of main (exit codes,
+// no exception escapes), parsing with numeric options that refuse nan and inf,
+// --version, the config lookup rule, the command line as text (provenance in
+// metrics.json), and where the installed data (configs, Python tools, message
+// definitions) lives.
+//
+// Every program's main:
+//   int main(int argc, char** argv) {
+//     return elaslam::cli::guarded_main("simulator", [&] { return run(argc, argv); });
+//   }
+// and in run:
+//   app.add_option("--speed", speed, "...")->check(cli::range(0.0, 1000.0));
+//   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 
 namespace CLI {
 class App;
-}
+class Validator;
+}  // namespace CLI
 
 namespace elaslam::cli {
+
+/// The exit codes of every program (docs/tools.md, "Exit codes").
+inline constexpr int kExitOk = 0;
+/// The input was valid and the run failed: LCM, a file that cannot be written, a
+/// dataset that cannot be read, an internal error.
+inline constexpr int kExitFailure = 1;
+/// A bad command line or configuration: the message names the option, key path or file.
+inline constexpr int kExitBadInput = 2;
+
+/// The one way out of main: runs `body` (the program; it returns its exit code) so
+/// that no exception escapes. One that does is printed as "<program>: <what>" on
+/// stderr and exits kExitBadInput when it is about the input (config::ConfigError,
+/// YAML::Exception, std::invalid_argument), else kExitFailure.
+int guarded_main(const std::string& program, const std::function<int()>& body);
+
+/// Parses the command line: -1 to go on, else the exit code: kExitOk after --help or
+/// --version (printed), kExitBadInput for a bad command line, CLI11's message naming
+/// the option on stderr. Every floating-point option refuses nan and inf here,
+/// whether or not it has a range.
+int parse(CLI::App& app, int argc, const char* const* argv);
+
+/// The check of a numeric option: a finite number in [lo, hi], or the message
+/// "--speed: nan is not a finite number" / "--speed: -5 is out of range: expected a
+/// number in [0, 1000]". CLI::Range's replacement: it lets nan through (every
+/// comparison with nan is false).
+CLI::Validator range(double lo, double hi);
+CLI::Validator range(int lo, int hi);
 
 /// "<program> (elaslam <version>, git <commit>)".
 std::string version_line(const std::string& program);

@@ -18,6 +18,7 @@
 //   doc.finish();                                               // throws ConfigError
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <initializer_list>
 #include <memory>
@@ -33,6 +34,15 @@ namespace elaslam::config {
 /// (simulator), dataset (the MRCLAM importer, in place of scenario), robot (every
 /// robot_node), main (main_robot). Any other top-level key is an error.
 inline constexpr const char* kSections[] = {"scenario", "dataset", "robot", "main"};
+
+/// What the loader accepts as a configuration file (Document::from_file): a regular
+/// file of at most this many bytes (read with a bounded read, so that /dev/zero, a
+/// FIFO or a runaway file is refused at once), UTF-8 text without NUL bytes, one
+/// YAML document whose keys are plain names, each once per map, nested at most
+/// kMaxDepth levels and with at most kMaxNodes values once aliases are expanded.
+inline constexpr std::size_t kMaxFileBytes = std::size_t{1} << 20;  // 1 MiB; config/paper.yaml is 10 KB
+inline constexpr int kMaxDepth = 64;
+inline constexpr std::size_t kMaxNodes = 100000;
 
 /// All problems found in a configuration, one per line, each naming its key path.
 class ConfigError : public std::runtime_error {
@@ -96,6 +106,7 @@ class Reader {
   template <typename T>
   bool scalar(const std::string& key, T* out, bool optional, const char* type_name);
   void record(const std::string& key, const YAML::Node& value);
+  void check_range(const std::string& key, double v, double lo, double hi);  // finite and in [lo, hi]
 
   YAML::Node node_;
   std::string path_;
@@ -108,7 +119,9 @@ class Reader {
 /// level that no component reads are reported by finish().
 class Document {
  public:
-  /// Throws ConfigError naming the file (and line, for malformed YAML).
+  /// Throws ConfigError naming the file and every problem found: not a regular
+  /// file, too large, not UTF-8 text, malformed YAML (with its line), more than one
+  /// document, non-scalar or duplicate keys (with their key paths and lines).
   static Document from_file(const std::string& path);
   static Document from_string(const std::string& text, const std::string& source = "<string>");
 

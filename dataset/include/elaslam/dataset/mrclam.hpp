@@ -68,6 +68,14 @@ struct DatasetError : std::runtime_error {
 constexpr int kMaxRobotSubject = 5;    // subjects 1..5 are the robots
 constexpr int kFirstLandmarkSubject = 6;  // subjects 6..20 the static landmarks
 
+/// The ranges of the dataset keys that command lines override too (mrclam_import,
+/// run_dataset, mrclam_stats --rate): the config reader checks the same bounds.
+namespace limits {
+inline constexpr double kRateMinHz = 0.1, kRateMaxHz = 1000.0;  // rate_hz
+inline constexpr double kStartMaxS = 1e5;                       // start_s (from 0)
+inline constexpr double kDurationMaxS = 1e5;                    // duration_s (from 0; 0: to the end)
+}  // namespace limits
+
 /// The `dataset:` section of config/mrclam.yaml (every key required).
 struct Options {
   double rate_hz = 10.0;                 // [frames/s]

@@ -87,6 +87,17 @@ struct ScenarioOptions {
   int moving_count() const;
 };
 
+/// The ranges of the scenario keys that command lines override too (simulator,
+/// scenario_dump, run_scenario, sweep, evaluate, apply_overrides): the config
+/// reader checks the same bounds, so an override is refused where the key would be.
+namespace limits {
+inline constexpr double kRateMinHz = 1e-3, kRateMaxHz = 100000.0;           // rate_hz
+inline constexpr int kFramesMax = 100000000;                                 // frames (from 1)
+inline constexpr int kSeedMax = 2147483647;                                  // seed (from 0)
+inline constexpr double kDynamismMaxPercent = 100.0;                         // dynamism_percent (from 0)
+inline constexpr double kLandmarkSpeedMaxMps = 1000.0;                       // landmark_speed_mps (from 0)
+}  // namespace limits
+
 /// One problem found by check_scenario: key path relative to the scenario section.
 struct Problem {
   std::string key;
