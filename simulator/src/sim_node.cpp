@@ -102,6 +102,9 @@ void SimNode::publish_status(int frame) {
   m.frames_dropped = publish_errors_;  // the simulator loses a frame only if publish fails
   m.rejected_inputs = waiter_ ? waiter_->rejected() : 0;
   m.decode_errors = waiter_ ? waiter_->decode_errors() : 0;
+  const auto c = shell_.counters();  // the transport's authentication refusals
+  m.auth_refused = c.auth_refused;
+  m.auth_unauthenticated = c.auth_unauthenticated;
   m.processing_us_p50 = static_cast<std::int32_t>(stats_.processing.quantile(0.50));
   m.processing_us_p99 = static_cast<std::int32_t>(stats_.processing.quantile(0.99));
   m.processing_us_max = static_cast<std::int32_t>(std::min<std::int64_t>(stats_.processing.max(), INT32_MAX));
