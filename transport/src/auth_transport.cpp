@@ -147,19 +147,26 @@ Verdict ReplayGuard::check(const Sender& s) {
 
 // ---- Authenticator ------------------------------------------------------------------
 
+struct Authenticator::Keyed {
+  crypto_auth_hmacsha512256_state state;
+};
+
 Authenticator::Authenticator(const TeamKey& key, std::int16_t sender_id, std::int64_t incarnation,
                              std::string channel_suffix)
-    : key_(key), sender_id_(sender_id), incarnation_(incarnation), suffix_(std::move(channel_suffix)) {
+    : keyed_(std::make_unique<Keyed>()), sender_id_(sender_id), incarnation_(incarnation),
+      suffix_(std::move(channel_suffix)) {
   if (sodium_init() < 0) throw std::runtime_error("libsodium could not be initialised");
   if (key.empty()) throw std::invalid_argument("Authenticator: no team key");
+  crypto_auth_hmacsha512256_init(&keyed_->state, key.data(), TeamKey::kBytes);
 }
+
+Authenticator::~Authenticator() { sodium_memzero(&keyed_->state, sizeof keyed_->state); }
 
 void Authenticator::mac(const std::string& channel, const std::uint8_t* payload, std::size_t size,
                         const std::uint8_t* header, std::uint8_t* out) const {
-  crypto_auth_hmacsha512256_state st;
+  crypto_auth_hmacsha512256_state st = keyed_->state;  // = init(key): the key's pads already hashed
   std::uint8_t len[4];
   put_be(len, channel.size(), 4);
-  crypto_auth_hmacsha512256_init(&st, key_.data(), TeamKey::kBytes);
   crypto_auth_hmacsha512256_update(&st, len, sizeof len);
   crypto_auth_hmacsha512256_update(&st, reinterpret_cast<const unsigned char*>(channel.data()), channel.size());
   crypto_auth_hmacsha512256_update(&st, payload, size);
