@@ -129,7 +129,7 @@ PY
 # Every ELF program answers --version with exit 0 and this version.
 version_check() { # BIN_DIR: every program and script answers --version with this version
   local f out n=0
-  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy"; do
+  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy" "$1/elaslam-make-team-key"; do
     out="$("$f" --version 2>&1)" || fail "$f --version: exit $?: $out"
     case "$out" in
       *"(elaslam $VERSION"*) ;;
