@@ -8,12 +8,11 @@
 // (write, then rename) on change at a bounded rate and at shutdown, and reloaded at start.
 #include <chrono>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/atomic_file.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/transport/auth_transport.hpp"
@@ -37,27 +36,30 @@ GlobalMapOptions load_options(const std::string& path) {
   doc.section("main", [&](config::Reader& r) { parse(r, &o); });
   doc.allow_sections();
   doc.finish();
+  if (auto problems = check_shared_config(path); !problems.empty()) throw config::ConfigError(path, std::move(problems));
   return o;
 }
 
-/// Write, then rename: a reader never sees half a file. Says so when it failed.
+/// files::write_atomic: a temporary made by mkstemp beside it (never a planted link
+/// followed), fsync'ed, renamed over, the directory fsync'ed. Says so when it failed.
 void save_state(const GlobalMap& map, const std::string& path) {
-  const std::string tmp = path + ".tmp";
-  std::ofstream out(tmp, std::ios::trunc);
-  out << map.to_json();
-  out.close();  // fails (and says so below) when the file could not be opened or written
-  if (out && std::rename(tmp.c_str(), path.c_str()) == 0) return;
-  std::fprintf(stderr, "main_robot: cannot save %s\n", path.c_str());
+  std::string why;
+  if (files::write_atomic(path, map.to_json(), &why)) return;
+  std::fprintf(stderr, "main_robot: cannot save %s: %s\n", path.c_str(), why.c_str());
 }
 
-/// The saved map, when --state names a file that exists; false (said why) when it cannot be read.
+/// The saved map, when --state names a file that exists; false (said why) when it
+/// cannot be read or does not hold (from_json checks it like a message).
 bool resume(const std::string& path, GlobalMap* map) {
-  std::ifstream in;
-  if (path.empty() || (in.open(path), !in)) return true;
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string why;
-  if (!map->from_json(ss.str(), &why)) {
+  std::string text, why;
+  bool missing = false;
+  if (path.empty()) return true;
+  if (!files::read_all(path, &text, &why, &missing)) {
+    if (missing) return true;
+    std::fprintf(stderr, "main_robot: cannot load state %s: %s\n", path.c_str(), why.c_str());
+    return false;
+  }
+  if (!map->from_json(text, &why)) {
     std::fprintf(stderr, "main_robot: cannot load state %s: %s\n", path.c_str(), why.c_str());
     return false;
   }

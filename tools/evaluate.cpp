@@ -24,10 +24,12 @@
 // of the first GLOBAL_MAP whose frame is >= k minus the latest SENSOR utime of
 // frame k. Both clocks are the same machine's wall clock.
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -77,6 +79,14 @@ struct LogData {
   std::map<int, int> robot_mode;                        // robot -> node_status_t::MODE_* (last)
   std::optional<run_info_t> run_info;                   // the last RUN_INFO
   std::map<std::string, long> decode_errors;
+  // Messages that decode but that a node would refuse (frame_data.hpp, check_logged):
+  // not evaluated; per channel and reason.
+  std::map<std::string, std::map<std::string, long>> invalid;
+  MessageLimits limits;
+  // From STATUS_ROBOT_<r> / STATUS_MAIN / STATUS_SIM: nodes that raised FAULT_CAPACITY
+  // (results no longer what the inputs said), and each node's last refusal counts.
+  std::set<std::string> capacity_faults;
+  std::map<std::string, std::array<std::int64_t, kNumRefusals>> refused;
   long events = 0;
   std::int64_t bytes_skipped = 0;  // [bytes] between events, not an event (a damaged log)
   bool complete = true;            // false: the log ends in a truncated event
@@ -91,6 +101,21 @@ bool decode(const LogEvent& ev, Msg* m, LogData* d) {
   }
   ++d->decode_errors[ev.channel];
   return false;
+}
+
+/// True when the message holds; else counted (channel, reason) and to be skipped.
+template <typename Msg, typename... Extra>
+bool holds(const LogEvent& ev, const Msg& m, LogData* d, Extra... extra) {
+  Refusal reason = Refusal::kMalformed;
+  if (check_logged(m, extra..., d->limits, &reason).empty()) return true;
+  ++d->invalid[ev.channel][to_string(reason)];
+  return false;
+}
+
+void note_health(const std::string& channel, const node_status_t& m, LogData* d) {
+  if (m.fault_flags & node_status_t::FAULT_CAPACITY) d->capacity_faults.insert(channel);
+  auto& r = d->refused[channel];
+  for (int k = 0; k < kNumRefusals; ++k) r[static_cast<std::size_t>(k)] = m.refused[k];
 }
 
 void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
@@ -123,23 +148,29 @@ void on_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
     f.time_s = static_cast<double>(m.utime) * 1e-6;
   } else if (ch == channels::global_map(sfx)) {
     global_map_t m;
-    if (decode(ev, &m, d) && d->map_assembly.add(m)) on_map(d->map_assembly.map(), ev.timestamp, d);
+    if (decode(ev, &m, d) && holds(ev, m, d) && d->map_assembly.add(m)) on_map(d->map_assembly.map(), ev.timestamp, d);
   } else if (channels::robot_of(ch, "POSE_", sfx) > 0) {
     pose_estimate_t m;
-    if (decode(ev, &m, d)) d->poses[m.frame][m.robot_id] = {m, ev.timestamp};
+    // The first valid POSE of a robot's frame (a later copy is a duplicate or a replay).
+    if (decode(ev, &m, d) && holds(ev, m, d, ev.timestamp)) d->poses[m.frame].emplace(m.robot_id, PoseRecord{m, ev.timestamp});
   } else if (ch == channels::run_info(sfx)) {
     run_info_t m;
     if (decode(ev, &m, d)) d->run_info = m;
   } else if (channels::robot_of(ch, "SENSOR_", sfx) > 0) {
     sensor_frame_t m;
-    if (!decode(ev, &m, d)) return;
+    if (!decode(ev, &m, d) || !holds(ev, m, d)) return;
     d->sensor_frames[m.robot_id].push_back(m.frame);
     auto& t = d->sensor_utime[m.frame];
     t = std::max(t, m.utime);
     add_observed(m, &d->observed[m.frame]);
+  } else if (ch == channels::status_main(sfx) || ch == channels::status_sim(sfx)) {
+    node_status_t m;
+    if (!decode(ev, &m, d)) return;
+    note_health(ch, m, d);
   } else if (channels::robot_of(ch, "STATUS_ROBOT_", sfx) > 0) {
     node_status_t m;
     if (!decode(ev, &m, d)) return;
+    note_health(ch, m, d);
     d->status[m.node_id].push_back({m.frame, m.frames, m.frames_dropped});
     if (m.mode != node_status_t::MODE_NONE) d->robot_mode[m.node_id] = m.mode;
   }
@@ -376,6 +407,12 @@ void add_log_figures(const LogData& d, const Assembled& x, nlohmann::json* j) {
   (*j)["log_bytes_skipped"] = d.bytes_skipped;
   (*j)["log_complete"] = d.complete;
   for (const auto& [ch, n] : d.decode_errors) (*j)["decode_errors"][ch] = n;
+  for (const auto& [ch, reasons] : d.invalid)
+    for (const auto& [why, n] : reasons) (*j)["invalid_messages"][ch][why] = n;
+  (*j)["capacity_faults"] = d.capacity_faults;  // STATUS channels that raised FAULT_CAPACITY
+  for (const auto& [ch, counts] : d.refused)
+    for (int k = 0; k < kNumRefusals; ++k)
+      if (counts[static_cast<std::size_t>(k)] > 0) (*j)["refused_by_nodes"][ch][to_string(static_cast<Refusal>(k))] = counts[static_cast<std::size_t>(k)];
 }
 
 void print_frames(const std::vector<RobotFrameAccount>& accounts, long dropped, long missing_from_log) {
@@ -408,6 +445,11 @@ void print_report(const LogData& d, const Assembled& x, const RunInfo& info, con
             << " max " << mq.max << "\n";
   print_frames(accounts, j["frames_dropped"].get<long>(), j["poses_missing_from_log"].get<long>());
   for (const auto& [ch, n] : d.decode_errors) std::cout << "  undecodable events on " << ch << ": " << n << "\n";
+  for (const auto& [ch, reasons] : d.invalid)
+    for (const auto& [why, n] : reasons)
+      std::cout << "  invalid messages on " << ch << " (" << why << "), not evaluated: " << n << "\n";
+  for (const auto& ch : d.capacity_faults)
+    std::cout << "  FAULT_CAPACITY raised by " << ch << ": a capacity was exceeded, results are not what the inputs said\n";
   if (d.bytes_skipped > 0 || !d.complete)
     std::cout << "  damaged log: " << d.bytes_skipped << " bytes between events skipped"
               << (d.complete ? "" : ", the last event truncated") << "\n";

@@ -6,11 +6,14 @@
 #
 #   tools/fault_test.sh [--seeds "1 2 3"] [--losses "5 20 30"] [--frames N]
 #                       [--dynamism P] [--speed V] [--kill-robot R] [--kill-at-frame F]
-#                       [--restart-after S] [--no-kill] [--out DIR] [--port P]
+#                       [--restart-after S] [--no-kill] [--sensor-losses "30"] [--out DIR] [--port P]
 #                       [--build-dir DIR] [--config FILE]
 #
 # - Per seed (default 1 2 3): the lossless run, one run per loss (default 5, 20 and
-#   30 %: run_team.sh --loss) and one run with robot R (default 2) killed (SIGKILL)
+#   30 %: run_team.sh --loss, the radio's loss: SENSOR frames arrive, as from a
+#   robot's own drivers), one run per --sensor-losses value (default 30; "" for
+#   none: run_team.sh --loss P --loss-scope all, the robots' SENSOR frames lost too,
+#   named seed<S>_loss<P>all) and one run with robot R (default 2) killed (SIGKILL)
 #   when it has published its pose of frame F (default 60) and restarted S seconds
 #   later (default 1.0; -1 never), with --robot-state when robot_node accepts
 #   --state (probed: robot_node --help). --no-kill: no kill run. All with
@@ -39,6 +42,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 SEEDS="1 2 3"
 LOSSES="5 20 30"
+SENSOR_LOSSES="30"
 FRAMES=150
 DYNAMISM=50
 SPEED=0.5
@@ -63,7 +67,7 @@ num() {  # num VALUE LO HI: VALUE is a number in [LO, HI]
 }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --seeds|--losses|--frames|--dynamism|--speed|--kill-robot|--kill-at-frame|--restart-after|--out|--port|--build-dir|--config)
+    --seeds|--losses|--sensor-losses|--frames|--dynamism|--speed|--kill-robot|--kill-at-frame|--restart-after|--out|--port|--build-dir|--config)
       [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --seeds) ints --seeds "$2"; SEEDS="${2//,/ }"; shift 2 ;;
     --losses) for v in ${2//,/ }; do
@@ -72,6 +76,12 @@ while [ $# -gt 0 ]; do
                 fi
               done
               LOSSES="${2//,/ }"; shift 2 ;;
+    --sensor-losses) for v in ${2//,/ }; do
+                       if ! [[ "$v" =~ ^[0-9]+([.][0-9])?$ ]] || ! num "$v" 0 100; then
+                         die "--sensor-losses: percentages in [0, 100] with at most one decimal, got '$v'"
+                       fi
+                     done
+                     SENSOR_LOSSES="${2//,/ }"; shift 2 ;;
     --frames) ints --frames "$2"; FRAMES="$2"; shift 2 ;;
     --dynamism) num "$2" 0 100 || die "--dynamism must be in [0, 100], got '$2'"; DYNAMISM="$2"; shift 2 ;;
     --speed) num "$2" 0 100 || die "--speed must be in [0, 100], got '$2'"; SPEED="$2"; shift 2 ;;
@@ -146,6 +156,9 @@ NAMES=()
 for s in $SEEDS; do
   run "seed${s}_lossless" --seed "$s"; NAMES+=("seed${s}_lossless")
   for p in $LOSSES; do run "seed${s}_loss$p" --seed "$s" --loss "$p"; NAMES+=("seed${s}_loss$p"); done
+  for p in $SENSOR_LOSSES; do
+    run "seed${s}_loss${p}all" --seed "$s" --loss "$p" --loss-scope all; NAMES+=("seed${s}_loss${p}all")
+  done
   if [ "$KILL" -eq 1 ]; then
     run "seed${s}_kill$KILL_ROBOT" --seed "$s" --kill-robot "$KILL_ROBOT" --kill-at-frame "$KILL_FRAME" \
       --restart-after "$RESTART_AFTER" "${STATE_ARGS[@]}"

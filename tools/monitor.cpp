@@ -63,7 +63,9 @@ class Progress {
       dropped_by_robot_[m.node_id] = m.frames_dropped;
       dropped_ = 0;
       for (const auto& [id, n] : dropped_by_robot_) dropped_ += n;
+      note_health("robot " + std::to_string(m.node_id), m);
     });
+    on<node_status_t>(channels::status_main(sfx), 10, [this](const node_status_t& m) { note_health("main", m); });
   }
 
   std::string line() const {
@@ -79,11 +81,31 @@ class Progress {
     if (bad > 0) out += " | undecodable " + std::to_string(bad);
     if (const long long refused = shell_.counters().auth_refused; refused > 0)
       out += " | refused (authentication) " + std::to_string(refused);
+    long long refused = 0;
+    std::string full;
+    for (const auto& [node, h] : health_) {
+      refused += h.refused;
+      if (h.capacity) full += (full.empty() ? "" : ", ") + node;
+    }
+    if (refused > 0) out += " | messages refused " + std::to_string(refused);
+    if (!full.empty()) out += " | CAPACITY EXCEEDED: " + full;
     if (frame_ < 0) out = "waiting for the first frame" + std::string(frames_ > 0 ? " of " + std::to_string(frames_) : "");
     return out;
   }
 
  private:
+  // Refusals (every reason of node_status_t.refused) and the capacity flag, per node.
+  struct Health {
+    long long refused = 0;
+    bool capacity = false;
+  };
+  void note_health(const std::string& node, const node_status_t& m) {
+    Health& h = health_[node];
+    h.refused = 0;
+    for (std::int64_t n : m.refused) h.refused += n;
+    h.capacity = (m.fault_flags & node_status_t::FAULT_CAPACITY) != 0;
+  }
+
   template <typename Msg, typename Fn>
   void on(const std::string& channel, int queue, Fn fn) {
     shell_.subscribe<Msg>(channel, [fn](const Msg& m, const std::string&) { fn(m); }, queue);
@@ -94,6 +116,7 @@ class Progress {
   long long poses_ = 0, notices_ = 0, dropped_ = 0;
   std::set<int> pose_robots_, moving_;
   std::map<int, long long> dropped_by_robot_;
+  std::map<std::string, Health> health_;
 };
 
 }  // namespace

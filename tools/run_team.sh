@@ -6,7 +6,8 @@
 #   tools/run_team.sh [--config FILE] [--mode M] [--rate F] [--dynamism P] [--speed V]
 #                     [--seed S] [--frames N] [--out DIR] [--hosts] [--port P] [--in-process]
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
-#                     [--loss P] [--kill-robot R --kill-at-frame F [--restart-after S]]
+#                     [--loss P [--loss-scope radio|all]]
+#                     [--kill-robot R --kill-at-frame F [--restart-after S]]
 #                     [--robot-state] [--key-file FILE | --auth]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
@@ -50,6 +51,10 @@
 #   random), as a lossy link would: a datagram of k fragments is lost with
 #   1-(1-P)^k. DIR/loss.csv: per host, incoming UDP packets (fragments) and those
 #   dropped, from the rule's counters.
+#   --loss-scope radio (default): the links between the team's computers lose
+#   packets, a robot's SENSOR frames do not (on a robot they come from its own
+#   drivers, on board; the simulator stands in for them), so robot hosts do not
+#   drop what the simulator sends them. all: the robots lose SENSOR frames too.
 #   --kill-robot R --kill-at-frame F: when robot R has published its pose of frame F
 #   (or later; watched from lcm-logger's host), its robot_node gets SIGKILL and,
 #   --restart-after S seconds later (default 1.0; -1: never), is started again with
@@ -77,6 +82,7 @@ REALTIME=0
 PROGRESS=1
 BASELINE=1
 LOSS=""          # --loss: percent, as given
+LOSS_SCOPE=radio # --loss-scope: radio (SENSOR frames arrive) or all
 KILL_ROBOT=""
 KILL_FRAME=""
 RESTART_AFTER=1.0
@@ -99,7 +105,7 @@ number() {
 }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir|--loss|--kill-robot|\
+    --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir|--loss|--loss-scope|--kill-robot|\
     --kill-at-frame|--restart-after|--key-file)
       [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --config) CONFIG="$2"; shift 2 ;;
@@ -115,6 +121,8 @@ while [ $# -gt 0 ]; do
     --hosts) HOSTS=1; shift ;;
     --loss) [[ "$2" =~ ^[0-9]+([.][0-9])?$ ]] || die "--loss must be a percentage in [0, 100] with at most one decimal, got '$2'"
             number --loss "$2" 0 100; LOSS="$2"; shift 2 ;;
+    --loss-scope) case "$2" in radio|all) LOSS_SCOPE="$2" ;; *) die "--loss-scope must be radio or all, got '$2'" ;; esac
+                  shift 2 ;;
     --kill-robot) number --kill-robot "$2" 1 8 int; KILL_ROBOT="$2"; shift 2 ;;
     --kill-at-frame) number --kill-at-frame "$2" 0 100000000 int; KILL_FRAME="$2"; shift 2 ;;
     --restart-after) [ "$2" = -1 ] || number --restart-after "$2" 0 3600; RESTART_AFTER="$2"; shift 2 ;;
@@ -273,7 +281,15 @@ make_host() {
 # add_loss HOST: drop LOSS % of the host's incoming UDP packets (tools/loss_rule.sh).
 # shellcheck source=tools/loss_rule.sh
 . "$ROOT/tools/loss_rule.sh"
-add_loss() { install_loss_rule "${HOST_NS[$1]}" "${HOST_IP[$1]}" "$LOSS"; }
+# With --loss-scope radio a robot's host does not drop what the simulator sends (its
+# SENSOR frames: on a robot they come from its own drivers, not over the radio).
+add_loss() {
+  if [ "$LOSS_SCOPE" = radio ] && [[ "$1" == robot* ]]; then
+    install_loss_rule "${HOST_NS[$1]}" "${HOST_IP[$1]}" "$LOSS" "${HOST_IP[sim]}"
+  else
+    install_loss_rule "${HOST_NS[$1]}" "${HOST_IP[$1]}" "$LOSS"
+  fi
+}
 
 # loss_report: per host, incoming UDP packets and those dropped (DIR/loss.csv), and a
 # line; also the host's IP reassembly: datagrams reassembled from fragments, and
@@ -455,7 +471,13 @@ if [ "$HOSTS" -eq 1 ]; then
   echo "run_team.sh: ${#HOST_NS[@]} hosts on a bridge (10.77.0.0/24), LCM $URL"
   if [ -n "$LOSS" ]; then
     for h in sim main "${ROBOTS[@]/#/robot}"; do add_loss "$h"; done
-    echo "run_team.sh: every host but the logger's drops $LOSS % of its incoming UDP packets (nftables)"
+    if [ "$LOSS_SCOPE" = radio ]; then
+      echo "run_team.sh: every host but the logger's drops $LOSS % of its incoming UDP packets (nftables);" \
+        "SENSOR frames (the simulator's, to the robots) are not dropped (--loss-scope radio)"
+    else
+      echo "run_team.sh: every host but the logger's drops $LOSS % of its incoming UDP packets (nftables)," \
+        "the robots' SENSOR frames included (--loss-scope all)"
+    fi
   fi
   launch own_host
 elif [ "$INSIDE" -eq 1 ]; then

@@ -2,10 +2,11 @@
 # Set-up for elaslam on Debian (bookworm): installs what is missing, makes the
 # Python virtual environment, configures the build in build/.
 # Idempotent and fast when everything is there.
-#   tools/setup.sh [--build-dir DIR] [--sanitize] [--no-python] [--with-test-tools] [--with-spy]
+#   tools/setup.sh [--build-dir DIR] [--sanitize] [--no-python] [--with-test-tools] [--with-spy] [--with-fuzz]
 # --with-test-tools: also what the tests need beyond building and running the team
 #   (Debian packaging, systemd-analyze, Xvfb, a Java runtime for lcm-spy, nftables);
 #   tools/run_tests.sh passes it. --with-spy: what tools/spy.sh needs (Java, Xlibs).
+#   --with-fuzz: clang and its libFuzzer runtime (tools/fuzz.sh).
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
@@ -14,6 +15,7 @@ SANITIZE=OFF
 PYTHON=1
 TEST_TOOLS=0
 SPY=0
+FUZZ=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
@@ -21,6 +23,7 @@ while [ $# -gt 0 ]; do
     --no-python) PYTHON=0; shift ;;
     --with-test-tools) TEST_TOOLS=1; SPY=1; shift ;;
     --with-spy) SPY=1; shift ;;
+    --with-fuzz) FUZZ=1; shift ;;
     -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "setup.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
@@ -40,6 +43,9 @@ SPY_PKGS=(openjdk-17-jdk-headless openjdk-17-jre libjchart2d-java)
 TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables)
 [ "$SPY" -eq 1 ] && PKGS+=("${SPY_PKGS[@]}")
 [ "$TEST_TOOLS" -eq 1 ] && PKGS+=("${TEST_PKGS[@]}")
+# libFuzzer (tools/fuzz.sh): clang 14 and its runtime (-fsanitize=fuzzer).
+FUZZ_PKGS=(clang libclang-rt-14-dev)
+[ "$FUZZ" -eq 1 ] && PKGS+=("${FUZZ_PKGS[@]}")
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,6 +1,8 @@
 #include "elaslam/main_robot/global_map.hpp"
 
 #include <algorithm>
+#include <limits>
+#include <stdexcept>
 
 #include <Eigen/Cholesky>
 #include <nlohmann/json.hpp>
@@ -17,6 +19,11 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   r.read("publish_rate_hz", &o->publish_rate_hz, 0.1, 10000.0);
   r.read("state_save_interval_s", &o->state_save_interval_s, 0.0, 3600.0);
   r.read("resync_interval_frames", &o->resync_interval_frames, 1, 100000);
+  r.read_optional("max_frame_gap", &o->max_frame_gap, 1, 100000);
+  int seq_jump = static_cast<int>(o->max_seq_jump);
+  r.read_optional("max_seq_jump", &seq_jump, 1, 1 << 30);
+  o->max_seq_jump = seq_jump;
+  parse(r, &o->limits);
 }
 
 const char* to_string(EventResult r) {
@@ -69,6 +76,7 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
     s.incarnation = incarnation;
     s.last_seq = 0;
     s.snapshot_seq = 0;
+    s.snapshot_frame = -1;
     s.previous_heard = 0;
     ++s.restarts;
     s.restart_repair(0);
@@ -172,8 +180,11 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
                                const std::vector<int>& moving_frames, std::vector<Notice>* notices) {
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
   const std::size_t r = static_cast<std::size_t>(robot_id - 1);
-  if (seq < s.snapshot_seq) return false;  // an older snapshot than one applied: it would roll the map back
+  // An older snapshot than one applied (lower seq, or the same seq and an older
+  // frame: no events between them) would roll the map back.
+  if (seq < s.snapshot_seq || (seq == s.snapshot_seq && frame < s.snapshot_frame)) return false;
   s.snapshot_seq = seq;
+  s.snapshot_frame = frame;
   // Events of r this map has not seen: a gap on r's event stream, or a snapshot
   // ahead of r's last applied event (a restarted main_robot: empty, or resumed from
   // a state file up to state_save_interval_s old). Those events may have been
@@ -263,44 +274,70 @@ std::string GlobalMap::to_json() const {
   return j.dump(1);
 }
 
+namespace {
+
+// An integer field within [lo, hi] (a float, a huge value or a string is refused:
+// nlohmann's get<int> would convert or wrap silently).
+std::int64_t integer(const nlohmann::json& o, const char* key, std::int64_t lo, std::int64_t hi) {
+  const nlohmann::json& v = o.at(key);
+  if (!v.is_number_integer() || (v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)))
+    throw std::runtime_error(std::string(key) + " is not an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + v.dump() + ")");
+  const std::int64_t x = v.get<std::int64_t>();
+  if (x < lo || x > hi)
+    throw std::runtime_error(contract::got(std::string(key) + " not in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", x));
+  return x;
+}
+
+constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+
+}  // namespace
+
 bool GlobalMap::from_json(const std::string& text, std::string* why) {
   using nlohmann::json;
   GlobalMap loaded(options_);
   try {
     const json j = json::parse(text);
     if (j.at("format").get<std::string>() != "elaslam.global_map.v1") throw std::runtime_error("unknown format");
-    loaded.version_ = j.at("version").get<std::int64_t>();
-    loaded.newest_frame_ = j.at("newest_frame").get<int>();
+    loaded.version_ = integer(j, "version", 0, kMaxSeq);
+    loaded.newest_frame_ = static_cast<int>(integer(j, "newest_frame", -1, kIntMax));
     const json& rs = j.at("robots");
     if (!rs.is_array() || rs.size() != static_cast<std::size_t>(kMaxTeamRobots))
       throw std::runtime_error("robots: expected 8 entries");
     for (std::size_t r = 0; r < rs.size(); ++r) {
-      loaded.streams_[r].last_seq = rs[r].at("last_seq").get<std::int64_t>();
-      loaded.streams_[r].last_frame = rs[r].at("last_frame").get<int>();
-      loaded.streams_[r].incarnation = rs[r].value("incarnation", std::int64_t{0});  // absent in v1 files of before
-      if (loaded.streams_[r].last_seq < 0 || loaded.streams_[r].incarnation < 0)
-        throw std::runtime_error("robots: negative seq or incarnation");
+      const std::string where = "robots[" + std::to_string(r) + "].";
+      try {
+        loaded.streams_[r].last_seq = integer(rs[r], "last_seq", 0, kMaxSeq);
+        loaded.streams_[r].last_frame = static_cast<int>(integer(rs[r], "last_frame", -1, kIntMax));
+        if (rs[r].contains("incarnation"))  // absent in v1 files of before
+          loaded.streams_[r].incarnation = integer(rs[r], "incarnation", 0, std::numeric_limits<std::int64_t>::max());
+      } catch (const std::exception& e) {
+        throw std::runtime_error(where + e.what());
+      }
     }
     for (const json& l : j.at("landmarks")) {
-      const int id = l.at("id").get<int>();
-      const int status = l.at("status").get<int>();
+      const int id = static_cast<int>(integer(l, "id", -1, kIntMax));
+      const int status = static_cast<int>(integer(l, "status", 0, 100));
       if (id < 0 || id >= max_landmark_id()) throw std::runtime_error("landmark id " + std::to_string(id) + " out of range");
       if (status < 1 || status > 2) throw std::runtime_error("landmark status " + std::to_string(status));
       GlobalEntry& g = loaded.entries_[static_cast<std::size_t>(id)];
       g.status = static_cast<GlobalStatus>(status);
-      g.status_frame = l.at("status_frame").get<int>();
-      g.moving_by = l.at("moving_by").get<int>();
+      g.status_frame = static_cast<int>(integer(l, "status_frame", -1, kIntMax));
+      g.moving_by = static_cast<int>(integer(l, "moving_by", 0, kMaxTeamRobots));
       for (const json& e : l.at("estimates")) {
-        const int r = e.at("robot").get<int>();
+        const int r = static_cast<int>(integer(e, "robot", 0, 100));
         if (r < 1 || r > kMaxTeamRobots) throw std::runtime_error("estimate robot " + std::to_string(r));
         const auto c = e.at("cov").get<std::vector<double>>();
         if (c.size() != 4) throw std::runtime_error("cov: expected 4 numbers");
         RobotEstimate& est = g.by_robot[static_cast<std::size_t>(r - 1)];
         est.valid = true;
-        est.frame = e.at("frame").get<int>();
+        est.frame = static_cast<int>(integer(e, "frame", -1, kIntMax));
         est.position = {e.at("x").get<double>(), e.at("y").get<double>()};
         est.cov << c[0], c[1], c[2], c[3];
-        if (!est.position.allFinite() || !est.cov.allFinite()) throw std::runtime_error("non-finite estimate");
+        const std::string where = "landmark " + std::to_string(id) + " robot " + std::to_string(r);
+        if (!options_.limits.in_team(r)) throw std::runtime_error(where + ": robot not in limits.team " + team_text(options_.limits.team_mask));
+        std::string bad = check_position(est.position.x(), est.position.y(), options_.limits, "position");
+        if (bad.empty()) bad = check_cov2(est.cov, options_.limits, "cov");
+        if (!bad.empty()) throw std::runtime_error(where + ": " + bad);
       }
       if (g.status == GlobalStatus::kStatic) loaded.fuse(g);
     }

@@ -9,15 +9,6 @@ namespace elaslam {
 namespace {
 
 
-bool finite_cov(const double (&c)[2][2]) {
-  for (const auto& row : c)
-    for (double v : row)
-      if (!std::isfinite(v)) return false;
-  // A covariance: symmetric, non-negative diagonal and determinant.
-  return c[0][0] >= 0.0 && c[1][1] >= 0.0 && std::fabs(c[0][1] - c[1][0]) <= 1e-9 * (1.0 + std::fabs(c[0][1])) &&
-         c[0][0] * c[1][1] - c[0][1] * c[1][0] >= -1e-18;
-}
-
 // A global map chunk's two kinds of entry (chunks.hpp, prepare_chunks).
 void grow_static(global_map_t* m, int n) { contract::set_count(&m->landmarks, &m->num_landmarks, n); }
 void grow_moving(global_map_t* m, int n) {
@@ -52,24 +43,49 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   spans_.reserve(chunks_.size());
 }
 
-std::string MainNode::validate(const landmark_event_t& m) const {
-  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return contract::got(contract::outside("robot_id", 1, kMaxTeamRobots), m.robot_id);
-  if (m.seq < 1) return contract::got("seq must be >= 1", m.seq);
+namespace {
+
+/// The robot id of a message: within the contract, then in the team.
+std::string check_robot(int robot_id, const MessageLimits& l, Refusal* reason) {
+  if (robot_id < 1 || robot_id > kMaxTeamRobots) {
+    *reason = Refusal::kMalformed;
+    return contract::got(contract::outside("robot_id", 1, kMaxTeamRobots), robot_id);
+  }
+  if (!l.in_team(robot_id)) {
+    *reason = Refusal::kOutsideTeam;
+    return contract::got("robot_id not in limits.team " + team_text(l.team_mask), robot_id);
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string MainNode::validate(const landmark_event_t& m, Refusal* reason) const {
+  Refusal dummy = Refusal::kMalformed;
+  Refusal& r = reason ? *reason : dummy;
+  const MessageLimits& lim = map_.options().limits;
+  if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
+  r = Refusal::kMalformed;
+  if (m.seq < 1 || m.seq > kMaxSeq) return contract::got("seq not in [1, 2^62]", m.seq);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
   if (m.kind < landmark_event_t::ADD || m.kind > landmark_event_t::RETURN) return contract::got("unknown kind", int(m.kind));
   if (m.landmark_id < 0 || m.landmark_id >= map_.max_landmark_id())
     return contract::got("landmark_id outside [0, max_landmark_id)", m.landmark_id);
   if (m.kind != landmark_event_t::MOVING) {
-    if (!std::isfinite(m.x) || !std::isfinite(m.y) || std::fabs(m.x) > 1e6 || std::fabs(m.y) > 1e6)
-      return "position is not finite or beyond 1e6 m";
-    if (!finite_cov(m.cov)) return "covariance is not a finite symmetric positive semi-definite matrix";
+    r = Refusal::kImplausible;
+    if (std::string p = check_position(m.x, m.y, lim, "position"); !p.empty()) return p;
+    if (std::string p = check_cov2(m.cov, lim, "cov"); !p.empty()) return p;
   }
   return "";
 }
 
-std::string MainNode::validate(const lmap_snapshot_t& m) const {
-  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots) return contract::got(contract::outside("robot_id", 1, kMaxTeamRobots), m.robot_id);
-  if (m.seq < 0) return contract::got("seq is negative", m.seq);
+std::string MainNode::validate(const lmap_snapshot_t& m, Refusal* reason) const {
+  Refusal dummy = Refusal::kMalformed;
+  Refusal& r = reason ? *reason : dummy;
+  const MessageLimits& lim = map_.options().limits;
+  if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
+  r = Refusal::kMalformed;
+  if (m.seq < 0 || m.seq > kMaxSeq) return contract::got("seq not in [0, 2^62]", m.seq);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
   if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks) return contract::got("chunk outside [0, num_chunks)", m.chunk);
   if (m.id_begin < 0 || m.id_end <= m.id_begin || m.id_end > map_.max_landmark_id())
@@ -80,20 +96,77 @@ std::string MainNode::validate(const lmap_snapshot_t& m) const {
   int previous = -1;
   for (int k = 0; k < m.num_landmarks; ++k) {
     const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
+    r = Refusal::kMalformed;
     if (l.id < m.id_begin || l.id >= m.id_end) return contract::got("landmark id outside the chunk's range", l.id);
-    if (l.id <= previous) return contract::got("landmark ids not ascending (or repeated), id", l.id);
+    if (l.id == previous) return r = Refusal::kDuplicateId, contract::got("landmark id listed twice", l.id);
+    if (l.id < previous) return contract::got("landmark ids not ascending, id", l.id);
     previous = l.id;
-    if (!std::isfinite(l.x) || !std::isfinite(l.y) || std::fabs(l.x) > 1e6 || std::fabs(l.y) > 1e6)
-      return contract::got("landmark position not finite or beyond 1e6 m, id", l.id);
-    if (!finite_cov(l.cov)) return contract::got("landmark covariance invalid, id", l.id);
+    r = Refusal::kImplausible;  // (no string built unless refused: the frame path allocates nothing)
+    if (std::string p = check_position(l.x, l.y, lim, "position"); !p.empty()) return "landmark " + std::to_string(l.id) + " " + p;
+    if (std::string p = check_cov2(l.cov, lim, "cov"); !p.empty()) return "landmark " + std::to_string(l.id) + " " + p;
   }
+  previous = -1;
   for (int k = 0; k < m.num_moving; ++k) {
     const int id = m.moving_ids[static_cast<std::size_t>(k)];
+    r = Refusal::kMalformed;
     if (id < m.id_begin || id >= m.id_end) return contract::got("moving id outside the chunk's range", id);
+    // Ascending like the landmarks (snapshot chunks list both in id order): a repeat is one id twice.
+    if (id == previous) return r = Refusal::kDuplicateId, contract::got("moving id listed twice", id);
+    if (id < previous) return contract::got("moving ids not ascending, id", id);
+    previous = id;
     const int found = m.moving_frames[static_cast<std::size_t>(k)];
     if (found < -1 || found > m.frame) return contract::got("moving frame not in [-1, the snapshot's frame]", found);
   }
+  // One id both static and moving: two contradicting entries for it.
+  for (int a = 0, b = 0; a < m.num_landmarks && b < m.num_moving;) {
+    const int ia = m.landmarks[static_cast<std::size_t>(a)].id, ib = m.moving_ids[static_cast<std::size_t>(b)];
+    if (ia == ib) return r = Refusal::kDuplicateId, contract::got("id listed as static and as moving", ia);
+    (ia < ib ? a : b)++;
+  }
   return "";
+}
+
+std::string MainNode::validate(const pose_estimate_t& m, Refusal* reason) const {
+  Refusal dummy = Refusal::kMalformed;
+  Refusal& r = reason ? *reason : dummy;
+  const MessageLimits& lim = map_.options().limits;
+  if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
+  r = Refusal::kMalformed;
+  if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  r = Refusal::kImplausible;
+  if (std::string p = check_position(m.x, m.y, lim, "position"); !p.empty()) return p;
+  if (!std::isfinite(m.theta)) return "theta is not finite";
+  if (std::string p = check_pose_cov(m.cov, lim, "cov"); !p.empty()) return p;
+  return "";
+}
+
+// The newest frame known of the robot (else of the team, when the robot is new): a
+// message further ahead than max_frame_gap is held until a next one confirms it.
+std::string MainNode::check_frame(int robot_id, int frame, Refusal* reason) {
+  const auto r = static_cast<std::size_t>(robot_id - 1);
+  int last = std::max(map_.stream(robot_id).last_frame, robot_frame_[r]);
+  if (last < 0) last = std::max(map_.newest_frame(), completed_frame_);
+  if (last < 0) return "";  // nothing known yet: the first frame sets the reference
+  const auto v = frame_guard_[r].check(last, frame, map_.options().max_frame_gap, /*strictly_after=*/false);
+  if (v != JumpGuard::Verdict::kHeld) return "";
+  *reason = Refusal::kFrameWindow;
+  return contract::got("frame more than max_frame_gap " + std::to_string(map_.options().max_frame_gap) +
+                           " ahead of robot " + std::to_string(robot_id) + "'s last " + std::to_string(last) +
+                           ", held until a next message confirms it",
+                       frame);
+}
+
+std::string MainNode::check_seq(int robot_id, std::int64_t seq, bool snapshot, Refusal* reason) {
+  const auto r = static_cast<std::size_t>(robot_id - 1);
+  const std::int64_t last = map_.stream(robot_id).last_seq;
+  if (seq <= last) return "";  // a duplicate or stale one: the map ignores it
+  JumpGuard& g = snapshot ? snapshot_guard_[r] : event_guard_[r];
+  if (g.check(last, seq, map_.options().max_seq_jump, /*strictly_after=*/!snapshot) != JumpGuard::Verdict::kHeld) return "";
+  *reason = Refusal::kSeqWindow;
+  return contract::got("seq more than max_seq_jump " + std::to_string(map_.options().max_seq_jump) + " ahead of robot " +
+                           std::to_string(robot_id) + "'s last " + std::to_string(last) +
+                           ", held until a next message confirms it",
+                       seq);
 }
 
 bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int frame) {
@@ -102,6 +175,9 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
     case IncarnationVerdict::kRestarted:
       ++counters_.restarts;
       robot_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;
+      frame_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
+      event_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
+      snapshot_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       alert_ = "robot " + std::to_string(robot_id) + " restarted without its state (incarnation " +
                std::to_string(incarnation) + "): its stream starts over, snapshot requested";
       request_resync(robot_id, resync_request_t::NEW_INCARNATION);
@@ -109,6 +185,8 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
     case IncarnationVerdict::kStale: break;
   }
   ++counters_.stale_incarnation;
+  counters_.refused.add(Refusal::kStale);
+  ++counters_.rejected_inputs;
   auto& alerted = alerted_duplicate_[static_cast<std::size_t>(robot_id - 1)];
   if (map_.duplicate_sender(robot_id) && !alerted) {
     alert_ = "FAULT: two live senders use robot id " + std::to_string(robot_id) + " (incarnations " +
@@ -151,11 +229,14 @@ std::string MainNode::take_alert() {
 }
 
 bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
-  if (const std::string problem = validate(m); !problem.empty()) return refused(problem, why);
+  Refusal reason = Refusal::kMalformed;
+  if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why);
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
     if (why) *why = "event of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
     return false;
   }
+  if (std::string p = check_seq(m.robot_id, m.seq, false, &reason); !p.empty()) return refused(reason, p, why);
+  if (std::string p = check_frame(m.robot_id, m.frame, &reason); !p.empty()) return refused(reason, p, why);
   GlobalEvent e;
   e.robot_id = m.robot_id;
   e.seq = m.seq;
@@ -177,11 +258,14 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
 }
 
 bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
-  if (const std::string problem = validate(m); !problem.empty()) return refused(problem, why);
+  Refusal reason = Refusal::kMalformed;
+  if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why);
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
     if (why) *why = "snapshot of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
     return false;
   }
+  if (std::string p = check_seq(m.robot_id, m.seq, true, &reason); !p.empty()) return refused(reason, p, why);
+  if (std::string p = check_frame(m.robot_id, m.frame, &reason); !p.empty()) return refused(reason, p, why);
   snap_lms_.clear();
   snap_moving_.clear();
   snap_moving_frames_.clear();
@@ -196,7 +280,12 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
   if (!map_.apply_snapshot(m.robot_id, m.seq, m.frame, m.id_begin, m.id_end, snap_lms_, snap_moving_,
                            snap_moving_frames_, &pending_)) {
     ++counters_.stale_snapshots;
-    return true;
+    const RobotStream& st = map_.stream(m.robot_id);
+    return refused(Refusal::kStale,
+                   "snapshot (seq " + std::to_string(m.seq) + ", frame " + std::to_string(m.frame) +
+                       ") older than the one applied (seq " + std::to_string(st.snapshot_seq) + ", frame " +
+                       std::to_string(st.snapshot_frame) + "): it would roll the map back",
+                   why);
   }
   ++counters_.snapshots;
   return true;
@@ -219,17 +308,21 @@ const std::vector<dynamic_notice_t>& MainNode::take_notices(std::int64_t now_uti
   return notices_;
 }
 
-bool MainNode::refused(const std::string& problem, std::string* why) {
+bool MainNode::refused(Refusal reason, const std::string& problem, std::string* why) {
   ++counters_.rejected_inputs;
+  counters_.refused.add(reason);
   if (why) *why = problem;
   return false;
 }
 
-int MainNode::on_pose(const pose_estimate_t& m) {
-  if (m.robot_id < 1 || m.robot_id > kMaxTeamRobots || m.frame < 0) return refused("pose outside the team", nullptr), -1;
+int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
+  Refusal reason = Refusal::kMalformed;
+  // A POSE from outside the team never counts towards the frame the team has finished.
+  if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why), -1;
   const auto r = static_cast<std::size_t>(m.robot_id - 1);
   const bool first = map_.stream(m.robot_id).incarnation == 0 && robot_frame_[r] < 0;
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) return -1;
+  if (std::string p = check_frame(m.robot_id, m.frame, &reason); !p.empty()) return refused(reason, p, why), -1;
   // Heard of first past its first frames (main started late or without its state):
   // the robot's earlier events never reached this map.
   if (first && m.frame > 0 && map_.stream(m.robot_id).last_seq == 0)
@@ -260,7 +353,11 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
   }
   cut_chunks(static_ids_.data(), static_cast<int>(static_ids_.size()), moving_ids_.data(),
              static_cast<int>(moving_ids_.size()), chunk_sizes_, map_.max_landmark_id(), &spans_);
-  const int n = static_cast<int>(std::min(spans_.size(), chunks_.size()));  // equal: the pool fits the largest map
+  // Equal: the pool fits the largest map. Were it ever short, the map would go out
+  // cut: a capacity fault, flagged in STATUS_MAIN, never silent.
+  const int n = static_cast<int>(std::min(spans_.size(), chunks_.size()));
+  capacity_fault_ = spans_.size() > chunks_.size();
+  if (capacity_fault_) ++counters_.capacity_faults;
   const int stamp = frame >= 0 ? frame : (completed_frame_ >= 0 ? completed_frame_ : map_.newest_frame());
   for (int k = 0; k < n; ++k) {
     const ChunkSpan& sp = spans_[static_cast<std::size_t>(k)];
@@ -315,6 +412,8 @@ node_status_t MainNode::status_msg(std::int64_t now_utime) const {
     }
     if (map_.stream(r).gap_pending) s.fault_flags |= node_status_t::FAULT_UNREPAIRED_GAP;
   }
+  if (capacity_fault_) s.fault_flags |= node_status_t::FAULT_CAPACITY;
+  for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = counters_.events;
   s.frames_dropped = counters_.gaps;
   s.rejected_inputs = counters_.rejected_inputs;

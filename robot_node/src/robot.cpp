@@ -87,6 +87,13 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
       P0 = dead_reckoning_cov(P0, in.frame, options_.late_start_step_m, options_.late_start_turn, in.noise);
     ekf_.reset(in.odometer, P0);
     initialised_ = true;
+  } else if (in.reanchor) {
+    // A new odometer origin: no increment, and the frames since the last one driven
+    // anywhere within the vehicle's bounds.
+    const double k = std::max(1, in.frame - last_frame_);
+    const double step = options_.max_step_m * k, turn = std::min(kPi, options_.max_turn * k);
+    const Eigen::Matrix3d U = Eigen::Vector3d(step * step, step * step, turn * turn).asDiagonal();
+    if (ekf_.predict(Pose2{}, U) != EkfStatus::kOk) ++s->filter_faults;
   } else {
     const Pose2 increment = between(last_odometer_, in.odometer);
     if (ekf_.predict(increment, odometry_covariance(increment, in.noise)) != EkfStatus::kOk) ++s->filter_faults;
@@ -117,10 +124,7 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
     if (ekf_.has_landmark(o.landmark_id)) continue;
     ++s->num_candidates;
-    if (ekf_.add_landmark(o.landmark_id, o.z) != EkfStatus::kOk) {
-      ++s->filter_faults;
-      continue;
-    }
+    if (!added(ekf_.add_landmark(o.landmark_id, o.z), s)) continue;
     lmap_.map_at_once(o.landmark_id, in.frame);
     emit(EventKind::kAdd, o.landmark_id);
     ++s->num_added;
@@ -201,7 +205,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     }
     // New, seen again after moving or after a gap, or inconsistent: (re)anchor here.
     lmap_.anchor_candidate(id, in.frame);
-    if (ekf_.add_landmark(id, o.z) != EkfStatus::kOk) ++s->filter_faults;  // kFull: candidate outside the filter
+    added(ekf_.add_landmark(id, o.z), s);  // kFull: candidate outside the filter
   }
 }
 
@@ -271,7 +275,7 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   lmap_.found_moving(id, last_frame_, seen != nullptr);
   if (seen) {
     record_sighting(id, *seen);
-    if (ekf_.add_landmark(id, *seen) != EkfStatus::kOk) ++s->filter_faults;
+    added(ekf_.add_landmark(id, *seen), s);
   }
   emit_at(EventKind::kMoving, id, last, last_cov);
   ++s->num_moving;
@@ -307,6 +311,13 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   const bool removed = in_filter && ekf_.remove_landmark(landmark_id) == EkfStatus::kOk;
   lmap_.told_moving(landmark_id, frame, removed);
   return removed && held;
+}
+
+bool Robot::added(EkfStatus st, FrameSummary* s) {
+  if (st == EkfStatus::kOk) return true;
+  ++s->filter_faults;
+  if (st == EkfStatus::kFull) ++s->filter_full;  // a capacity limit: the node says so (FAULT_CAPACITY)
+  return false;
 }
 
 void Robot::emit(EventKind kind, int id) {

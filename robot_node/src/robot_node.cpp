@@ -1,6 +1,7 @@
 #include "elaslam/robot_node/robot_node.hpp"
 
 #include <chrono>
+#include <sstream>
 #include <algorithm>
 #include <cmath>
 
@@ -61,13 +62,15 @@ void RobotNode::prepare_snapshot_chunks() {
   spans_.reserve(chunks_.size());
 }
 
-std::string RobotNode::validate(const sensor_frame_t& m) const {
+std::string RobotNode::validate(const sensor_frame_t& m, Refusal* reason) const {
+  Refusal dummy = Refusal::kMalformed;
+  Refusal& r = reason ? *reason : dummy;
+  r = Refusal::kMalformed;
   if (m.robot_id != robot_id_) return contract::got("robot_id is not this robot's", m.robot_id);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
   if (m.num_obs < 0 || m.num_obs > kMaxObservations) return contract::got(contract::count_outside("num_obs", kMaxObservations), m.num_obs);
   if (!contract::count_fits(m.obs, m.num_obs)) return contract::got("num_obs larger than the obs array", m.num_obs);
   if (!finite(m.odom_x) || !finite(m.odom_y) || !finite(m.odom_theta)) return "odometer reading is not finite";
-  if (std::fabs(m.odom_x) > 1e6 || std::fabs(m.odom_y) > 1e6) return "odometer position beyond 1e6 m";
   for (double v : {m.odom_var_trans_per_m, m.odom_var_rot_per_rad, m.odom_var_rot_per_m})
     if (!finite(v) || v < 0.0 || v > kMaxOdomVar) return contract::got("odometry noise variance not in [0, 1e3]", v);
   for (int k = 0; k < m.num_obs; ++k) {
@@ -79,17 +82,77 @@ std::string RobotNode::validate(const sensor_frame_t& m) const {
     if (!finite(o.bearing) || std::fabs(o.bearing) > kPi + kBearingSlack)
       return contract::got("observation bearing not in [-pi, pi]", o.bearing);
   }
+  r = Refusal::kImplausible;
+  if (std::string p = check_position(m.odom_x, m.odom_y, options_.limits, "odometer position"); !p.empty()) return p;
   return "";
+}
+
+// Frames further ahead than confirm_jump_frames wait for the next frame to confirm
+// them (JumpGuard); odometer increments beyond what the robot can drive in the
+// frames elapsed are refused, and re-anchored on once odometry_reanchor_frames
+// readings in a row continue the jump (a real change of the odometer's origin).
+std::string RobotNode::check_progress(const sensor_frame_t& msg, Refusal* reason) {
+  input_.reanchor = false;
+  if (last_frame_ < 0 || !robot_.initialised()) return "";
+  const std::int64_t ahead = std::int64_t{msg.frame} - last_frame_;  // > 0 here
+  if (ahead > options_.max_frame_gap) {
+    *reason = Refusal::kFrameWindow;
+    return contract::got("frame jumps further ahead than node.max_frame_gap " + std::to_string(options_.max_frame_gap) +
+                             " of the last " + std::to_string(last_frame_),
+                         msg.frame);
+  }
+  if (frame_guard_.check(last_frame_, msg.frame, options_.confirm_jump_frames) == JumpGuard::Verdict::kHeld) {
+    *reason = Refusal::kFrameWindow;
+    return contract::got("frame more than node.confirm_jump_frames " + std::to_string(options_.confirm_jump_frames) +
+                             " ahead of the last " + std::to_string(last_frame_) + ", held until the next frame confirms it",
+                         msg.frame);
+  }
+  const Pose2 reading{msg.odom_x, msg.odom_y, wrap_angle(msg.odom_theta)};
+  const auto within = [&](const Pose2& from, std::int64_t frames) {
+    const Pose2 d = between(from, reading);
+    const double k = static_cast<double>(std::max<std::int64_t>(frames, 1));
+    return std::hypot(d.x, d.y) <= options_.max_step_m * k &&
+           (options_.max_turn * k >= kPi || std::fabs(d.theta) <= options_.max_turn * k);
+  };
+  if (within(robot_.last_odometer(), ahead)) {
+    odo_candidate_frame_ = -1;
+    odo_streak_ = 0;
+    return "";
+  }
+  // A jump: does it continue the previous refused one?
+  if (odo_candidate_frame_ >= 0 && msg.frame > odo_candidate_frame_ && within(odo_candidate_, msg.frame - odo_candidate_frame_)) {
+    ++odo_streak_;
+  } else {
+    odo_streak_ = 1;
+  }
+  odo_candidate_ = reading;
+  odo_candidate_frame_ = msg.frame;
+  if (odo_streak_ >= options_.odometry_reanchor_frames) {
+    input_.reanchor = true;
+    odo_candidate_frame_ = -1;
+    odo_streak_ = 0;
+    ++counters_.odometry_reanchors;
+    return "";
+  }
+  const Pose2 d = between(robot_.last_odometer(), reading);
+  *reason = Refusal::kOdometry;
+  std::ostringstream os;
+  os << "odometer moved " << std::hypot(d.x, d.y) << " m and " << rad2deg(std::fabs(d.theta)) << " deg in " << ahead
+     << " frame(s), beyond node.max_step_m " << options_.max_step_m << " / max_turn_deg " << rad2deg(options_.max_turn)
+     << " per frame (frame " << msg.frame << "; re-anchored after " << options_.odometry_reanchor_frames
+     << " consistent readings)";
+  return os.str();
 }
 
 RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t now_utime, std::string* why) {
   snapshot_ready_ = false;
   events_.clear();
-  std::string problem = validate(msg);
+  Refusal reason = Refusal::kMalformed;
+  std::string problem = validate(msg, &reason);
   // Two observations of one landmark in a frame: the contract allows one.
   for (int k = 0; problem.empty() && k < msg.num_obs; ++k) {
     auto& seen = id_seen_[static_cast<std::size_t>(msg.obs[k].landmark_id)];
-    if (seen) problem = contract::got("landmark observed twice in one frame", msg.obs[k].landmark_id);
+    if (seen) problem = contract::got("landmark observed twice in one frame", msg.obs[k].landmark_id), reason = Refusal::kDuplicateId;
     seen = 1;
   }
   // Clear the marks; a refused count may exceed the array (the obs are variable-length).
@@ -98,9 +161,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     const int id = msg.obs[static_cast<std::size_t>(k)].landmark_id;
     if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
   }
-  if (problem.empty() && last_frame_ >= 0 && msg.frame > last_frame_ + options_.max_frame_gap)
-    problem = contract::got("frame jumps further ahead than node.max_frame_gap", msg.frame);
-  if (!problem.empty()) return refused(problem, why), Verdict::kInvalid;
+  if (!problem.empty()) return refused(reason, problem, why), Verdict::kInvalid;
   if (msg.frame == last_frame_) {
     ++counters_.frames_duplicate;
     if (why) *why = "duplicate frame " + std::to_string(msg.frame);
@@ -111,6 +172,8 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     if (why) *why = "frame " + std::to_string(msg.frame) + " older than " + std::to_string(last_frame_);
     return Verdict::kOutOfOrder;
   }
+  problem = check_progress(msg, &reason);
+  if (!problem.empty()) return refused(reason, problem, why), Verdict::kInvalid;
   if (last_frame_ >= 0) counters_.frames_gap += msg.frame - last_frame_ - 1;
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -124,6 +187,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   last_frame_ = msg.frame;
   ++counters_.frames;
   counters_.filter_faults += s.filter_faults;
+  if (s.filter_full > 0) note_filter_full(s.filter_full);
   fill_events(now_utime);
   if (msg.frame % options_.snapshot_period_frames == 0) {
     make_snapshot(now_utime);
@@ -234,18 +298,42 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
   return num_chunks_;
 }
 
+void RobotNode::note_filter_full(int n) {
+  counters_.filter_full += n;
+  full_frame_ = last_frame_;
+  if (last_frame_ - alerted_frame_ < kAlertFrames) return;  // rate-limited
+  alerted_frame_ = last_frame_;
+  alert_ = "FAULT: robot " + std::to_string(robot_id_) + " filter full (filter.capacity " +
+           std::to_string(options_.ekf.capacity) + " landmarks) at frame " + std::to_string(last_frame_) + ": " +
+           std::to_string(counters_.filter_full) + " landmark(s) left out so far; raise filter.capacity";
+}
+
+std::string RobotNode::take_alert() {
+  std::string a;
+  a.swap(alert_);
+  return a;
+}
+
 bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
   std::string problem;
+  Refusal reason = Refusal::kMalformed;
   if (msg.landmark_id < 0 || msg.landmark_id >= options_.ekf.max_landmark_id)
     problem = contract::got("landmark_id outside [0, max_landmark_id)", msg.landmark_id);
   else if (msg.detected_by < 1 || msg.detected_by > contract::kMaxRobots)
     problem = contract::got(contract::outside("detected_by", 1, contract::kMaxRobots), msg.detected_by);
-  if (!problem.empty()) return refused(problem, why);
+  else if (msg.frame < 0)
+    problem = contract::got("frame is negative", msg.frame);
+  else if (msg.seq < 0 || msg.seq > kMaxSeq)
+    problem = contract::got("seq not in [0, 2^62]", msg.seq);
+  else if (!options_.limits.in_team(msg.detected_by))
+    problem = contract::got("detected_by not in limits.team " + team_text(options_.limits.team_mask), msg.detected_by),
+    reason = Refusal::kOutsideTeam;
+  if (!problem.empty()) return refused(reason, problem, why);
   auto& had = notice_frame_[static_cast<std::size_t>(msg.landmark_id)];
   had = std::max(had, msg.frame);
   // Ahead of this robot's frames: hold it (a fresh node, one far behind or a full
   // buffer applies it at once; a notice is never lost).
-  if (last_frame_ >= 0 && msg.frame > last_frame_ && msg.frame <= last_frame_ + options_.max_frame_gap &&
+  if (last_frame_ >= 0 && msg.frame > last_frame_ && std::int64_t{msg.frame} <= std::int64_t{last_frame_} + options_.max_frame_gap &&
       held_.size() < held_.capacity()) {
     held_.push_back(msg);
     ++counters_.notices_deferred;
@@ -260,28 +348,52 @@ void RobotNode::apply_notice(const dynamic_notice_t& msg) {
   ++(removed ? counters_.notices_applied : counters_.notices_ignored);
 }
 
-std::string RobotNode::validate(const global_map_t& m) const {
+std::string RobotNode::validate(const global_map_t& m, Refusal* reason) const {
   const int max_id = options_.ekf.max_landmark_id;
+  const MessageLimits& lim = options_.limits;
+  *reason = Refusal::kMalformed;
   if (m.num_moving < 0 || !contract::count_fits(m.moving_ids, m.num_moving) ||
       !contract::count_fits(m.moving_frames, m.num_moving) || !contract::count_fits(m.moving_by, m.num_moving))
     return contract::got("num_moving does not match the moving arrays", m.num_moving);
+  if (!contract::count_fits(m.landmarks, m.num_landmarks)) return contract::got("num_landmarks does not match the array", m.num_landmarks);
+  int previous = -1;
+  for (int k = 0; k < m.num_landmarks; ++k) {
+    const global_landmark_t& l = m.landmarks[static_cast<std::size_t>(k)];
+    *reason = Refusal::kMalformed;
+    if (l.id < 0) return contract::got("landmark id is negative", l.id);
+    if (l.id == previous) return *reason = Refusal::kDuplicateId, contract::got("landmark id listed twice", l.id);
+    if (l.id < previous) return contract::got("landmark ids not ascending, id", l.id);
+    previous = l.id;
+    *reason = Refusal::kImplausible;  // (no string built unless refused)
+    if (std::string p = check_position(l.x, l.y, lim, "position"); !p.empty()) return "landmark " + std::to_string(l.id) + " " + p;
+    if (std::string p = check_cov2(l.cov, lim, "cov"); !p.empty()) return "landmark " + std::to_string(l.id) + " " + p;
+  }
+  previous = -1;
   for (int k = 0; k < m.num_moving; ++k) {
     const auto i = static_cast<std::size_t>(k);
+    *reason = Refusal::kMalformed;
     if (m.moving_ids[i] < 0 || m.moving_ids[i] >= max_id) return contract::got("moving id outside [0, max_landmark_id)", m.moving_ids[i]);
+    if (m.moving_ids[i] == previous) return *reason = Refusal::kDuplicateId, contract::got("moving id listed twice", m.moving_ids[i]);
+    if (m.moving_ids[i] < previous) return contract::got("moving ids not ascending, id", m.moving_ids[i]);
+    previous = m.moving_ids[i];
     if (m.moving_by[i] < 0 || m.moving_by[i] > contract::kMaxRobots) return contract::got(contract::outside("moving_by", 0, contract::kMaxRobots), m.moving_by[i]);
+    if (m.moving_by[i] > 0 && !lim.in_team(m.moving_by[i]))
+      return *reason = Refusal::kOutsideTeam, contract::got("moving_by not in limits.team " + team_text(lim.team_mask), m.moving_by[i]);
     if (m.moving_frames[i] < 0) return contract::got("moving frame is negative", m.moving_frames[i]);
   }
   return "";
 }
 
-bool RobotNode::refused(const std::string& problem, std::string* why) {
+bool RobotNode::refused(Refusal reason, const std::string& problem, std::string* why) {
   ++counters_.rejected_inputs;
+  counters_.refused.add(reason);
   if (why) *why = problem;
   return false;
 }
 
 bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {
-  if (const std::string problem = validate(msg); !problem.empty()) return refused(problem, why);
+  Refusal reason = Refusal::kMalformed;
+  if (const std::string problem = validate(msg, &reason); !problem.empty()) return refused(reason, problem, why);
   for (int k = 0; k < msg.num_moving; ++k) {
     const auto i = static_cast<std::size_t>(k);
     const int id = msg.moving_ids[i], by = msg.moving_by[i], frame = msg.moving_frames[i];
@@ -325,6 +437,8 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   s.mode = status_mode(options_.mode);
   s.incarnation = incarnation_;
   s.fault_flags = counters_.foreign_poses > 0 && last_frame_ <= duplicate_until_frame_ ? node_status_t::FAULT_DUPLICATE_SENDER : 0;
+  if (full_frame_ >= 0 && last_frame_ - full_frame_ < kAlertFrames) s.fault_flags |= node_status_t::FAULT_CAPACITY;
+  for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = counters_.frames;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;
   s.rejected_inputs = counters_.rejected_inputs;

@@ -72,7 +72,16 @@ void parse(config::Reader& r, RobotOptions* o) {
     n.read_optional("late_start_turn_deg", &turn_deg, 0.0, 180.0);
     o->late_start_turn = deg2rad(turn_deg);
     n.read_optional("state_save_interval_s", &o->state_save_interval_s, 0.0, 3600.0);
+    n.read_optional("max_step_m", &o->max_step_m, 1e-3, 1e4);
+    double max_turn_deg = rad2deg(o->max_turn);
+    n.read_optional("max_turn_deg", &max_turn_deg, 1e-3, 360.0);
+    o->max_turn = deg2rad(max_turn_deg);
+    n.read_optional("odometry_reanchor_frames", &o->odometry_reanchor_frames, 1, 1000);
+    n.read_optional("confirm_jump_frames", &o->confirm_jump_frames, 1, 100000);
+    if (o->confirm_jump_frames > o->max_frame_gap)
+      n.fail("confirm_jump_frames", "larger than max_frame_gap: a jump that far is refused anyway");
   });
+  parse(r, &o->limits);
   if (o->ekf.capacity > o->ekf.max_landmark_id)
     r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");
 }
@@ -83,6 +92,7 @@ RobotOptions load_robot_options(const std::string& path, std::string* effective_
   doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
   doc.allow_sections();
   doc.finish();
+  if (auto problems = check_shared_config(path); !problems.empty()) throw config::ConfigError(path, std::move(problems));
   if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;
 }

@@ -18,8 +18,9 @@ using json = nlohmann::json;
 namespace {
 
 // Anything beyond these is a corrupt file, not a robot's state.
-constexpr double kMaxPosition = 1e6;      // [m]
-constexpr double kMaxVariance = 1e12;     // [m^2], [rad^2]
+// Positions and covariances: limits.* of the configuration (common/limits.hpp), the
+// same bounds a message must meet. Beyond these, a corrupt file.
+constexpr double kMaxVariance = 1e12;     // [m^2], [rad^2] (a structural bound; limits.cov_ceiling_m2 is tighter)
 constexpr double kMaxWhitened = 1e12;     // drift and innovation sums (whitened, unitless)
 constexpr double kAngleSlack = 1e-9;      // [rad] on [-pi, pi]
 constexpr double kMaxCount = 1e15;        // seq and counters
@@ -80,8 +81,9 @@ Eigen::Vector2d vec2(const json& v, const std::string& where, double bound) {
   return {real(a[0], where + "[0]", -bound, bound), real(a[1], where + "[1]", -bound, bound)};
 }
 
-// A 2x2 covariance, row-major: finite, variances in [0, kMaxVariance], symmetric and PSD within rounding.
-Eigen::Matrix2d cov2(const json& v, const std::string& where) {
+// A 2x2 covariance, row-major: finite, variances in [0, kMaxVariance], symmetric and
+// PSD within rounding; unless all zero (never set), within limits.cov_* like a message's.
+Eigen::Matrix2d cov2(const json& v, const std::string& where, const MessageLimits& lim) {
   const json& a = array(v, where, 4, 4);
   Eigen::Matrix2d C;
   for (int k = 0; k < 4; ++k) C(k / 2, k % 2) = real(a[static_cast<std::size_t>(k)], where + "[" + std::to_string(k) + "]", -kMaxVariance, kMaxVariance);
@@ -89,6 +91,8 @@ Eigen::Matrix2d cov2(const json& v, const std::string& where) {
   const double scale = std::max(C(0, 0) + C(1, 1), 1e-300);
   if (std::fabs(C(0, 1) - C(1, 0)) > 1e-6 * scale) fail(where, "not symmetric");
   if (C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0) < -1e-9 * scale * scale) fail(where, "not positive semi-definite");
+  if (!C.isZero(0.0))
+    if (const std::string bad = check_cov2(C, lim, "covariance"); !bad.empty()) fail(where, bad);
   return C;
 }
 
@@ -136,10 +140,10 @@ const std::pair<const char*, bool LMapEntry::*> kEntryBools[] = {
 struct VecField {
   const char* name;
   Eigen::Vector2d LMapEntry::*field;
-  double bound;
+  double bound;  // 0: limits.world_bound_m
 };
 const VecField kEntryVecs[] = {
-    {"position", &LMapEntry::position, kMaxPosition},
+    {"position", &LMapEntry::position, 0.0},
     {"innovation_sum", &LMapEntry::innovation_sum, kMaxWhitened},
     {"drift", &LMapEntry::drift, kMaxWhitened},
 };
@@ -292,14 +296,16 @@ void RobotStateAccess::load_robot(const json& s, Robot* r, int node_last_frame) 
   if (r->last_frame_ != node_last_frame)
     fail("robot.last_frame", std::to_string(r->last_frame_) + " differs from node.last_frame " + std::to_string(node_last_frame));
   const json& odo = array(need(robot, "robot", "last_odometer"), "robot.last_odometer", 3, 3);
-  r->last_odometer_.x = real(odo[0], "robot.last_odometer[0]", -kMaxPosition, kMaxPosition);
-  r->last_odometer_.y = real(odo[1], "robot.last_odometer[1]", -kMaxPosition, kMaxPosition);
+  const double bound = r->options_.limits.world_bound;
+  r->last_odometer_.x = real(odo[0], "robot.last_odometer[0]", -bound, bound);
+  r->last_odometer_.y = real(odo[1], "robot.last_odometer[1]", -bound, bound);
   r->last_odometer_.theta = real(odo[2], "robot.last_odometer[2]", -kPi - kAngleSlack, kPi + kAngleSlack);
 }
 
 void RobotStateAccess::load_filter(const json& s, Robot* r) {
   const json& f = need(s, "state", "filter");
   const EkfOptions& o = r->options_.ekf;
+  const MessageLimits& lim = r->options_.limits;
   const json& ids = array(need(f, "filter", "slot_ids"), "filter.slot_ids", 0, static_cast<std::size_t>(o.capacity));
   std::vector<int> slot_ids;
   for (std::size_t k = 0; k < ids.size(); ++k)
@@ -311,7 +317,7 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
   for (Eigen::Index i = 0; i < dim; ++i) {
     const bool heading = i == StateLayout::kTheta;
     x(i) = real(mean[static_cast<std::size_t>(i)], "filter.mean[" + std::to_string(i) + "]",
-                heading ? -kPi - kAngleSlack : -kMaxPosition, heading ? kPi + kAngleSlack : kMaxPosition);
+                heading ? -kPi - kAngleSlack : -lim.world_bound, heading ? kPi + kAngleSlack : lim.world_bound);
   }
   const json& lower = array(need(f, "filter", "cov_lower"), "filter.cov_lower", n_lower, n_lower);
   Eigen::MatrixXd P(dim, dim);
@@ -321,7 +327,15 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
       const std::string w = "filter.cov_lower[" + std::to_string(k) + "] (P(" + std::to_string(i) + "," + std::to_string(j) + "))";
       P(i, j) = P(j, i) = real(lower[k], w, -kMaxVariance, kMaxVariance);
       if (i == j && P(i, i) < 0.0) fail(w, "negative variance " + num(P(i, i)));
+      if (i == j && P(i, i) > lim.cov_ceiling) fail(w, "variance " + num(P(i, i)) + " above limits.cov_ceiling_m2 " + num(lim.cov_ceiling));
     }
+  // Each landmark's own 2x2 block: what its snapshot would carry, so the same bounds.
+  for (std::size_t slot = 0; slot < slot_ids.size(); ++slot) {
+    const Eigen::Index o2 = StateLayout::landmark_offset(static_cast<int>(slot));
+    const Eigen::Matrix2d block = P.block<2, 2>(o2, o2);
+    if (const std::string bad = check_cov2(block, lim, "covariance"); !bad.empty())
+      fail("filter.cov_lower (landmark " + std::to_string(slot_ids[slot]) + ")", bad);
+  }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(P);
   const double tol = kPsdTolerance * std::max(1.0, P.diagonal().maxCoeff());
   if (ldlt.info() != Eigen::Success || (ldlt.vectorD().array() < -tol).any())
@@ -340,10 +354,11 @@ void RobotStateAccess::load_lmap(const json& s, Robot* r) {
     if (seen[static_cast<std::size_t>(id)]++) fail(w + ".id", std::to_string(id) + " appears twice");
     LMapEntry e;
     e.status = parse_status(need(j, w, "status"), w + ".status");
-    e.cov = cov2(need(j, w, "cov"), w + ".cov");
+    e.cov = cov2(need(j, w, "cov"), w + ".cov", r->options_.limits);
     for (const auto& f : kEntryInts) e.*f.field = static_cast<int>(whole(need(j, w, f.name), w + "." + f.name, f.lo, kMaxFrame));
     for (const auto& f : kEntryBools) e.*f.second = boolean(need(j, w, f.first), w + "." + f.first);
-    for (const auto& f : kEntryVecs) e.*f.field = vec2(need(j, w, f.name), w + "." + f.name, f.bound);
+    for (const auto& f : kEntryVecs)
+      e.*f.field = vec2(need(j, w, f.name), w + "." + f.name, f.bound > 0.0 ? f.bound : r->options_.limits.world_bound);
     r->lmap_.restore(id, e);
   }
 }

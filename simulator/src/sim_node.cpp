@@ -45,6 +45,8 @@ class SimNode {
   void publish_status(int frame);
   bool publish_frame(int k, const FrameSchedule& schedule);
   void say_summary() const;
+  void note_truncation(int k);
+  static constexpr int kAlertFrames = 100;  // at most one truncation line per this many frames
 
   transport::NodeShell& shell_;
   const ScenarioOptions& o_;
@@ -53,6 +55,8 @@ class SimNode {
   std::optional<LockstepWaiter> waiter_;
   ScheduleStats stats_;
   std::int64_t lockstep_timeouts_ = 0, publish_errors_ = 0;
+  std::int64_t truncated_seen_ = 0;                          // world_.counters().truncated_obs already said
+  int truncated_frame_ = -1, alerted_frame_ = -1000000;      // last frame truncated / said
   std::vector<sensor_frame_t> sensor_msgs_;
   std::unique_ptr<ground_truth_t> truth_;
   run_info_t info_;
@@ -102,6 +106,8 @@ void SimNode::publish_status(int frame) {
   m.frames_dropped = publish_errors_;  // the simulator loses a frame only if publish fails
   m.rejected_inputs = waiter_ ? waiter_->rejected() : 0;
   m.decode_errors = waiter_ ? waiter_->decode_errors() : 0;
+  // Observations beyond sensor_frame_t's 64 were left out in the last kAlertFrames frames.
+  if (truncated_frame_ >= 0 && frame - truncated_frame_ < kAlertFrames) m.fault_flags |= node_status_t::FAULT_CAPACITY;
   const auto c = shell_.counters();  // the transport's authentication refusals
   m.auth_refused = c.auth_refused;
   m.auth_unauthenticated = c.auth_unauthenticated;
@@ -118,6 +124,7 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
   if (k > 0) world_.step();
   for (int r = 0; r < world_.num_robots(); ++r)
     to_message(world_.sensor_frame(r), 0, &sensor_msgs_[static_cast<std::size_t>(r)]);
+  note_truncation(k);
   *truth_ = to_message(world_, 0);
   stats_.processing.add((mono_ns() - t_work) / 1000);
   const std::int64_t deadline = schedule.deadline_ns(k);
@@ -139,6 +146,22 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
     shell_.say(buf);
   }
   return true;
+}
+
+// More landmarks in view than a sensor frame carries: the nearest 64 go out, the rest
+// are left out. Said at once (then at most once per kAlertFrames frames) and flagged
+// in STATUS_SIM, not only in the summary line.
+void SimNode::note_truncation(int k) {
+  const std::int64_t n = world_.counters().truncated_obs;
+  if (n == truncated_seen_) return;
+  const std::int64_t now = n - truncated_seen_;
+  truncated_seen_ = n;
+  truncated_frame_ = k;
+  if (k - alerted_frame_ < kAlertFrames) return;
+  alerted_frame_ = k;
+  shell_.say("FAULT: frame " + std::to_string(k) + ": " + std::to_string(now) + " observation(s) beyond the " +
+             std::to_string(contract::kMaxObsPerFrame) + " a sensor frame carries left out (" + std::to_string(n) +
+             " so far; the nearest are kept)");
 }
 
 void SimNode::say_summary() const {

@@ -13,6 +13,13 @@ std::string check_team(const TeamConfig& c) {
   if (c.scenario.landmarks.count > c.robot.ekf.max_landmark_id)
     return "scenario.landmarks.count exceeds robot.filter.max_landmark_id";
   if (c.scenario.landmarks.count > c.main.max_landmark_id) return "scenario.landmarks.count exceeds main.max_landmark_id";
+  if (c.main.max_landmark_id < c.robot.ekf.max_landmark_id)
+    return "main.max_landmark_id (" + std::to_string(c.main.max_landmark_id) + ") is smaller than robot.filter.max_landmark_id (" +
+           std::to_string(c.robot.ekf.max_landmark_id) + "): main_robot would refuse every event about the ids between";
+  for (const auto& r : c.scenario.robots)
+    if (!c.robot.limits.in_team(r.id) || !c.main.limits.in_team(r.id))
+      return "scenario robot " + std::to_string(r.id) + " is not in robot.limits.team (" + team_text(c.robot.limits.team_mask) +
+             ") and main.limits.team (" + team_text(c.main.limits.team_mask) + ")";
   return "";
 }
 

@@ -20,6 +20,7 @@
 
 #include "elaslam/common/config.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/limits.hpp"
 
 namespace elaslam {
 
@@ -33,6 +34,15 @@ struct GlobalMapOptions {
   double publish_rate_hz = 10.0;       // process only: GLOBAL_MAP rate
   double state_save_interval_s = 1.0;  // process only: at most one save per interval
   int resync_interval_frames = 5;      // ask a robot with an unrepaired gap again after this many of its frames
+  // What a message may say (issue 15, docs/security.md): bounds, the team.
+  MessageLimits limits;
+  /// A robot's frame (POSE, events, snapshots) more than this far ahead of the last
+  /// one seen from it is held until a next message confirms it (one forged
+  /// far-future frame never pins GLOBAL_MAP.frame nor blocks the real stream).
+  int max_frame_gap = 100;
+  /// The same for event and snapshot seq numbers (a robot resumed from its state
+  /// file skips 2^24: its first message is held, the next confirms the jump).
+  std::int64_t max_seq_jump = 100000;
 };
 void parse(config::Reader& r, GlobalMapOptions* o);
 
@@ -97,6 +107,7 @@ struct RobotStream {
   std::int64_t previous_incarnation = 0;
   std::int64_t last_seq = 0;   // highest seq applied (or covered by a snapshot)
   std::int64_t snapshot_seq = 0;  // seq of the newest snapshot chunk applied
+  int snapshot_frame = -1;        // and its frame: chunks are ordered by (seq, frame)
   bool gap_pending = false;    // a gap was seen and snapshot chunks have not covered every id since
   std::int64_t repair_seq = 0; // chunks with at least this seq repair the pending gap
   std::vector<std::uint8_t> covered;  // per landmark id: covered by such a chunk (sized max_landmark_id)
@@ -139,7 +150,8 @@ class GlobalMap {
   /// id) the frame the robot found each one moving: newer than this map's last
   /// status change, it stands in for a lost MOVING event even when another robot
   /// still holds the landmark. A chunk older than the robot's newest applied snapshot
-  /// is ignored (returns false).
+  /// is ignored (returns false): one with a lower seq, or the same seq and an older
+  /// frame (a replay of an older snapshot would roll the map back).
   bool apply_snapshot(int robot_id, std::int64_t seq, int frame, int id_begin, int id_end,
                       const std::vector<std::pair<int, RobotEstimate>>& lms, const std::vector<int>& moving_ids,
                       const std::vector<int>& moving_frames, std::vector<Notice>* notices);
@@ -161,8 +173,10 @@ class GlobalMap {
   int count(GlobalStatus s) const;
   const GlobalMapOptions& options() const { return options_; }
 
-  /// Persistence (JSON text). from_json returns false with `why` on malformed input
-  /// and leaves the map unchanged.
+  /// Persistence (JSON text). from_json returns false with `why` on malformed input,
+  /// or on values a message could not carry either (positions beyond
+  /// limits.world_bound_m, covariances outside limits.cov_*, seq beyond 2^62, ids
+  /// outside the team), and leaves the map unchanged.
   std::string to_json() const;
   bool from_json(const std::string& text, std::string* why);
 

@@ -34,7 +34,9 @@ struct MainCounters {
   std::int64_t resyncs_requested = 0;    // LMAP_RESYNC requests sent
   std::int64_t restarts = 0;             // robots seen with a new incarnation
   std::int64_t stale_incarnation = 0;    // messages of an older incarnation refused (replay, second sender)
-  std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, ignored
+  std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, refused
+  RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
+  std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
 };
 
 class MainNode {
@@ -57,8 +59,10 @@ class MainNode {
   /// A robot's POSE: robot `robot_id` has finished frame `frame` (it publishes its
   /// events before its POSE). Returns the newest frame that every robot seen so far
   /// has finished when that advanced with this call, else -1: the moment to publish
-  /// GLOBAL_MAP for that frame. A POSE of a stale incarnation returns -1.
-  int on_pose(const pose_estimate_t& msg);
+  /// GLOBAL_MAP for that frame. A POSE of a stale incarnation returns -1; so does an
+  /// invalid one (counted; `why` says why): from outside limits.team, a position or
+  /// covariance outside limits, a frame jump not confirmed yet.
+  int on_pose(const pose_estimate_t& msg, std::string* why = nullptr);
 
   /// The global map in chunks that each fit one datagram (global_map_t), stamped
   /// with `frame` (default: the newest frame every robot has finished, or before any
@@ -78,18 +82,25 @@ class MainNode {
   const GlobalMap& map() const { return map_; }
   const MainCounters& counters() const { return counters_; }
 
-  std::string validate(const landmark_event_t& msg) const;
-  std::string validate(const lmap_snapshot_t& msg) const;
+  /// The checks of a message on its own (contract, limits, team); "" when valid,
+  /// else the problem, and `reason` (when given) its kind.
+  std::string validate(const landmark_event_t& msg, Refusal* reason = nullptr) const;
+  std::string validate(const lmap_snapshot_t& msg, Refusal* reason = nullptr) const;
+  std::string validate(const pose_estimate_t& msg, Refusal* reason = nullptr) const;
 
  private:
+  /// The frame and seq windows of robot `robot_id` (valid, in the team): "" when the
+  /// message may be applied, else why not (counted as kFrameWindow / kSeqWindow).
+  std::string check_frame(int robot_id, int frame, Refusal* reason);
+  std::string check_seq(int robot_id, std::int64_t seq, bool snapshot, Refusal* reason);
   /// The incarnation check of every robot message: false when it must be refused.
   bool accept_incarnation(int robot_id, std::int64_t incarnation, int frame);
   void request_resync(int robot_id, std::int8_t reason);
   /// Robot `robot_id` (valid) finished `frame`: the newest frame the whole team has
   /// finished when that advanced, else -1.
   int finished_frame(int robot_id, int frame);
-  /// A refused message: counted, `why` (when given) says why; returns false.
-  bool refused(const std::string& problem, std::string* why);
+  /// A refused message: counted per reason, `why` (when given) says why; returns false.
+  bool refused(Refusal reason, const std::string& problem, std::string* why);
   GlobalMap map_;
   MainCounters counters_;
   std::vector<Notice> pending_;
@@ -100,6 +111,8 @@ class MainNode {
   std::int64_t incarnation_ = 0;
   std::vector<resync_request_t> resyncs_, taken_;
   std::array<int, kMaxTeamRobots> resync_frame_;  // robot frame of the last request, per robot
+  std::array<JumpGuard, kMaxTeamRobots> frame_guard_{}, event_guard_{}, snapshot_guard_{};  // per robot
+  bool capacity_fault_ = false;  // the last GLOBAL_MAP could not carry the whole map
   std::array<bool, kMaxTeamRobots> alerted_duplicate_{};
   std::string alert_;
   // GLOBAL_MAP chunks: a pool sized at construction for the largest map (no allocation).
@@ -177,7 +190,9 @@ class MainPorts {
     send_notices();
   }
   void on_pose(const pose_estimate_t& m) {
-    const int done = node_.on_pose(m);
+    std::string why;
+    const int done = node_.on_pose(m, &why);
+    if (!why.empty()) shell_.refuse("pose refused: " + why);
     send_notices();
     if (done >= 0) publish_map(done);
   }

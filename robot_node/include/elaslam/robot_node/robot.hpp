@@ -32,6 +32,10 @@ struct FrameInput {
   int frame = 0;
   Pose2 odometer;        // cumulative odometer reading, odometry frame O (= W at start)
   OdometryNoise noise;   // odometry noise model of this robot
+  /// The odometer's origin changed (RobotNode: a jump the following readings
+  /// confirmed): no increment from the last reading; the motion since the last frame
+  /// is unknown within options.max_step_m / max_turn per frame.
+  bool reanchor = false;
   int num_obs = 0;
   std::array<Observation, kMaxObservations> obs{};
 };
@@ -56,7 +60,8 @@ struct FrameSummary {
   int num_added = 0;      // landmarks added to the filter (ADD or RETURN)
   int num_moving = 0;     // landmarks removed as moving (ELA, missing)
   int num_candidates = 0; // observations of landmarks not (yet) in the filter
-  int filter_faults = 0;  // filter operations refused by its health checks
+  int filter_faults = 0;  // filter operations refused by its health checks (filter_full included)
+  int filter_full = 0;    // landmarks not added: every slot of the filter taken (a capacity limit)
   int events_dropped = 0; // events beyond the fixed event buffer (should stay 0)
 };
 
@@ -88,6 +93,7 @@ class Robot {
   /// the map (paper eq 19); candidates, inert states in the filter, are not the map.
   double map_mean_diag() const;
   int last_frame() const { return last_frame_; }
+  const Pose2& last_odometer() const { return last_odometer_; }
 
  private:
   friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
@@ -104,6 +110,8 @@ class Robot {
   void mark_moving(int id, const RangeBearing* seen, FrameSummary* s);
   void record_sighting(int id, const RangeBearing& z);
   void emit(EventKind kind, int id);
+  /// An add_landmark's status: false (counted) unless kOk.
+  bool added(EkfStatus st, FrameSummary* s);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
 
   RobotOptions options_;

@@ -41,6 +41,9 @@ struct RobotNodeCounters {
   std::int64_t notices_repaired = 0;  // moving landmarks learnt from GLOBAL_MAP whose notice never came
   std::int64_t resyncs_answered = 0;  // snapshots sent on main_robot's request
   std::int64_t foreign_poses = 0;     // POSE_<r> messages of another incarnation: a second sender with this id
+  RefusalCounts refused;              // refused messages per reason (their sum is rejected_inputs)
+  std::int64_t odometry_reanchors = 0;  // odometer origin changes taken (a confirmed jump)
+  std::int64_t filter_full = 0;       // landmarks not added because every filter slot was taken
 };
 
 class RobotNode {
@@ -107,8 +110,14 @@ class RobotNode {
   int robot_id() const { return robot_id_; }
 
   /// Check a sensor frame against the contract (robot id, counts, finite values,
-  /// ranges, ids within capacity). Empty string when valid.
-  std::string validate(const sensor_frame_t& msg) const;
+  /// ranges, ids within capacity) and limits (odometer within world_bound_m).
+  /// Empty string when valid, else the problem and `reason` (when given) its kind.
+  std::string validate(const sensor_frame_t& msg, Refusal* reason = nullptr) const;
+
+  /// A line for stderr when an operator must see something (a capacity exceeded:
+  /// the filter full), at most once per kAlertFrames frames; else "".
+  std::string take_alert();
+  static constexpr int kAlertFrames = 100;
 
  private:
   friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
@@ -116,10 +125,14 @@ class RobotNode {
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);
+  void note_filter_full(int n);  // landmarks left out this frame: FAULT_CAPACITY and a rate-limited alert
   void prepare_snapshot_chunks();
-  std::string validate(const global_map_t& msg) const;
-  /// A refused message: counted, `why` (when given) says why; returns false.
-  bool refused(const std::string& problem, std::string* why);
+  std::string validate(const global_map_t& msg, Refusal* reason) const;
+  /// A refused message: counted per reason, `why` (when given) says why; returns false.
+  bool refused(Refusal reason, const std::string& problem, std::string* why);
+  /// The frame window and the odometry bound of a valid, newer frame: "" when it may
+  /// be processed (input_.reanchor set when it re-anchors the odometer), else why not.
+  std::string check_progress(const sensor_frame_t& msg, Refusal* reason);
 
   RobotOptions options_;
   int robot_id_;
@@ -128,6 +141,13 @@ class RobotNode {
   RobotNodeCounters counters_;
   DurationHistogram processing_;
   int last_frame_ = -1;
+  JumpGuard frame_guard_;        // frame jumps beyond confirm_jump_frames wait for the next frame
+  Pose2 odo_candidate_;          // a refused odometer jump, possibly a new origin
+  int odo_candidate_frame_ = -1; // its frame, -1: none
+  int odo_streak_ = 0;           // consecutive refused readings continuing it
+  int full_frame_ = -1;          // last frame the filter was found full (FAULT_CAPACITY for kAlertFrames)
+  int alerted_frame_ = -1000000; // last frame a capacity alert went out
+  std::string alert_;
   std::int64_t seq_ = 0;
   pose_estimate_t pose_{};
   std::vector<landmark_event_t> events_;
@@ -215,6 +235,7 @@ class RobotPorts {
     const auto v = node_.on_sensor(msg, shell_.now_utime(), &why);
     if (v == RobotNode::Verdict::kInvalid) shell_.refuse("sensor frame refused: " + why);
     if (v != RobotNode::Verdict::kProcessed) return;
+    if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
     if (after_frame_) after_frame_(node_);
     const std::int64_t now = shell_.now_utime();
     for (auto ev : node_.event_msgs()) {
@@ -247,10 +268,11 @@ class RobotPorts {
   }
 
   void on_notice(const dynamic_notice_t& msg) {
+    std::string why;
+    if (!node_.on_notice(msg, &why)) return shell_.refuse("dynamic notice refused: " + why);
+    // Only an accepted notice moves the tracker: a forged seq must not hide real losses.
     const std::int64_t lost = notice_seq_.observe(msg.seq, msg.incarnation);
     if (lost > 0) node_.count_queue_drops(lost);
-    std::string why;
-    if (!node_.on_notice(msg, &why)) shell_.refuse("dynamic notice refused: " + why);
   }
 
   Shell& shell_;

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "elaslam/common/config.hpp"
+#include "elaslam/common/limits.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 
 namespace elaslam {
@@ -64,6 +65,23 @@ struct RobotOptions {
   /// The robot_node process saves its state file (--state) at most this often (0:
   /// after every frame), and at exit.
   double state_save_interval_s = 0.5;   // [s]
+
+  // What a message may say (issue 15, docs/security.md).
+  MessageLimits limits;
+  /// The most the robot can move in one frame, with margin: an odometer increment
+  /// over k frames beyond k times these is refused as a glitch or forgery (not the
+  /// late start's bounds above, which describe the paths: these bound the vehicle).
+  double max_step_m = 1.0;              // [m] per frame
+  double max_turn = deg2rad(90.0);      // [rad] per frame
+  /// A refused odometer jump that the next readings continue (each within the
+  /// bounds above of the one before) is a real change of the odometer's origin
+  /// (a reset): after this many such frames in a row the robot re-anchors on it,
+  /// the motion since its last frame unknown within the bounds above.
+  int odometry_reanchor_frames = 3;
+  /// A forward jump of more than this many frames is taken only when the next frame
+  /// confirms it (continues it within this many frames): one forged frame number
+  /// never makes the robot refuse the real ones. Up to node.max_frame_gap.
+  int confirm_jump_frames = 5;
 };
 
 /// Read the `robot:` section (see config/paper.yaml for every key and its unit).

@@ -5,9 +5,12 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "elaslam/common/limits.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -53,5 +56,16 @@ class GlobalMapAssembly {
   std::vector<bool> received_;
   int count_ = 0;
 };
+
+/// The receivers' checks for a recorded message (issue 15): what a node would have
+/// refused is not evaluated either. "" when it holds, else the problem (`reason`
+/// its kind). A POSE's source_utime must not be after `received_us` (more than
+/// kClockSlackUs): a forged stamp in the future made a negative latency.
+constexpr std::int64_t kClockSlackUs = 100000;  // [us] skew allowed between the sender's and the recorder's clocks
+std::string check_logged(const pose_estimate_t& p, std::int64_t received_us, const MessageLimits& l, Refusal* reason);
+std::string check_logged(const sensor_frame_t& s, const MessageLimits& l, Refusal* reason);
+/// One GLOBAL_MAP chunk: ids ascending without repeats, positions and covariances
+/// within limits, moving ids without repeats.
+std::string check_logged(const global_map_t& g, const MessageLimits& l, Refusal* reason);
 
 }  // namespace elaslam

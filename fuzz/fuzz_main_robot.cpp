@@ -1,0 +1,80 @@
+// libFuzzer target: every message handler of main_robot, as the process runs them
+// (MainPorts on a NodeShell: decode, validate, apply, publish notices, resync
+// requests and the global map), with config/paper.yaml. An input is a burst of
+// LMAP_EVENT, LMAP_SNAPSHOT and POSE_<r> messages (fuzz_input.hpp; POSE of robots 1,
+// 2, 3 and 7). The node is reset to a pristine copy per input. After each input the global map, the status
+// and the state file's text must still be producible, and the state must load back.
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "elaslam/common/channels.hpp"
+#include "elaslam/common/config.hpp"
+#include "elaslam/main_robot/global_map.hpp"
+#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/transport/inprocess_transport.hpp"
+#include "elaslam/transport/node_shell.hpp"
+#include "fuzz_input.hpp"
+
+namespace {
+
+using namespace elaslam;
+
+const GlobalMapOptions& options() {
+  static const GlobalMapOptions o = [] {
+    config::Document doc = config::Document::from_file(fuzz::source_dir() + "/config/paper.yaml");
+    GlobalMapOptions g;
+    doc.section("main", [&](config::Reader& r) { parse(r, &g); });
+    doc.allow_sections();
+    doc.finish();
+    return g;
+  }();
+  return o;
+}
+
+const std::string kChannels[] = {channels::lmap_event(), channels::lmap_snapshot(), channels::pose(1),
+                                 channels::pose(2),      channels::pose(3),         channels::pose(7)};
+
+/// The shell, the transport and the ports live across inputs (their decode buffers
+/// are reserved once); the node is reset to a pristine copy before each input, so
+/// that an input's outcome depends on it alone.
+struct Harness {
+  transport::InProcessTransport bus;
+  std::int64_t clock = 0;
+  transport::NodeShell shell{bus, [this] {
+                               transport::ShellOptions so("main_robot", "", nullptr);
+                               so.clock = [this] { return clock += 1000; };
+                               return so;
+                             }()};
+  const MainNode pristine{options()};
+  MainNode node{pristine};
+  MainPorts<transport::NodeShell> ports{shell, node};
+  Harness() {
+    if (!ports.open()) std::abort();
+  }
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static Harness h;
+  h.node = h.pristine;
+  h.clock = 1'700'000'000'000'000;
+  fuzz::for_each_record(data, size, std::size(kChannels), [&](const fuzz::Record& r) {
+    h.bus.publish(kChannels[r.channel], r.data, r.size);
+    h.bus.dispatch_all();
+  });
+  h.ports.publish_map();
+  h.ports.publish_status();
+  h.bus.dispatch_all();
+  // The state main_robot would save must load back into a fresh map.
+  const std::string state = h.node.map().to_json();
+  GlobalMap reloaded(options());
+  std::string why;
+  if (!reloaded.from_json(state, &why)) {
+    std::fprintf(stderr, "fuzz_main_robot: the saved state does not load back: %s\n", why.c_str());
+    std::abort();
+  }
+  return 0;
+}

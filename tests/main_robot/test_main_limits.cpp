@@ -1,0 +1,260 @@
+// Messages and state files that decode and look valid but are absurd (issue 15):
+// main_robot refuses them, counts each per reason, and keeps the map as it was.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+
+#include "elaslam/main_robot/main_node.hpp"
+
+namespace elaslam {
+namespace {
+
+GlobalMapOptions options(const std::string& team = "1,2,3,4,5,6,7,8") {
+  GlobalMapOptions o;
+  o.max_landmark_id = 32;
+  std::string why;
+  EXPECT_TRUE(parse_team(team, &o.limits.team_mask, &why)) << why;
+  return o;
+}
+
+landmark_event_t add(int robot, std::int64_t seq, int id, double var = 0.01, int frame = 0) {
+  landmark_event_t m{};
+  m.robot_id = static_cast<int16_t>(robot);
+  m.seq = seq;
+  m.frame = frame;
+  m.kind = landmark_event_t::ADD;
+  m.landmark_id = id;
+  m.x = 1.0;
+  m.y = 2.0;
+  m.cov[0][0] = m.cov[1][1] = var;
+  return m;
+}
+
+lmap_snapshot_t snapshot(int robot, std::int64_t seq, int frame, std::vector<int> ids, std::vector<int> moving = {}) {
+  lmap_snapshot_t s{};
+  s.robot_id = static_cast<int16_t>(robot);
+  s.seq = seq;
+  s.frame = frame;
+  s.num_chunks = 1;
+  s.id_end = 32;
+  s.num_landmarks = static_cast<int16_t>(ids.size());
+  for (int id : ids) {
+    landmark_estimate_t l{};
+    l.id = id;
+    l.x = 0.1 * id + 0.01 * frame;  // the estimate moves with the frame: a rollback shows
+    l.y = 1.0;
+    l.cov[0][0] = l.cov[1][1] = 0.01;
+    s.landmarks.push_back(l);
+  }
+  s.num_moving = static_cast<int16_t>(moving.size());
+  s.moving_ids = moving;
+  s.moving_frames.assign(moving.size(), -1);
+  return s;
+}
+
+pose_estimate_t pose(int robot, int frame) {
+  pose_estimate_t p{};
+  p.robot_id = static_cast<int16_t>(robot);
+  p.frame = frame;
+  p.cov[0][0] = p.cov[1][1] = p.cov[2][2] = 1e-4;
+  return p;
+}
+
+// GIVEN an ADD whose covariance is denormal (1e-320: inverts to infinity, a NaN
+// landmark) or zero (pins the landmark)  THEN it is refused as implausible, naming
+// the floor, and the map stays empty.
+TEST(MainLimits, DenormalOrZeroCovarianceIsRefused) {
+  MainNode node(options());
+  std::string why;
+  EXPECT_FALSE(node.on_event(add(1, 1, 3, 1e-320), &why));
+  EXPECT_NE(why.find("cov_floor_m2"), std::string::npos) << why;
+  EXPECT_FALSE(node.on_event(add(1, 1, 3, 0.0), &why));
+  auto neg = add(1, 1, 3);
+  neg.cov[0][1] = neg.cov[1][0] = 0.02;  // not positive definite
+  EXPECT_FALSE(node.on_event(neg, &why));
+  EXPECT_FALSE(node.on_event(add(1, 1, 3, 1e9), &why));  // above the ceiling
+  EXPECT_NE(why.find("cov_ceiling_m2"), std::string::npos) << why;
+  EXPECT_EQ(node.map().count(GlobalStatus::kStatic), 0);
+  EXPECT_EQ(node.counters().refused[Refusal::kImplausible], 4);
+  EXPECT_TRUE(node.on_event(add(1, 1, 3), &why)) << why;
+  EXPECT_TRUE(node.map().entry(3).fused.allFinite());
+}
+
+// Snapshots had no position bound (1e300 m accepted; events refused over 1e6 m).
+TEST(MainLimits, PositionsBeyondTheWorldBoundAreRefusedInEventsAndSnapshots) {
+  MainNode node(options());
+  std::string why;
+  auto far = add(1, 1, 3);
+  far.x = 2e4;  // limits.world_bound_m 1e4 by default
+  EXPECT_FALSE(node.on_event(far, &why));
+  EXPECT_NE(why.find("world_bound_m"), std::string::npos) << why;
+  auto s = snapshot(1, 0, 5, {2, 4});
+  s.landmarks[1].y = 1e300;
+  EXPECT_FALSE(node.on_snapshot(s, &why));
+  EXPECT_NE(why.find("landmark 4"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kImplausible], 2);
+  EXPECT_EQ(node.map().count(GlobalStatus::kStatic), 0);
+}
+
+// One event with seq INT64_MAX made main drop every later event of that robot.
+TEST(MainLimits, AFarFutureSeqNeverBlocksTheRealStream) {
+  MainNode node(options());
+  std::string why;
+  ASSERT_TRUE(node.on_event(add(1, 1, 3), &why)) << why;
+  EXPECT_FALSE(node.on_event(add(1, std::numeric_limits<std::int64_t>::max(), 4), &why));
+  EXPECT_NE(why.find("seq"), std::string::npos) << why;
+  EXPECT_FALSE(node.on_event(add(1, 5000000, 4), &why));  // beyond max_seq_jump: held
+  EXPECT_NE(why.find("max_seq_jump"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kSeqWindow], 1);
+  // The real stream goes on.
+  EXPECT_TRUE(node.on_event(add(1, 2, 5), &why)) << why;
+  EXPECT_EQ(node.map().stream(1).last_seq, 2);
+  EXPECT_EQ(node.map().entry(5).status, GlobalStatus::kStatic);
+  // A real jump (a robot resumed from its state file skips 2^24) is confirmed by
+  // its next message.
+  EXPECT_FALSE(node.on_event(add(1, 2 + (1 << 24), 6), &why));
+  EXPECT_TRUE(node.on_event(add(1, 3 + (1 << 24), 7), &why)) << why;
+  EXPECT_EQ(node.map().stream(1).last_seq, 3 + (1 << 24));
+}
+
+TEST(MainLimits, AnOlderSnapshotNeverRollsTheMapBack) {
+  MainNode node(options());
+  std::string why;
+  ASSERT_TRUE(node.on_snapshot(snapshot(1, 4, 10, {2}), &why)) << why;
+  ASSERT_TRUE(node.on_snapshot(snapshot(1, 4, 20, {2}), &why)) << why;
+  const double x = node.map().entry(2).fused.x();
+  // The snapshot of frame 10 again (no events between: the same seq).
+  EXPECT_FALSE(node.on_snapshot(snapshot(1, 4, 10, {2}), &why));
+  EXPECT_NE(why.find("roll the map back"), std::string::npos) << why;
+  EXPECT_FALSE(node.on_snapshot(snapshot(1, 3, 30, {2}), &why));  // a lower seq
+  EXPECT_DOUBLE_EQ(node.map().entry(2).fused.x(), x);
+  EXPECT_EQ(node.counters().refused[Refusal::kStale], 2);
+}
+
+TEST(MainLimits, DuplicateIdsInOneSnapshotAreRefused) {
+  MainNode node(options());
+  std::string why;
+  EXPECT_FALSE(node.on_snapshot(snapshot(1, 0, 5, {2, 2}), &why));
+  EXPECT_NE(why.find("twice"), std::string::npos) << why;
+  EXPECT_FALSE(node.on_snapshot(snapshot(1, 0, 5, {2}, {4, 4}), &why));
+  EXPECT_FALSE(node.on_snapshot(snapshot(1, 0, 5, {2, 4}, {4}), &why));
+  EXPECT_NE(why.find("static and as moving"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kDuplicateId], 3);
+  EXPECT_EQ(node.map().count(GlobalStatus::kStatic), 0);
+}
+
+// A POSE from a robot outside the team stalled the per-frame GLOBAL_MAP (main
+// waited for it to finish every later frame).
+TEST(MainLimits, APoseFromOutsideTheTeamNeverStallsTheMap) {
+  MainNode node(options("1,2"));
+  std::string why;
+  EXPECT_EQ(node.on_pose(pose(1, 0)), 0);
+  EXPECT_EQ(node.on_pose(pose(5, 0), &why), -1);
+  EXPECT_NE(why.find("limits.team"), std::string::npos) << why;
+  EXPECT_EQ(node.on_pose(pose(2, 0)), -1);
+  for (int f = 1; f < 4; ++f) {
+    EXPECT_EQ(node.on_pose(pose(1, f)), -1);
+    EXPECT_EQ(node.on_pose(pose(2, f)), f);  // robot 5 stopped at frame 0 would hold this at -1
+  }
+  EXPECT_FALSE(node.on_event(add(5, 1, 3), &why));
+  EXPECT_EQ(node.counters().refused[Refusal::kOutsideTeam], 2);
+}
+
+// A frame of INT32_MAX pinned GLOBAL_MAP.frame there.
+TEST(MainLimits, AFarFutureFrameNeverPinsTheMapFrame) {
+  MainNode node(options("1"));
+  for (int f = 0; f < 5; ++f) EXPECT_EQ(node.on_pose(pose(1, f)), f);
+  std::string why;
+  EXPECT_EQ(node.on_pose(pose(1, std::numeric_limits<int>::max()), &why), -1);
+  EXPECT_NE(why.find("max_frame_gap"), std::string::npos) << why;
+  // (A second message at the same frame would confirm the jump: another forged value.)
+  EXPECT_FALSE(node.on_event(add(1, 1, 3, 0.01, std::numeric_limits<int>::max() - 1000), &why));
+  EXPECT_EQ(node.on_pose(pose(1, 5)), 5);
+  node.make_global_map(0);
+  EXPECT_EQ(node.map_chunk(0).frame, 5);
+  EXPECT_EQ(node.map().newest_frame(), -1);  // no event got in
+  EXPECT_EQ(node.counters().refused[Refusal::kFrameWindow], 2);
+  // A real jump (main saw nothing of robot 1 for a while) is confirmed by the next.
+  EXPECT_EQ(node.on_pose(pose(1, 500)), -1);
+  EXPECT_EQ(node.on_pose(pose(1, 501)), 501);
+}
+
+TEST(MainLimits, StatusCountsEveryRefusalPerReason) {
+  MainNode node(options("1"));
+  node.on_event(add(1, 1, 3, 0.0));
+  node.on_event(add(2, 1, 3));
+  node.on_snapshot(snapshot(1, 0, 5, {2, 2}));
+  const node_status_t s = node.status_msg(0);
+  EXPECT_EQ(s.refused[node_status_t::REFUSED_IMPLAUSIBLE], 1);
+  EXPECT_EQ(s.refused[node_status_t::REFUSED_OUTSIDE_TEAM], 1);
+  EXPECT_EQ(s.refused[node_status_t::REFUSED_DUPLICATE_ID], 1);
+  EXPECT_EQ(s.rejected_inputs, 3);
+  EXPECT_EQ(s.fault_flags & node_status_t::FAULT_CAPACITY, 0);
+}
+
+// The state file is checked like a message: denormal or negative covariances,
+// seq beyond 2^62, positions beyond the world bound, robots outside the team.
+TEST(MainLimits, AbsurdStateFilesAreRefusedAndTheMapKept) {
+  GlobalMap m(options("1,2"));
+  GlobalEvent e;
+  e.robot_id = 1;
+  e.seq = 1;
+  e.kind = landmark_event_t::ADD;
+  e.landmark_id = 2;
+  e.position = {1.0, 1.0};
+  e.cov = Eigen::Matrix2d::Identity() * 0.01;
+  m.apply(e, nullptr);
+  const std::string good = m.to_json();
+  const auto spoiled = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return t.replace(at, from.size(), to);
+  };
+  struct Case {
+    std::string from, to, expect;
+  };
+  const std::vector<Case> cases = {
+      {"0.01,", "1e-320,", "cov_floor_m2"},
+      {"0.01,", "-0.01,", "cov_floor_m2"},
+      {"\"last_seq\": 1", "\"last_seq\": 9223372036854775807", "last_seq"},
+      {"\"last_seq\": 1", "\"last_seq\": 1.5", "last_seq"},
+      {"\"x\": 1.0", "\"x\": 1e300", "world_bound_m"},
+      {"\"robot\": 1", "\"robot\": 3", "limits.team"},
+  };
+  for (const Case& c : cases) {
+    std::string why;
+    EXPECT_FALSE(m.from_json(spoiled(c.from, c.to), &why)) << c.to;
+    EXPECT_NE(why.find(c.expect), std::string::npos) << c.to << ": " << why;
+  }
+  EXPECT_EQ(m.to_json(), good);
+}
+
+// main's max_landmark_id smaller than the robots' was not caught at start-up: main
+// refused every event about the ids between, at run time.
+TEST(MainLimits, ConfigMismatchesBetweenSectionsAreFoundAtStartUp) {
+  const std::string path = ::testing::TempDir() + "/main_limits_config.yaml";
+  const auto write = [&](const std::string& text) {
+    FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  };
+  write("robot:\n  filter: {max_landmark_id: 256}\nmain:\n  max_landmark_id: 64\n");
+  auto problems = check_shared_config(path);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("main.max_landmark_id (64)"), std::string::npos) << problems[0];
+  write("robot:\n  filter: {max_landmark_id: 64}\n  limits: {team: \"1,2\"}\nmain:\n  max_landmark_id: 64\n"
+        "  limits: {team: \"1,2,3\"}\n");
+  problems = check_shared_config(path);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("limits.team"), std::string::npos) << problems[0];
+  write("robot:\n  filter: {max_landmark_id: 64}\nmain:\n  max_landmark_id: 64\n");
+  EXPECT_TRUE(check_shared_config(path).empty());
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace elaslam

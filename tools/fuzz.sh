@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# Fuzz the inputs from outside with libFuzzer (clang), under AddressSanitizer and
+# UndefinedBehaviorSanitizer: every message handler of robot_node and main_robot
+# (decode + validate + apply, through the node shell as in the processes), the
+# config loader, the state loaders and the MRCLAM parser (fuzz/, docs/security.md).
+#
+#   tools/fuzz.sh [--seconds S | --runs N] [--targets "fuzz_config fuzz_state ..."]
+#                 [--jobs J] [--build-dir DIR] [--keep-corpus]
+#
+# - Installs clang and libFuzzer when missing (tools/setup.sh --with-fuzz),
+#   configures DIR (default build/fuzz) with clang and ELASLAM_FUZZ=ON, builds the
+#   targets.
+# - Runs each target for S seconds (default 30) or N executions, from its seed corpus
+#   fuzz/corpus/<target>/ (copied: the committed corpus is never changed) plus what
+#   earlier runs found (DIR/corpus/<target>/; --keep-corpus keeps it between runs,
+#   default: start from the seeds). A crash, a leak, a sanitizer report, an escaping
+#   exception or an input slower than 10 s fails the target; its input is saved in
+#   DIR/artifacts/ (reproduce: DIR/bin/<target> DIR/artifacts/<file>).
+# - Prints per target: executions, executions/s, corpus size, result; exit 0 when
+#   every target ran clean, 1 otherwise, 2 bad arguments.
+set -euo pipefail
+ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
+BUILD_DIR="$ROOT/build/fuzz"
+SECONDS_PER_TARGET=30
+RUNS=""
+TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam"
+JOBS=1
+KEEP=0
+die() { echo "fuzz.sh: $*" >&2; exit 2; }
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --seconds|--runs|--targets|--jobs|--build-dir) [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
+    --seconds) [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "--seconds must be a positive integer, got '$2'"
+               SECONDS_PER_TARGET="$2"; shift 2 ;;
+    --runs) [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "--runs must be a positive integer, got '$2'"; RUNS="$2"; shift 2 ;;
+    --targets) TARGETS="$2"; shift 2 ;;
+    --jobs) [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "--jobs must be a positive integer, got '$2'"; JOBS="$2"; shift 2 ;;
+    --build-dir) BUILD_DIR="$2"; shift 2 ;;
+    --keep-corpus) KEEP=1; shift ;;
+    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) die "unknown argument '$1' (see --help)" ;;
+  esac
+done
+for t in $TARGETS; do
+  [ -f "$ROOT/fuzz/$t.cpp" ] || die "no such target: $t (fuzz/*.cpp)"
+done
+
+mkdir -p "$BUILD_DIR" || die "cannot create $BUILD_DIR"
+BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
+"$ROOT/tools/setup.sh" --with-fuzz --no-python >&2
+if [ ! -f "$BUILD_DIR/build.ninja" ]; then
+  CC=clang CXX=clang++ cmake -S "$ROOT" -B "$BUILD_DIR" -G Ninja -DELASLAM_FUZZ=ON -DELASLAM_BUILD_TESTS=OFF \
+    -DELASLAM_BUILD_BENCH=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+fi
+# shellcheck disable=SC2086
+cmake --build "$BUILD_DIR" --target $TARGETS -j "$(nproc)" >&2 || { echo "fuzz.sh: the build failed" >&2; exit 1; }
+
+mkdir -p "$BUILD_DIR/artifacts"
+failed=0
+printf '%-18s %12s %10s %8s  %s\n' target executions "exec/s" corpus result
+for t in $TARGETS; do
+  corpus="$BUILD_DIR/corpus/$t"
+  [ "$KEEP" -eq 1 ] || rm -rf "$corpus"
+  mkdir -p "$corpus"
+  log="$BUILD_DIR/$t.log"
+  limit=(-max_total_time="$SECONDS_PER_TARGET")
+  [ -z "$RUNS" ] || limit=(-runs="$RUNS")
+  jobs=()
+  [ "$JOBS" -eq 1 ] || jobs=(-jobs="$JOBS" -workers="$JOBS")
+  rm -f "$BUILD_DIR"/fuzz-*.log
+  rc=0
+  # -max_len: a burst of messages, a config, a state file; -timeout: one input.
+  (cd "$BUILD_DIR" && ASAN_OPTIONS=detect_leaks=1 "$BUILD_DIR/bin/$t" "${limit[@]}" -max_len=131072 -timeout=10 -rss_limit_mb=3072 \
+    "${jobs[@]}" -print_final_stats=1 -artifact_prefix="$BUILD_DIR/artifacts/$t-" \
+    "$corpus" "$ROOT/fuzz/corpus/$t") >"$log" 2>&1 || rc=$?
+  [ "$JOBS" -eq 1 ] || cat "$BUILD_DIR"/fuzz-*.log >>"$log" 2>/dev/null || true
+  execs=$(grep -h "stat::number_of_executed_units" "$log" | awk '{ s += $2 } END { print s + 0 }')
+  rate=$(grep -h "stat::average_exec_per_sec" "$log" | awk '{ s += $2 } END { print s + 0 }')
+  n=$(find "$corpus" -type f | wc -l)
+  if [ "$rc" -eq 0 ] && ! grep -q "ERROR: \|SUMMARY: \|escaped\|deadly signal" "$log"; then
+    result=clean
+  else
+    result="FAILED (exit $rc; $log)"
+    failed=1
+  fi
+  printf '%-18s %12s %10s %8s  %s\n' "$t" "$execs" "$rate" "$n" "$result"
+  if [ "$result" != clean ]; then grep -m5 "ERROR\|SUMMARY\|escaped\|fuzz_" "$log" | sed 's/^/    /' || true; fi
+done
+exit $failed
