@@ -15,6 +15,7 @@
 #include "elaslam/common/atomic_file.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -91,8 +92,9 @@ int run(const Args& a) {
     std::printf("main_robot: %s (%s): valid\n", cfg.path.c_str(), cfg.origin.c_str());
     return 0;
   }
-  const auto lcm = transport::open_lcm(a.transport.lcm_url, "main_robot");
-  if (!lcm) return 1;
+  int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
+  const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::auth::kSenderMain, "main_robot", &open_rc);
+  if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions("main_robot", a.transport.channel_suffix));
   MainNode node(o);
   node.set_incarnation(transport::now_utime());  // a later start has a larger one (landmark_event_t)

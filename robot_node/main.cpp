@@ -180,8 +180,9 @@ int run(const Args& a) {
     return 0;
   }
   const std::string name = "robot_node " + std::to_string(a.robot);
-  const auto lcm = transport::open_lcm(a.transport.lcm_url, name);
-  if (!lcm) return 1;
+  int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
+  const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), name, &open_rc);
+  if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
   RobotNode node(o, a.robot);
   StateKeeper keeper(a.state, o, &node, resume(a.state, &node));

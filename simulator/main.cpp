@@ -18,6 +18,7 @@
 #include "elaslam/common/config.hpp"
 #include "elaslam/simulator/scenario.hpp"
 #include "elaslam/simulator/sim_node.hpp"
+#include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -95,8 +96,9 @@ bool load(Args* a, ScenarioOptions* o) {
 
 int run(const Args& a, const ScenarioOptions& o) {
   namespace transport = elaslam::transport;
-  const auto lcm = transport::open_lcm(a.transport.lcm_url, "simulator");
-  if (!lcm) return 1;
+  int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
+  const auto lcm = transport::open_lcm(a.transport, a.run.config_path, transport::auth::kSenderSimulator, "simulator", &open_rc);
+  if (!lcm) return open_rc;
   const std::string& suffix = a.transport.channel_suffix;
   std::cerr << elaslam::cli::version_line("simulator") << ", config " << a.run.config_path << " ("
             << a.config_choice.origin << ")\n"

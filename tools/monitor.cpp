@@ -1,6 +1,6 @@
 // monitor: one line that follows a live team (frame k/N, poses received, moving
 // landmarks found so far, nodes' health), for a terminal or a log.
-//   monitor [--lcm-url URL] [--channel-suffix S] [--interval S]
+//   monitor [--config FILE] [--key-file FILE] [--lcm-url URL] [--channel-suffix S] [--interval S]
 // On a terminal the line is rewritten in place about 5 times a second; otherwise a
 // line is printed every --interval seconds. SIGINT / SIGTERM end it (exit 0) with
 // the final line. Reads RUN_INFO, SENSOR_*, POSE_*, GLOBAL_MAP, DYNAMIC_NOTICE and
@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <set>
 #include <string>
@@ -24,6 +25,8 @@
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/common/config.hpp"
+#include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -76,6 +79,8 @@ class Progress {
     const long long bad = shell_.counters().inputs.decode_errors;
     if (dropped_ > 0) out += " | robots report " + std::to_string(dropped_) + " dropped frames";
     if (bad > 0) out += " | undecodable " + std::to_string(bad);
+    if (const long long refused = shell_.counters().auth_refused; refused > 0)
+      out += " | refused (authentication) " + std::to_string(refused);
     long long refused = 0;
     std::string full;
     for (const auto& [node, h] : health_) {
@@ -125,13 +130,27 @@ int monitor_main(int argc, char** argv) {
   double interval_s = 5.0;
   CLI::App app{"elaslam monitor: one progress line for a live team (frame, poses, moving landmarks, health)"};
   cli::add_version_flag(app, "monitor");
+  std::string config;
+  cli::add_config_option(app, &config, "its team: section (the team key)");
   transport::add_transport_options(app, &targs);
   app.add_option("--interval", interval_s, "seconds between lines when not on a terminal")
       ->capture_default_str()
       ->check(cli::range(0.1, 3600.0));
   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
-  const auto lcm = transport::open_lcm(targs.lcm_url, "monitor");
-  if (!lcm) return 1;
+  // The team key (--key-file, else the config's team.key_file): a keyed team's messages
+  // are verified here too. No configuration found (and none asked for): no key.
+  std::string config_path;
+  try {
+    config_path = cli::find_config(config).path;
+  } catch (const config::ConfigError& e) {
+    if (!config.empty() || std::getenv(cli::kConfigEnv) != nullptr) {
+      std::fprintf(stderr, "monitor: %s\n", e.what());
+      return 2;
+    }
+  }
+  int open_rc = 1;
+  const auto lcm = transport::open_lcm(targs, config_path, transport::auth::kSenderTool, "monitor", &open_rc, nullptr);
+  if (!lcm) return open_rc;
   // No log: the line is the monitor's output; bad messages show in it as "undecodable".
   transport::NodeShell shell(*lcm, transport::ShellOptions("monitor", targs.channel_suffix, nullptr));
   Progress progress(shell);

@@ -8,7 +8,7 @@
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
 #                     [--loss P [--loss-scope radio|all]]
 #                     [--kill-robot R --kill-at-frame F [--restart-after S]]
-#                     [--robot-state]
+#                     [--robot-state] [--key-file FILE | --auth]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
 #   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
@@ -62,6 +62,10 @@
 #   when. Needs the Python venv (tools/setup.sh).
 #   --robot-state: each robot_node gets --state DIR/state/robot<R>.json (a
 #   robot_node that saves and reloads its state; main_robot always has --state).
+# - Message authentication (docs/security.md): --key-file FILE gives every process
+#   (simulator, main_robot, each robot_node, the progress line) the team key FILE;
+#   --auth makes a new key in DIR/team.key (tools/make_team_key.sh) and uses it.
+#   Without either, the config's team.key_file decides (the repo's configs have none).
 # Exit status: 0 done, 1 the run failed, 2 bad arguments, 130 interrupted.
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
@@ -83,6 +87,8 @@ KILL_ROBOT=""
 KILL_FRAME=""
 RESTART_AFTER=1.0
 ROBOT_STATE=0
+KEY_FILE=""      # --key-file, or DIR/team.key with --auth
+AUTH=0
 FRAMES_ARG=""    # --frames, when given (to check --kill-at-frame against)
 SIM_ARGS=()      # overrides for the simulator (and run_scenario)
 EVAL_ARGS=()     # the same facts, for the record when a log lacks RUN_INFO
@@ -100,7 +106,7 @@ number() {
 while [ $# -gt 0 ]; do
   case "$1" in
     --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir|--loss|--loss-scope|--kill-robot|\
-    --kill-at-frame|--restart-after)
+    --kill-at-frame|--restart-after|--key-file)
       [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --config) CONFIG="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
@@ -121,6 +127,8 @@ while [ $# -gt 0 ]; do
     --kill-at-frame) number --kill-at-frame "$2" 0 100000000 int; KILL_FRAME="$2"; shift 2 ;;
     --restart-after) [ "$2" = -1 ] || number --restart-after "$2" 0 3600; RESTART_AFTER="$2"; shift 2 ;;
     --robot-state) ROBOT_STATE=1; shift ;;
+    --key-file) KEY_FILE="$2"; shift 2 ;;
+    --auth) AUTH=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
     --realtime) REALTIME=1; shift ;;
     --no-progress) PROGRESS=0; shift ;;
@@ -149,10 +157,19 @@ if [ "$REALTIME" -eq 1 ] && { [ "$(id -u)" -ne 0 ] || ! command -v chrt >/dev/nu
   echo "run_team.sh: --realtime needs root and chrt (util-linux); running with normal scheduling" >&2
   REALTIME=0
 fi
+[ -z "$KEY_FILE" ] || [ "$AUTH" -eq 0 ] || die "--key-file and --auth do not go together (--auth makes a key)"
+[ -z "$KEY_FILE" ] || [ -f "$KEY_FILE" ] || die "--key-file $KEY_FILE: no such file"
+[ -z "$KEY_FILE" ] || KEY_FILE="$(cd "$(dirname "$KEY_FILE")" && pwd)/$(basename "$KEY_FILE")"
 [ -n "$OUT" ] || OUT="$ROOT/runs/team_$(date +%Y%m%d_%H%M%S)"
 mkdir -p "$OUT/logs" 2>/dev/null || die "cannot create the output directory $OUT"
 OUT="$(cd "$OUT" && pwd)"
 [ "$ROBOT_STATE" -eq 0 ] || mkdir -p "$OUT/state"
+if [ "$AUTH" -eq 1 ]; then  # a new key for this run (the nested run inside the namespace gets --key-file)
+  rm -f "$OUT/team.key"
+  "$ROOT/tools/make_team_key.sh" "$OUT/team.key" 2>/dev/null || die "cannot make a team key in $OUT/team.key"
+  KEY_FILE="$OUT/team.key"
+fi
+KEY_ARGS=(${KEY_FILE:+--key-file "$KEY_FILE"})
 
 # Whoever is outermost says that the run was interrupted (once).
 NESTED_PID=""
@@ -311,12 +328,12 @@ rt() { [ "$REALTIME" -eq 1 ] && echo chrt -f "$1"; return 0; }
 launch() {  # $1: how to run each role (a function printing the prefix)
   local where="$1"
   start logger $($where log) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
-  start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json"
+  start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json" "${KEY_ARGS[@]}"
   local state=()
   for r in "${ROBOTS[@]}"; do
     [ "$ROBOT_STATE" -eq 0 ] || state=(--state "$OUT/state/robot$r.json")
     start "robot_node_$r" $($where "robot$r") $(rt 50) -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}" \
-      "${state[@]}"
+      "${state[@]}" "${KEY_ARGS[@]}"
   done
   if [ -n "$KILL_ROBOT" ]; then  # from the logger's host: it hears every pose
     $($where log) "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-frame "POSE_$KILL_ROBOT" \
@@ -324,11 +341,11 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     WATCH_PID=$!
   fi
   if [ "$PROGRESS" -eq 1 ]; then  # to the terminal; not supervised (a failure costs only the line)
-    $($where main) "$BIN/monitor" &
+    $($where main) "$BIN/monitor" --config "$CONFIG" "${KEY_ARGS[@]}" &
     MONITOR_PID=$!
   fi
   start simulator $($where sim) $(rt 60) -- "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) \
-    ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}"
+    ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}" "${KEY_ARGS[@]}"
 }
 
 # fault NOTE: a line in DIR/faults.log (Unix time, what happened) and on stderr.
@@ -431,7 +448,7 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
     --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} $([ "$REALTIME" -eq 1 ] && echo --realtime) \
     $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" \
     ${KILL_ROBOT:+--kill-robot "$KILL_ROBOT" --kill-at-frame "$KILL_FRAME" --restart-after "$RESTART_AFTER"} \
-    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) &
+    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) "${KEY_ARGS[@]}" &
   NESTED_PID=$!
   wait "$NESTED_PID" || rc=$?
   NESTED_PID=""

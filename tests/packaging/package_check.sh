@@ -49,7 +49,8 @@ expected_files() {
       for f in "$SRC"/lcmtypes/*.lcm; do echo "$p/share/elaslam/lcmtypes/$(basename "$f")"; done
       echo "$p/share/elaslam/systemd/realtime.conf"
       echo "$p/share/elaslam/VERSION"
-      echo "$p/share/doc/elaslam/deployment.md" ;;
+      echo "$p/share/doc/elaslam/deployment.md"; echo "$p/share/doc/elaslam/security.md"
+      echo "$p/bin/elaslam-make-team-key" ;;
     elaslam-robot)
       echo "$p/bin/elaslam-robot-node"; echo "$p/lib/systemd/system/elaslam-robot@.service" ;;
     elaslam-main-robot)
@@ -128,7 +129,7 @@ PY
 # Every ELF program answers --version with exit 0 and this version.
 version_check() { # BIN_DIR: every program and script answers --version with this version
   local f out n=0
-  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy"; do
+  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy" "$1/elaslam-make-team-key"; do
     out="$("$f" --version 2>&1)" || fail "$f --version: exit $?: $out"
     case "$out" in
       *"(elaslam $VERSION"*) ;;
@@ -173,7 +174,7 @@ etc_check() { # ETC_DIR
   n="$(grep -c '' "$SRC/config/paper.yaml")"
   tail -n "$n" "$yaml" | cmp -s - "$SRC/config/paper.yaml" || fail "$yaml: does not end with config/paper.yaml"
   grep -qx 'LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608' "$env" || fail "$env: LCM_DEFAULT_URL"
-  grep -qx '#ELASLAM_TEAM_KEY=/etc/elaslam/team.key' "$env" || fail "$env: ELASLAM_TEAM_KEY line"
+  grep -q "^  key_file: .*/team.key$" "$yaml" || fail "$yaml: no team.key_file (authentication on by default)"
   ! grep -v '^#' "$env" | grep -v '^$' | grep -v '^[A-Z_][A-Z0-9_]*=' || fail "$env: a line that is not KEY=VALUE"
 }
 
@@ -316,6 +317,12 @@ mode_deb() {
     dpkg-query --admindir="$I/var/lib/dpkg" -W -f='${Status}\n' "$pkg" | grep -qx "install ok installed" \
       || fail "dpkg: $pkg not installed"
   done
+  # The team key: made by elaslam-common's postinst, root's, mode 0600, 64 hex digits.
+  [ -f "$I/etc/elaslam/team.key" ] || fail "postinst made no /etc/elaslam/team.key"
+  [ "$(stat -c '%a %U' "$I/etc/elaslam/team.key")" = "600 root" ] || fail "team.key: $(stat -c '%a %U' "$I/etc/elaslam/team.key")"
+  grep -qx '[0-9a-f]\{64\}' "$I/etc/elaslam/team.key" || fail "team.key is not 64 hexadecimal digits"
+  local key_before
+  key_before="$(sha256sum < "$I/etc/elaslam/team.key")"
   # Upgrade elaslam-common to -2 (the same files) after a site edit: the edit stays.
   echo "# site edit" >> "$I/etc/elaslam/elaslam.yaml"
   dpkg-deb -R "${DEB[elaslam-common]}" "$TMP/common2"
@@ -323,6 +330,7 @@ mode_deb() {
   dpkg-deb --root-owner-group -b "$TMP/common2" "$TMP/elaslam-common_2.deb" > /dev/null
   "${DP[@]}" -i "$TMP/elaslam-common_2.deb" > "$TMP/dpkg2.log" 2>&1 || { cat "$TMP/dpkg2.log"; fail "dpkg upgrade"; }
   [ "$(tail -1 "$I/etc/elaslam/elaslam.yaml")" = "# site edit" ] || fail "upgrade lost the edit of elaslam.yaml"
+  [ "$(sha256sum < "$I/etc/elaslam/team.key")" = "$key_before" ] || fail "upgrade replaced the team key"
   # Purge elaslam-robot: its state and enablement links go, main-robot's state stays.
   mkdir -p "$I/var/lib/private/elaslam/robot-3" "$I/var/lib/private/elaslam/main-robot" "$I/var/lib/elaslam" \
            "$I/etc/systemd/system/multi-user.target.wants"
@@ -333,7 +341,11 @@ mode_deb() {
   [ ! -e "$I/var/lib/private/elaslam/robot-3" ] && [ ! -L "$I/var/lib/elaslam/robot-3" ] || fail "purge left robot-3's state"
   [ ! -L "$I/etc/systemd/system/multi-user.target.wants/elaslam-robot@3.service" ] || fail "purge left the enablement link"
   [ -d "$I/var/lib/private/elaslam/main-robot" ] || fail "purging elaslam-robot removed main-robot's state"
-  note "dpkg: installed, upgraded (site edit kept), purged"
+  # Purge everything: elaslam-common's purge removes the key it made.
+  "${DP[@]}" --purge elaslam-main-robot elaslam-simulator elaslam-tools > "$TMP/dpkg4.log" 2>&1 \
+    && "${DP[@]}" --purge elaslam-common >> "$TMP/dpkg4.log" 2>&1 || { cat "$TMP/dpkg4.log"; fail "dpkg --purge (all)"; }
+  [ ! -e "$I/etc/elaslam/team.key" ] || fail "purge left the team key"
+  note "dpkg: installed (team key made, 0600), upgraded (site edit and key kept), purged (key removed)"
   echo "deb: ok"
 }
 

@@ -79,7 +79,7 @@ TEST(SimScenario, BaseLoadsAndOtherSectionsAreAllowed) {
     load_scenario_text(kBase + "robto: {}\n");
     FAIL() << "an unknown section was accepted";
   } catch (const config::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("robto: unknown section (known sections: scenario, dataset, robot, main)"),
+    EXPECT_NE(std::string(e.what()).find("robto: unknown section (known sections: scenario, dataset, robot, main, team)"),
               std::string::npos)
         << e.what();
   }

@@ -109,6 +109,9 @@ ShellCounters NodeShell::counters() const {
   c.published = published_;
   c.publish_errors = publish_errors_;
   c.warnings = warnings_;
+  const TransportRefusals r = transport_.refusals();
+  c.auth_refused = r.total;
+  c.auth_unauthenticated = r.unauthenticated;
   return c;
 }
 

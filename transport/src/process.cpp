@@ -4,10 +4,15 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <system_error>
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/config.hpp"
+#include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/lcm_transport.hpp"
+#include "elaslam/transport/team_key.hpp"
 
 namespace elaslam::transport {
 namespace {
@@ -46,6 +51,31 @@ void add_transport_options(CLI::App& app, TransportArgs* args) {
             return std::string();
           },
           "[A-Za-z0-9_]*", "channel suffix"));
+  app.add_option("--key-file", args->key_file,
+                 "team key file: authenticate every message (default: the config's team.key_file; none: off)");
+}
+
+std::string team_key_file(const TransportArgs& args, const std::string& config_path, std::string* origin) {
+  std::string where;
+  if (origin == nullptr) origin = &where;
+  if (!args.key_file.empty()) {
+    *origin = "--key-file";
+    return args.key_file;
+  }
+  if (config_path.empty()) return "";
+  config::Document doc = config::Document::from_file(config_path);
+  std::string path;
+  doc.section("team", [&](config::Reader& r) { r.read_optional("key_file", &path); }, true);
+  doc.allow_sections();
+  doc.finish();
+  *origin = "team.key_file in " + config_path;
+  const char* creds = std::getenv("CREDENTIALS_DIRECTORY");
+  if (path.empty() || creds == nullptr || *creds == '\0') return path;
+  const std::string credential = std::string(creds) + "/team.key";
+  std::error_code ec;
+  if (!std::filesystem::exists(credential, ec)) return path;
+  *origin += ", passed by systemd as the credential team.key (LoadCredential=; 4 bytes \"none\": " + path + " is missing)";
+  return credential;
 }
 
 namespace {
@@ -73,6 +103,35 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
                "(see tools/netns_run.sh)\n",
                who.c_str(), describe_url(url).c_str());
   return nullptr;
+}
+
+std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
+                                    const std::string& who, int* exit_code, std::FILE* log) {
+  std::string key_path, origin;
+  try {
+    key_path = team_key_file(args, config_path, &origin);
+  } catch (const config::ConfigError& e) {
+    std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
+    *exit_code = 2;
+    return nullptr;
+  }
+  TeamKey key;
+  std::string why;
+  if (!key_path.empty() && !load_team_key(key_path, &key, &why)) {
+    std::fprintf(stderr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin.c_str());
+    *exit_code = 2;
+    return nullptr;
+  }
+  auto lcm = open_lcm(args.lcm_url, who);
+  if (!lcm) {
+    *exit_code = 1;
+    return nullptr;
+  }
+  if (key.empty()) return lcm;
+  std::fprintf(stderr, "%s: messages authenticated with the team key %s (sender id %d)\n", who.c_str(),
+               key_path.c_str(), sender_id);
+  return std::make_unique<auth::AuthenticatedTransport>(std::move(lcm), key, sender_id, now_utime(),
+                                                        args.channel_suffix, who, log);
 }
 
 }  // namespace elaslam::transport

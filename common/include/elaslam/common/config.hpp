@@ -32,8 +32,9 @@ namespace elaslam::config {
 
 /// The top-level sections of the one config file, and who reads them: scenario
 /// (simulator), dataset (the MRCLAM importer, in place of scenario), robot (every
-/// robot_node), main (main_robot). Any other top-level key is an error.
-inline constexpr const char* kSections[] = {"scenario", "dataset", "robot", "main"};
+/// robot_node), main (main_robot), team (every process on LCM: the team key,
+/// transport/process.hpp). Any other top-level key is an error.
+inline constexpr const char* kSections[] = {"scenario", "dataset", "robot", "main", "team"};
 
 /// What the loader accepts as a configuration file (Document::from_file): a regular
 /// file of at most this many bytes (read with a bounded read, so that /dev/zero, a

@@ -23,7 +23,8 @@ constexpr int kMaxCount = 32767;              // the most any int16_t count fiel
 
 // Messages that repair state fit one datagram (lmap_snapshot_t, global_map_t chunks):
 // at most this many bytes encoded (LCM's payload, fingerprint included). With LCM's
-// header (8 bytes and the channel name) and IP/UDP (28 bytes) a chunk stays under a
+// header (8 bytes and the channel name), IP/UDP (28 bytes) and the message
+// authentication trailer (54 bytes, docs/security.md) a chunk stays under a
 // 1,500-byte MTU for channel names of up to 200 characters, and under the 1,400
 // bytes of a typical tunnelled link for names of up to 100.
 constexpr int kMaxChunkBytes = 1200;

@@ -170,7 +170,13 @@ class MainPorts {
     const int n = node_.make_global_map(shell_.now_utime(), frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
   }
-  void publish_status() { shell_.publish(status_, node_.status_msg(shell_.now_utime())); }
+  void publish_status() {
+    node_status_t m = node_.status_msg(shell_.now_utime());
+    const auto c = shell_.counters();  // the transport's authentication refusals
+    m.auth_refused = c.auth_refused;
+    m.auth_unauthenticated = c.auth_unauthenticated;
+    shell_.publish(status_, m);
+  }
 
  private:
   void on_event(const landmark_event_t& m) {

@@ -217,7 +217,13 @@ class RobotPorts {
     return sensor > 0 && notice > 0 && map > 0 && resync > 0 && own > 0;
   }
 
-  void publish_status() { shell_.publish(status_, node_.status_msg(shell_.now_utime())); }
+  void publish_status() {
+    node_status_t m = node_.status_msg(shell_.now_utime());
+    const auto c = shell_.counters();  // the transport's authentication refusals
+    m.auth_refused = c.auth_refused;
+    m.auth_unauthenticated = c.auth_unauthenticated;
+    shell_.publish(status_, m);
+  }
 
   /// Called after every processed frame, before its messages go out (the in-process
   /// run reads the frame's gate records there).

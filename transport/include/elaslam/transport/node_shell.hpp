@@ -6,11 +6,13 @@
 // message bumps a counter). Outgoing: encode into one reused buffer and publish.
 // Periodic callbacks and the loop that ends on SIGINT / SIGTERM (spin()).
 //
-// Every message crosses one pipeline, Input<Msg>::dispatch below:
-//   [authenticate the bytes] -> decode -> validate -> [sender's sequence] -> handler
-// The bracketed steps are where message authentication and sequence / incarnation
-// tracking belong (later issues); today a node tracks what it needs itself
-// (sequence.hpp).
+// Every message crosses one pipeline:
+//   authenticate the bytes -> decode -> validate -> [sender's sequence] -> handler
+// Authentication is the transport's (AuthenticatedTransport, auth_transport.hpp, wraps
+// the LCM transport when a team key is configured): a message refused there never
+// reaches Input<Msg>::dispatch below, and is counted in ShellCounters::auth_refused.
+// The bracketed step is where sequence / incarnation tracking belongs (a later
+// issue); today a node tracks what it needs itself (sequence.hpp).
 #pragma once
 
 #include <atomic>
@@ -43,6 +45,8 @@ struct ShellCounters {
   std::int64_t published = 0;
   std::int64_t publish_errors = 0;  // encoding or sending failed
   std::int64_t warnings = 0;        // warn() calls, printed or not
+  std::int64_t auth_refused = 0;    // refused by the transport before any input saw them (authentication)
+  std::int64_t auth_unauthenticated = 0;  // of which: without an authentication trailer
 };
 
 struct ShellOptions {
@@ -149,7 +153,7 @@ class NodeShell {
     }
     void dispatch(const RawMessage& m) override {
       ++counters.received;
-      // [authenticate m's bytes here, before anything reads them]
+      // m's bytes were authenticated by the transport (auth_transport.hpp) when a key is configured
       if (!decode(m)) return shell->decode_failed(this, Msg::getTypeName());
       if (validate_) {
         const std::string why = validate_(*msg_, m.channel);

@@ -29,6 +29,12 @@ using RawHandler = void (*)(const RawMessage& message, void* context);
 constexpr int kTransportDefaultQueue = -1;
 constexpr int kUnboundedQueue = 0;
 
+/// What a transport refused before any subscriber saw it (Transport::refusals).
+struct TransportRefusals {
+  std::int64_t total = 0;            // for every reason
+  std::int64_t unauthenticated = 0;  // of which: no authentication trailer (a sender without the team key)
+};
+
 class Transport {
  public:
   Transport() = default;
@@ -56,6 +62,10 @@ class Transport {
   /// > 0 one was handled, 0 none came, < 0 failure (also a wait interrupted by a
   /// signal). Never call it from inside a handler.
   virtual int handle_timeout(int timeout_ms) = 0;
+
+  /// Messages received but refused before any subscriber saw them (message
+  /// authentication: auth_transport.hpp); none for a transport that refuses none.
+  virtual TransportRefusals refusals() const { return {}; }
 };
 
 }  // namespace elaslam::transport

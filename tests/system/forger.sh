@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# System test `system_forger` (issue 15, docs/security.md): a live team with a team
+# key, attacked by a process on its LCM network without the key (forger.py: forged
+# LMAP_EVENT ADDs at (100, 100) from robot ids in and out of the team, DYNAMIC_NOTICEs,
+# LMAP_SNAPSHOTs, POSEs, fake trailers, replayed, altered and moved genuine datagrams),
+# ends as the same team unattacked: the robots' poses (compare-poses) and the final
+# GLOBAL_MAP (compare-maps) of both recordings, read as a keyed node reads them
+# (lcm_check.py --key-file: only what verifies, each message once), are the same,
+# following the rule of the other two-run tests: exit 0 of compare-poses (the same
+# input, the same poses) requires the same map; exit 3 (notice timing differed) is
+# reported, not failed. Every robot and main_robot reported auth_refused > 0.
+# The unattacked keyed recording is read by evaluate (run_team.sh) and by the Python
+# tools (decode_log.py): sealed messages decode unchanged.
+# Last, the same attack on the team without a key: its map is not the unattacked one
+# (the attack is real; skipped with UNKEYED=0).
+# Needs root and ip netns (exit 77 otherwise) and the .venv (tools/setup.sh).
+#   [UNKEYED=1] tests/system/forger.sh BUILD_DIR
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+HERE="$ROOT/tests/system"
+PY="$ROOT/.venv/bin/python"
+ARGS=(--dynamism 50 --speed 0.5 --seed 3)
+CONFIG="$ROOT/config/paper.yaml"
+
+if [ "${1:-}" = "--inner" ]; then  # inside a namespace: --inner BUILD OUT [run_team.sh args]
+  BUILD="$2" OUT="$3"
+  shift 3
+  mkdir -p "$OUT"
+  "$PY" "$HERE/forger.py" --build-dir "$BUILD" --period 0.1 > "$OUT.forger.txt" 2>&1 &
+  FORGER=$!
+  trap 'kill -TERM $FORGER 2>/dev/null || true' EXIT
+  rc=0
+  "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT" --no-progress --no-baseline "$@" || rc=$?
+  kill -TERM $FORGER 2>/dev/null || true
+  wait $FORGER || true
+  trap - EXIT
+  exit $rc
+fi
+
+BUILD="$(cd "${1:?usage: forger.sh BUILD_DIR}" && pwd)"
+[ "$(id -u)" -eq 0 ] || { echo "forger: skipped (needs root for network namespaces)"; exit 77; }
+ip netns list >/dev/null 2>&1 || { echo "forger: skipped (no ip netns)"; exit 77; }
+[ -x "$PY" ] || { echo "forger: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
+OUT="$(mktemp -d)"
+[ -n "${KEEP_OUT:-}" ] && echo "forger: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+KEY="$OUT/team.key"
+"$ROOT/tools/make_team_key.sh" "$KEY" 2>/dev/null
+ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
+FRAMES=$(awk '/^scenario:/ {s = 1; next} /^[^ #]/ {s = 0} s && $1 == "frames:" {print $2; exit}' "$CONFIG")
+check() { "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" --key-file "$KEY" "$@"; }
+fail() { echo "forger: $*"; exit 1; }
+
+# 1. The keyed team, unattacked; 2. the same, attacked.
+"$ROOT/tools/netns_run.sh" --port 7720 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT/ref" \
+  --no-progress --no-baseline --key-file "$KEY" "${ARGS[@]}" > "$OUT/ref.txt" 2>&1 || { cat "$OUT/ref.txt"; exit 1; }
+"$ROOT/tools/netns_run.sh" --port 7721 -- "$0" --inner "$BUILD" "$OUT/attacked" --key-file "$KEY" "${ARGS[@]}" \
+  > "$OUT/attacked.txt" 2>&1 || { cat "$OUT/attacked.txt"; tail -n 5 "$OUT"/attacked/logs/*.log; exit 1; }
+cat "$OUT/attacked.forger.txt"
+grep -q "authenticated with the team key" "$OUT/attacked/logs/main_robot.log" || fail "main_robot did not use the key"
+grep -h "refused a message" "$OUT"/attacked/logs/*.log | head -n 4 || true
+
+# Every robot processed every frame, none lost or refused (its own count): a pose
+# missing from a recording is then the recorder's loss (lcm-logger's 30-message
+# queue, busier under the flood), noted by compare-poses, not failed.
+for r in "${ROBOTS[@]}"; do
+  grep -q "^robot_node $r: frames=$FRAMES gaps=0 duplicates=0 out_of_order=0 rejected=0 decode_errors=0 " \
+    "$OUT/attacked/logs/robot_node_$r.log" || { tail -n 3 "$OUT/attacked/logs/robot_node_$r.log"; fail "robot $r's frames"; }
+done
+rc=0
+poses=0
+check compare-poses "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --robots "${ROBOTS[@]}" --frames "$FRAMES" \
+  --tol 1e-9 --allow-missing 5 > "$OUT/poses.txt" || poses=$?
+cat "$OUT/poses.txt"
+case $poses in
+  0) echo "forger: the attacked team's poses are the unattacked team's, frame by frame" ;;
+  3) echo "forger: (not a failure) notice timing differed between the two live runs" ;;
+  *) fail "the attacked team's poses differ from the unattacked team's" ;;
+esac
+echo -n "forger: final global map, attacked vs unattacked: "
+if ! check compare-maps "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --tol 1e-6; then
+  [ "$poses" -ne 0 ] || fail "the same poses, but the attacked team's map differs"
+  echo "forger: (not a failure) the robots' inputs differed by notice timing"
+fi
+nodes=("${ROBOTS[@]/#/ROBOT_}" MAIN)
+check auth-refused "$OUT/attacked/run.lcmlog" --nodes "${nodes[@]}" || fail "a node refused nothing"
+
+# The keyed recording reads as any other: evaluate (run_team.sh) and the Python tools.
+[ -s "$OUT/ref/metrics.json" ] || fail "evaluate wrote no metrics.json for the keyed recording"
+"$PY" "$ROOT/tools/decode_log.py" "$OUT/ref/run.lcmlog" --build-dir "$BUILD" > "$OUT/decoded.txt"
+for ch in POSE_1 SENSOR_1 GROUND_TRUTH; do
+  grep -q "^$ch  *$FRAMES decoded$" "$OUT/decoded.txt" || { cat "$OUT/decoded.txt"; fail "decode_log.py: $ch"; }
+done
+echo "forger: the keyed recording: evaluate and decode_log.py read every message"
+python3 - "$OUT/ref/metrics.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+print(f"forger: unattacked keyed team: landmark error {m['landmark_error']['mean_euclidean']:.4f} m, "
+      f"robots {[round(r['error_mean'], 4) for r in m['robots']]}")
+PY
+
+# 3. The same attack on the team without a key: the attack is real.
+if [ "${UNKEYED:-1}" = 1 ]; then
+  "$ROOT/tools/netns_run.sh" --port 7722 -- "$0" --inner "$BUILD" "$OUT/unkeyed" "${ARGS[@]}" \
+    > "$OUT/unkeyed.txt" 2>&1 || { echo "forger: (the unkeyed attacked team failed to run, as may be)"; }
+  echo -n "forger: the same attack without a key, final map vs unattacked: "
+  if "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" compare-maps "$OUT/ref/run.lcmlog" "$OUT/unkeyed/run.lcmlog" \
+      --tol 1e-6 2>&1; then
+    echo "forger: the attack had no effect on a team without a key: the test proves nothing"; rc=1
+  fi
+fi
+exit $rc

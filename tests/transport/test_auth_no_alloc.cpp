@@ -1,0 +1,100 @@
+// The receive path of message authentication allocates nothing: open() verifies a
+// message in place (the MAC state on the stack, the payload the same bytes without
+// the trailer), accepted or refused; and a steady flow of sealed messages through
+// the node shell and the authenticated transport allocates nothing once warm.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "../support/no_alloc.hpp"
+#include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/transport/auth_transport.hpp"
+#include "elaslam/transport/inprocess_transport.hpp"
+#include "elaslam/transport/node_shell.hpp"
+
+namespace elaslam::transport::auth {
+namespace {
+
+TeamKey test_key() {
+  std::array<std::uint8_t, TeamKey::kBytes> b{};
+  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<std::uint8_t>(3 * i + 11);
+  return TeamKey(b);
+}
+
+TEST(AuthNoAlloc, OpeningAcceptedAndRefusedMessagesAllocatesNothing) {
+  const TeamKey key = test_key();
+  Authenticator sim(key, kSenderSimulator, 5);
+  Authenticator robot(key, 1, 6);
+  sensor_frame_t s{};
+  s.robot_id = 1;
+  s.obs.resize(15);
+  s.num_obs = 15;
+  const std::string channel = "SENSOR_1";
+  const int n = s.getEncodedSize();
+  // 2000 sealed frames, made before the region.
+  std::vector<std::vector<std::uint8_t>> sealed;
+  for (int k = 0; k < 2000; ++k) {
+    s.frame = k;
+    std::vector<std::uint8_t> buf(static_cast<std::size_t>(n) + kTrailerBytes);
+    s.encode(buf.data(), 0, n);
+    buf.resize(sim.seal(channel, buf.data(), static_cast<std::size_t>(n)));
+    sealed.push_back(std::move(buf));
+  }
+  std::vector<std::uint8_t> forged = sealed[0];
+  forged[20] ^= 1;
+  long accepted = 0, refused = 0;
+  {
+    test::NoAllocRegion region;
+    for (const auto& m : sealed) {
+      std::size_t payload = 0;
+      Sender who;
+      accepted += robot.open(channel, m.data(), m.size(), &payload, &who) == Verdict::kAccepted;
+      refused += robot.open(channel, m.data(), m.size(), &payload, &who) == Verdict::kReplayed;
+      refused += robot.open(channel, forged.data(), forged.size(), &payload, &who) == Verdict::kForged;
+      refused += robot.open(channel, m.data(), 10, &payload, &who) == Verdict::kUnauthenticated;
+    }
+  }
+  EXPECT_EQ(test::allocations_in_region(), 0);
+  EXPECT_EQ(accepted, 2000);
+  EXPECT_EQ(refused, 3 * 2000);
+}
+
+TEST(AuthNoAlloc, ASensorToPoseRoundTripThroughAuthenticatedTransportsAllocatesNothingOnceWarm) {
+  const TeamKey key = test_key();
+  InProcessTransport bus;
+  AuthenticatedTransport robot_t(bus, key, 1, 1, "", "robot", nullptr);
+  AuthenticatedTransport sim_t(bus, key, kSenderSimulator, 2, "", "sim", nullptr);
+  NodeShell robot(robot_t, ShellOptions("robot", "", nullptr));
+  NodeShell sim(sim_t, ShellOptions("sim", "", nullptr));
+  long poses = 0;
+  robot.subscribe<sensor_frame_t>("SENSOR_1", [&](const sensor_frame_t& s, const std::string&) {
+    pose_estimate_t p{};
+    p.frame = s.frame;
+    p.robot_id = s.robot_id;
+    robot.publish("POSE_1", p);
+  }, kUnboundedQueue);
+  sim.subscribe<pose_estimate_t>("POSE_[0-9]+", [&](const pose_estimate_t&, const std::string&) { ++poses; },
+                                 kUnboundedQueue);
+  sensor_frame_t s{};
+  s.robot_id = 1;
+  s.obs.resize(10);
+  s.num_obs = 10;
+  auto frame = [&](int k) {
+    s.frame = k;
+    sim.publish("SENSOR_1", s);
+    bus.dispatch_all();
+  };
+  for (int k = 0; k < 100; ++k) frame(k);
+  {
+    test::NoAllocRegion region;
+    for (int k = 100; k < 2000; ++k) frame(k);
+  }
+  EXPECT_EQ(test::allocations_in_region(), 0);
+  EXPECT_EQ(poses, 2000);
+  EXPECT_EQ(robot_t.counters().accepted, 2000);
+  EXPECT_EQ(sim_t.counters().refused(), 0);
+}
+
+}  // namespace
+}  // namespace elaslam::transport::auth
