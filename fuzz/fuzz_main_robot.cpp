@@ -16,22 +16,13 @@
 #include "elaslam/transport/inprocess_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "fuzz_input.hpp"
+#include "fuzz_options.hpp"
 
 namespace {
 
 using namespace elaslam;
 
-const GlobalMapOptions& options() {
-  static const GlobalMapOptions o = [] {
-    config::Document doc = config::Document::from_file(fuzz::source_dir() + "/config/paper.yaml");
-    GlobalMapOptions g;
-    doc.section("main", [&](config::Reader& r) { parse(r, &g); });
-    doc.allow_sections();
-    doc.finish();
-    return g;
-  }();
-  return o;
-}
+const GlobalMapOptions& options() { return fuzz::main_options(); }
 
 const std::string kChannels[] = {channels::lmap_event(), channels::lmap_snapshot(), channels::pose(1),
                                  channels::pose(2),      channels::pose(3),         channels::pose(7)};

@@ -16,6 +16,7 @@
 #include "elaslam/transport/inprocess_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "fuzz_input.hpp"
+#include "fuzz_options.hpp"
 
 namespace {
 
@@ -26,7 +27,7 @@ using namespace elaslam;
 // a small filter also fills up, so the full-filter paths get exercised.
 const RobotOptions& options() {
   static const RobotOptions o = [] {
-    RobotOptions r = load_robot_options(fuzz::source_dir() + "/config/paper.yaml");
+    RobotOptions r = fuzz::robot_options();
     r.ekf.capacity = 24;
     return r;
   }();

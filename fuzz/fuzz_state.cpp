@@ -18,27 +18,14 @@
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
 #include "fuzz_input.hpp"
+#include "fuzz_options.hpp"
 
 namespace {
 
 using namespace elaslam;
 
-const RobotOptions& robot_options() {
-  static const RobotOptions o = load_robot_options(fuzz::source_dir() + "/config/paper.yaml");
-  return o;
-}
-
-const GlobalMapOptions& main_options() {
-  static const GlobalMapOptions o = [] {
-    config::Document doc = config::Document::from_file(fuzz::source_dir() + "/config/paper.yaml");
-    GlobalMapOptions g;
-    doc.section("main", [&](config::Reader& r) { parse(r, &g); });
-    doc.allow_sections();
-    doc.finish();
-    return g;
-  }();
-  return o;
-}
+using fuzz::main_options;
+using fuzz::robot_options;
 
 /// The text with its checksum made right again (the text itself when it is not a
 /// JSON object with a "state").
