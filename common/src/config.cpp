@@ -2,6 +2,8 @@
 
 #include "config_input.hpp"
 
+#include <yaml-cpp/eventhandler.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -258,26 +260,55 @@ void Reader::finish() {
   }
 }
 
+namespace {
+/// Records where each document starts; ignores the rest (a counting pass).
+class DocumentStarts final : public YAML::EventHandler {
+ public:
+  explicit DocumentStarts(std::vector<YAML::Mark>* starts) : starts_(starts) {}
+  void OnDocumentStart(const YAML::Mark& mark) override { starts_->push_back(mark); }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+ private:
+  std::vector<YAML::Mark>* starts_;
+};
+}  // namespace
+
 Document::Document(YAML::Node root, std::string source)
     : root_(std::move(root)), source_(std::move(source)), state_(std::make_shared<ParseState>()) {}
 
 Document Document::from_string(const std::string& text, const std::string& source) {
   std::vector<std::string> problems = input::text_problems(text);
   if (!problems.empty()) throw ConfigError(source, problems);
-  std::vector<YAML::Node> docs;
+  // Not YAML::LoadAll: in yaml-cpp 0.7 it loops forever, allocating, when the parser
+  // keeps reporting a document it cannot read (jbeder/yaml-cpp#1319, fixed after 0.7;
+  // fuzz_config found two such configs). The documents are counted by a pass that
+  // stops at the second, and the first is built by YAML::Load.
+  YAML::Node root;
+  std::vector<YAML::Mark> starts;
   try {
-    docs = YAML::LoadAll(text);
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    DocumentStarts counter(&starts);
+    while (starts.size() < 2 && parser.HandleNextDocument(counter)) {
+    }
+    if (starts.size() < 2) root = YAML::Load(text);
   } catch (const YAML::Exception& e) {  // ParserException, and DeepRecursion (nesting beyond yaml-cpp's bound)
     throw ConfigError(source, {"malformed YAML at line " + std::to_string(e.mark.line + 1) + ", column " +
                                    std::to_string(e.mark.column + 1) + ": " + e.msg});
   }
-  if (docs.size() > 1) {
-    const YAML::Mark m = docs[1].Mark();
+  if (starts.size() > 1) {
+    const YAML::Mark m = starts[1];
     throw ConfigError(source, {"a second YAML document" +
                                (m.is_null() ? std::string() : " at line " + std::to_string(m.line + 1)) +
-                               " (after a '---' line): a configuration is one document; merge the two or remove one"});
+                               " (where its '---' or its content starts): a configuration is one document; merge the two or remove one"});
   }
-  const YAML::Node root = docs.empty() ? YAML::Node() : docs.front();
   if (!root.IsMap())
     throw ConfigError(source, {"expected a map of sections at the top level, got " + scalar_text(root)});
   problems = input::structure_problems(root);
