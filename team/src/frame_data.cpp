@@ -130,7 +130,8 @@ std::string check_logged(const global_map_t& g, const MessageLimits& l, Refusal*
   *reason = Refusal::kMalformed;
   if (!contract::count_fits(g.landmarks, g.num_landmarks)) return contract::got("num_landmarks does not match the array", g.num_landmarks);
   if (!contract::count_fits(g.moving_ids, g.num_moving)) return contract::got("num_moving does not match the array", g.num_moving);
-  if (g.frame < 0) return contract::got("frame is negative", g.frame);
+  // -1: main_robot's map before any robot has finished a frame (sent on request).
+  if (g.frame < -1) return contract::got("frame below -1", g.frame);
   int previous = -1;
   for (int i = 0; i < g.num_landmarks; ++i) {
     const global_landmark_t& m = g.landmarks[static_cast<std::size_t>(i)];
