@@ -13,10 +13,8 @@
 #include "elaslam/common/config.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/main_robot/main_node.hpp"
-#include "elaslam/transport/inprocess_transport.hpp"
-#include "elaslam/transport/node_shell.hpp"
-#include "fuzz_input.hpp"
 #include "fuzz_options.hpp"
+#include "node_harness.hpp"
 
 namespace {
 
@@ -27,35 +25,11 @@ const GlobalMapOptions& options() { return fuzz::main_options(); }
 const std::string kChannels[] = {channels::lmap_event(), channels::lmap_snapshot(), channels::pose(1),
                                  channels::pose(2),      channels::pose(3),         channels::pose(7)};
 
-/// The shell, the transport and the ports live across inputs (their decode buffers
-/// are reserved once); the node is reset to a pristine copy before each input, so
-/// that an input's outcome depends on it alone.
-struct Harness {
-  transport::InProcessTransport bus;
-  std::int64_t clock = 0;
-  transport::NodeShell shell{bus, [this] {
-                               transport::ShellOptions so("main_robot", "", nullptr);
-                               so.clock = [this] { return clock += 1000; };
-                               return so;
-                             }()};
-  const MainNode pristine{options()};
-  MainNode node{pristine};
-  MainPorts<transport::NodeShell> ports{shell, node};
-  Harness() {
-    if (!ports.open()) std::abort();
-  }
-};
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static Harness h;
-  h.node = h.pristine;
-  h.clock = 1'700'000'000'000'000;
-  fuzz::for_each_record(data, size, std::size(kChannels), [&](const fuzz::Record& r) {
-    h.bus.publish(kChannels[r.channel], r.data, r.size);
-    h.bus.dispatch_all();
-  });
+  static fuzz::NodeHarness<MainNode, MainPorts> h("main_robot", MainNode(options()));
+  h.run(data, size, kChannels);
   h.ports.publish_map();
   h.ports.publish_status();
   h.bus.dispatch_all();

@@ -13,10 +13,8 @@
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
-#include "elaslam/transport/inprocess_transport.hpp"
-#include "elaslam/transport/node_shell.hpp"
-#include "fuzz_input.hpp"
 #include "fuzz_options.hpp"
+#include "node_harness.hpp"
 
 namespace {
 
@@ -37,35 +35,11 @@ const RobotOptions& options() {
 const std::string kChannels[] = {channels::sensor(1), channels::dynamic_notice(), channels::global_map(),
                                  channels::lmap_resync(), channels::pose(1)};
 
-/// The shell, the transport and the ports live across inputs (their decode buffers
-/// are reserved once: megabytes); the node is reset to a pristine copy before each
-/// input, so that an input's outcome depends on it alone.
-struct Harness {
-  transport::InProcessTransport bus;
-  std::int64_t clock = 0;
-  transport::NodeShell shell{bus, [this] {
-                               transport::ShellOptions so("robot_node 1", "", nullptr);
-                               so.clock = [this] { return clock += 1000; };
-                               return so;
-                             }()};
-  const RobotNode pristine{options(), 1};
-  RobotNode node{pristine};
-  RobotPorts<transport::NodeShell> ports{shell, node};
-  Harness() {
-    if (!ports.open()) std::abort();
-  }
-};
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static Harness h;
-  h.node = h.pristine;
-  h.clock = 1'700'000'000'000'000;
-  fuzz::for_each_record(data, size, std::size(kChannels), [&](const fuzz::Record& r) {
-    h.bus.publish(kChannels[r.channel], r.data, r.size);
-    h.bus.dispatch_all();
-  });
+  static fuzz::NodeHarness<RobotNode, RobotPorts> h("robot_node 1", RobotNode(options(), 1));
+  h.run(data, size, kChannels);
   h.ports.publish_status();
   h.bus.dispatch_all();
   if (save_robot_state(h.node).empty()) std::abort();

@@ -148,6 +148,51 @@ std::string check_cov2(const double (&c)[2][2], const MessageLimits& l, const ch
   return check_cov2(m, l, field);
 }
 
+std::string check_pose(const pose_estimate_t& p, const MessageLimits& l, Refusal* reason) {
+  *reason = Refusal::kMalformed;
+  if (p.frame < 0) return contract::got("frame is negative", p.frame);
+  *reason = Refusal::kImplausible;
+  if (std::string e = check_position(p.x, p.y, l, "position"); !e.empty()) return e;
+  if (!std::isfinite(p.theta)) return "theta is not finite";
+  return check_pose_cov(p.cov, l, "cov");
+}
+
+std::string check_global_map(const global_map_t& m, const MessageLimits& l, int max_moving_id, Refusal* reason) {
+  *reason = Refusal::kMalformed;
+  if (m.num_moving < 0 || !contract::count_fits(m.moving_ids, m.num_moving) ||
+      !contract::count_fits(m.moving_frames, m.num_moving) || !contract::count_fits(m.moving_by, m.num_moving))
+    return contract::got("num_moving does not match the moving arrays", m.num_moving);
+  if (!contract::count_fits(m.landmarks, m.num_landmarks)) return contract::got("num_landmarks does not match the array", m.num_landmarks);
+  if (m.frame < -1) return contract::got("frame below -1", m.frame);
+  int previous = -1;
+  for (int k = 0; k < m.num_landmarks; ++k) {
+    const global_landmark_t& g = m.landmarks[static_cast<std::size_t>(k)];
+    *reason = Refusal::kMalformed;
+    if (g.id < 0) return contract::got("landmark id is negative", g.id);
+    if (g.id == previous) return *reason = Refusal::kDuplicateId, contract::got("landmark id listed twice", g.id);
+    if (g.id < previous) return contract::got("landmark ids not ascending, id", g.id);
+    previous = g.id;
+    *reason = Refusal::kImplausible;
+    if (std::string p = check_position(g.x, g.y, l, "position"); !p.empty()) return "landmark " + std::to_string(g.id) + " " + p;
+    if (std::string p = check_cov2(g.cov, l, "cov"); !p.empty()) return "landmark " + std::to_string(g.id) + " " + p;
+  }
+  previous = -1;
+  for (int k = 0; k < m.num_moving; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const int id = m.moving_ids[i], by = m.moving_by[i];
+    *reason = Refusal::kMalformed;
+    if (id < 0 || id >= max_moving_id) return contract::got("moving id outside [0, max_landmark_id)", id);
+    if (id == previous) return *reason = Refusal::kDuplicateId, contract::got("moving id listed twice", id);
+    if (id < previous) return contract::got("moving ids not ascending, id", id);
+    previous = id;
+    if (by < 0 || by > contract::kMaxRobots) return contract::got(contract::outside("moving_by", 0, contract::kMaxRobots), by);
+    if (by > 0 && !l.in_team(by))
+      return *reason = Refusal::kOutsideTeam, contract::got("moving_by not in limits.team " + team_text(l.team_mask), by);
+    if (m.moving_frames[i] < 0) return contract::got("moving frame is negative", m.moving_frames[i]);
+  }
+  return "";
+}
+
 std::string check_pose_cov(const double (&c)[3][3], const MessageLimits& l, const char* field) {
   Eigen::Matrix3d m;
   for (int i = 0; i < 3; ++i)

@@ -131,13 +131,7 @@ std::string MainNode::validate(const pose_estimate_t& m, Refusal* reason) const 
   Refusal& r = reason ? *reason : dummy;
   const MessageLimits& lim = map_.options().limits;
   if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
-  r = Refusal::kMalformed;
-  if (m.frame < 0) return contract::got("frame is negative", m.frame);
-  r = Refusal::kImplausible;
-  if (std::string p = check_position(m.x, m.y, lim, "position"); !p.empty()) return p;
-  if (!std::isfinite(m.theta)) return "theta is not finite";
-  if (std::string p = check_pose_cov(m.cov, lim, "cov"); !p.empty()) return p;
-  return "";
+  return check_pose(m, lim, &r);
 }
 
 // The newest frame known of the robot (else of the team, when the robot is new): a

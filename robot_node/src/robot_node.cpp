@@ -349,39 +349,7 @@ void RobotNode::apply_notice(const dynamic_notice_t& msg) {
 }
 
 std::string RobotNode::validate(const global_map_t& m, Refusal* reason) const {
-  const int max_id = options_.ekf.max_landmark_id;
-  const MessageLimits& lim = options_.limits;
-  *reason = Refusal::kMalformed;
-  if (m.num_moving < 0 || !contract::count_fits(m.moving_ids, m.num_moving) ||
-      !contract::count_fits(m.moving_frames, m.num_moving) || !contract::count_fits(m.moving_by, m.num_moving))
-    return contract::got("num_moving does not match the moving arrays", m.num_moving);
-  if (!contract::count_fits(m.landmarks, m.num_landmarks)) return contract::got("num_landmarks does not match the array", m.num_landmarks);
-  int previous = -1;
-  for (int k = 0; k < m.num_landmarks; ++k) {
-    const global_landmark_t& l = m.landmarks[static_cast<std::size_t>(k)];
-    *reason = Refusal::kMalformed;
-    if (l.id < 0) return contract::got("landmark id is negative", l.id);
-    if (l.id == previous) return *reason = Refusal::kDuplicateId, contract::got("landmark id listed twice", l.id);
-    if (l.id < previous) return contract::got("landmark ids not ascending, id", l.id);
-    previous = l.id;
-    *reason = Refusal::kImplausible;  // (no string built unless refused)
-    if (std::string p = check_position(l.x, l.y, lim, "position"); !p.empty()) return "landmark " + std::to_string(l.id) + " " + p;
-    if (std::string p = check_cov2(l.cov, lim, "cov"); !p.empty()) return "landmark " + std::to_string(l.id) + " " + p;
-  }
-  previous = -1;
-  for (int k = 0; k < m.num_moving; ++k) {
-    const auto i = static_cast<std::size_t>(k);
-    *reason = Refusal::kMalformed;
-    if (m.moving_ids[i] < 0 || m.moving_ids[i] >= max_id) return contract::got("moving id outside [0, max_landmark_id)", m.moving_ids[i]);
-    if (m.moving_ids[i] == previous) return *reason = Refusal::kDuplicateId, contract::got("moving id listed twice", m.moving_ids[i]);
-    if (m.moving_ids[i] < previous) return contract::got("moving ids not ascending, id", m.moving_ids[i]);
-    previous = m.moving_ids[i];
-    if (m.moving_by[i] < 0 || m.moving_by[i] > contract::kMaxRobots) return contract::got(contract::outside("moving_by", 0, contract::kMaxRobots), m.moving_by[i]);
-    if (m.moving_by[i] > 0 && !lim.in_team(m.moving_by[i]))
-      return *reason = Refusal::kOutsideTeam, contract::got("moving_by not in limits.team " + team_text(lim.team_mask), m.moving_by[i]);
-    if (m.moving_frames[i] < 0) return contract::got("moving frame is negative", m.moving_frames[i]);
-  }
-  return "";
+  return check_global_map(m, options_.limits, options_.ekf.max_landmark_id, reason);
 }
 
 bool RobotNode::refused(Refusal reason, const std::string& problem, std::string* why) {

@@ -108,9 +108,7 @@ void SimNode::publish_status(int frame) {
   m.decode_errors = waiter_ ? waiter_->decode_errors() : 0;
   // Observations beyond sensor_frame_t's 64 were left out in the last kAlertFrames frames.
   if (truncated_frame_ >= 0 && frame - truncated_frame_ < kAlertFrames) m.fault_flags |= node_status_t::FAULT_CAPACITY;
-  const auto c = shell_.counters();  // the transport's authentication refusals
-  m.auth_refused = c.auth_refused;
-  m.auth_unauthenticated = c.auth_unauthenticated;
+  shell_.stamp_auth(&m);
   m.processing_us_p50 = static_cast<std::int32_t>(stats_.processing.quantile(0.50));
   m.processing_us_p99 = static_cast<std::int32_t>(stats_.processing.quantile(0.99));
   m.processing_us_max = static_cast<std::int32_t>(std::min<std::int64_t>(stats_.processing.max(), INT32_MAX));

@@ -105,15 +105,11 @@ bool GlobalMapAssembly::add(const global_map_t& c) {
 std::string check_logged(const pose_estimate_t& p, std::int64_t received_us, const MessageLimits& l, Refusal* reason) {
   *reason = Refusal::kMalformed;
   if (p.robot_id < 1 || p.robot_id > contract::kMaxRobots) return contract::got("robot_id outside [1, 8]", p.robot_id);
-  if (p.frame < 0) return contract::got("frame is negative", p.frame);
   // Latency is receive - source_utime: a source stamp after the receipt (beyond the
   // clock skew of synchronised computers) is forged or from a wrong clock.
   if (p.source_utime < 0 || p.source_utime > received_us + kClockSlackUs)
     return contract::got("source_utime after the message was received (a forged stamp or a wrong clock)", p.source_utime);
-  *reason = Refusal::kImplausible;
-  if (std::string e = check_position(p.x, p.y, l, "position"); !e.empty()) return e;
-  if (!std::isfinite(p.theta)) return "theta is not finite";
-  return check_pose_cov(p.cov, l, "cov");
+  return check_pose(p, l, reason);
 }
 
 std::string check_logged(const sensor_frame_t& s, const MessageLimits& l, Refusal* reason) {
@@ -127,29 +123,7 @@ std::string check_logged(const sensor_frame_t& s, const MessageLimits& l, Refusa
 }
 
 std::string check_logged(const global_map_t& g, const MessageLimits& l, Refusal* reason) {
-  *reason = Refusal::kMalformed;
-  if (!contract::count_fits(g.landmarks, g.num_landmarks)) return contract::got("num_landmarks does not match the array", g.num_landmarks);
-  if (!contract::count_fits(g.moving_ids, g.num_moving)) return contract::got("num_moving does not match the array", g.num_moving);
-  // -1: main_robot's map before any robot has finished a frame (sent on request).
-  if (g.frame < -1) return contract::got("frame below -1", g.frame);
-  int previous = -1;
-  for (int i = 0; i < g.num_landmarks; ++i) {
-    const global_landmark_t& m = g.landmarks[static_cast<std::size_t>(i)];
-    *reason = m.id == previous ? Refusal::kDuplicateId : Refusal::kMalformed;
-    if (m.id <= previous) return contract::got("landmark ids not ascending (or repeated), id", m.id);
-    previous = m.id;
-    *reason = Refusal::kImplausible;
-    if (std::string e = check_position(m.x, m.y, l, "position"); !e.empty()) return "landmark " + std::to_string(m.id) + " " + e;
-    if (std::string e = check_cov2(m.cov, l, "cov"); !e.empty()) return "landmark " + std::to_string(m.id) + " " + e;
-  }
-  previous = -1;
-  for (int i = 0; i < g.num_moving; ++i) {
-    const int id = g.moving_ids[static_cast<std::size_t>(i)];
-    *reason = id == previous ? Refusal::kDuplicateId : Refusal::kMalformed;
-    if (id <= previous) return contract::got("moving ids not ascending (or repeated), id", id);
-    previous = id;
-  }
-  return "";
+  return check_global_map(g, l, contract::kMaxCount, reason);  // a recording's ids: the contract's bound
 }
 
 }  // namespace elaslam

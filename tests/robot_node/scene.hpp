@@ -10,7 +10,9 @@
 
 #include "elaslam/robot_node/ekf_slam.hpp"
 #include "elaslam/robot_node/ela_gate.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/robot.hpp"
+#include "elaslam/sensor_frame_t.hpp"
 
 namespace elaslam::test {
 
@@ -96,6 +98,27 @@ inline std::vector<InView> view_of(const EkfSlam& ekf, const Pose2& truth, const
     v.push_back(x);
   }
   return v;
+}
+
+/// A frame as robot `robot_id`'s SENSOR message (utime 1000 + frame).
+inline sensor_frame_t to_msg(const FrameInput& in, int robot_id) {
+  sensor_frame_t m{};
+  m.utime = 1000 + in.frame;
+  m.frame = in.frame;
+  m.robot_id = static_cast<int16_t>(robot_id);
+  m.odom_x = in.odometer.x;
+  m.odom_y = in.odometer.y;
+  m.odom_theta = in.odometer.theta;
+  m.odom_var_trans_per_m = in.noise.var_trans_per_m;
+  m.odom_var_rot_per_rad = in.noise.var_rot_per_rad;
+  m.odom_var_rot_per_m = in.noise.var_rot_per_m;
+  contract::set_count(&m.obs, &m.num_obs, in.num_obs);
+  for (int k = 0; k < in.num_obs; ++k) {
+    m.obs[static_cast<std::size_t>(k)].landmark_id = in.obs[static_cast<std::size_t>(k)].landmark_id;
+    m.obs[static_cast<std::size_t>(k)].range = in.obs[static_cast<std::size_t>(k)].z.range;
+    m.obs[static_cast<std::size_t>(k)].bearing = in.obs[static_cast<std::size_t>(k)].z.bearing;
+  }
+  return m;
 }
 
 }  // namespace elaslam::test

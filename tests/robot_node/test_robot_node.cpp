@@ -12,25 +12,7 @@
 namespace elaslam {
 namespace {
 
-sensor_frame_t to_msg(const FrameInput& in, int robot_id) {
-  sensor_frame_t m{};
-  m.utime = 1000 + in.frame;
-  m.frame = in.frame;
-  m.robot_id = static_cast<int16_t>(robot_id);
-  m.odom_x = in.odometer.x;
-  m.odom_y = in.odometer.y;
-  m.odom_theta = in.odometer.theta;
-  m.odom_var_trans_per_m = in.noise.var_trans_per_m;
-  m.odom_var_rot_per_rad = in.noise.var_rot_per_rad;
-  m.odom_var_rot_per_m = in.noise.var_rot_per_m;
-  contract::set_count(&m.obs, &m.num_obs, in.num_obs);
-  for (int k = 0; k < in.num_obs; ++k) {
-    m.obs[k].landmark_id = in.obs[static_cast<std::size_t>(k)].landmark_id;
-    m.obs[k].range = in.obs[static_cast<std::size_t>(k)].z.range;
-    m.obs[k].bearing = in.obs[static_cast<std::size_t>(k)].z.bearing;
-  }
-  return m;
-}
+using test::to_msg;
 
 class RobotNodeInput : public ::testing::Test {
  protected:

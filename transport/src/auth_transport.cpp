@@ -6,6 +6,7 @@
 
 #include <sodium.h>
 
+#include "elaslam/common/channels.hpp"
 #include "elaslam/common/contract.hpp"
 
 namespace elaslam::transport::auth {
@@ -29,18 +30,6 @@ bool strip_suffix(std::string_view channel, std::string_view suffix, std::string
   if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
   *base = channel.substr(0, channel.size() - suffix.size());
   return true;
-}
-
-/// The robot id of "<prefix><id>" (a positive decimal of at most 6 digits), else -1.
-int robot_of(std::string_view name, std::string_view prefix) {
-  if (name.size() <= prefix.size() || name.size() > prefix.size() + 6 || name.substr(0, prefix.size()) != prefix)
-    return -1;
-  int id = 0;
-  for (char c : name.substr(prefix.size())) {
-    if (c < '0' || c > '9') return -1;
-    id = id * 10 + (c - '0');
-  }
-  return id > 0 ? id : -1;
 }
 
 bool is_robot(std::int16_t id) { return id >= 1 && id <= contract::kMaxRobots; }
@@ -73,16 +62,16 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
                         const std::uint8_t* payload, std::size_t size) {
   std::string_view base;
   if (!strip_suffix(channel, suffix, &base)) return true;  // not a team channel
-  if (base == "LMAP_EVENT" || base == "LMAP_SNAPSHOT")
+  using namespace channels;
+  if (base == kLmapEvent || base == kLmapSnapshot)
     return is_robot(id) && size >= kRobotIdOffset + 2 &&
            static_cast<std::int16_t>(get_be(payload + kRobotIdOffset, 2)) == id;
-  if (base == "GLOBAL_MAP" || base == "DYNAMIC_NOTICE" || base == "STATUS_MAIN" || base == "LMAP_RESYNC")
+  if (base == kGlobalMap || base == kDynamicNotice || base == kStatusMain || base == kLmapResync)
     return id == kSenderMain;
-  if (base == "GROUND_TRUTH" || base == "RUN_INFO" || base == "STATUS_SIM" ||
-      robot_of(base, "SENSOR_") > 0)
+  if (base == kGroundTruth || base == kRunInfo || base == kStatusSim || robot_of(base, kSensorPrefix) > 0)
     return id == kSenderSimulator;
-  if (const int r = robot_of(base, "POSE_"); r > 0) return id == r;
-  if (const int r = robot_of(base, "STATUS_ROBOT_"); r > 0) return id == r;
+  if (const int r = robot_of(base, kPosePrefix); r > 0) return id == r;
+  if (const int r = robot_of(base, kStatusRobotPrefix); r > 0) return id == r;
   return true;  // another channel (a tool's, a test's): any sender of the team
 }
 

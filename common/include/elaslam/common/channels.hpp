@@ -3,17 +3,27 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 namespace elaslam::channels {
 
+/// The names without a suffix (and the per-robot prefixes), for code that compares
+/// names without building them (the authenticating transport, per message).
+inline constexpr std::string_view kSensorPrefix = "SENSOR_", kPosePrefix = "POSE_",
+                                  kStatusRobotPrefix = "STATUS_ROBOT_", kGroundTruth = "GROUND_TRUTH",
+                                  kLmapEvent = "LMAP_EVENT", kLmapSnapshot = "LMAP_SNAPSHOT",
+                                  kLmapResync = "LMAP_RESYNC", kGlobalMap = "GLOBAL_MAP",
+                                  kDynamicNotice = "DYNAMIC_NOTICE", kStatusMain = "STATUS_MAIN",
+                                  kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO";
+
 inline std::string sensor(int robot_id, const std::string& suffix = "") {
-  return "SENSOR_" + std::to_string(robot_id) + suffix;
+  return std::string(kSensorPrefix) + std::to_string(robot_id) + suffix;
 }
 inline std::string pose(int robot_id, const std::string& suffix = "") {
-  return "POSE_" + std::to_string(robot_id) + suffix;
+  return std::string(kPosePrefix) + std::to_string(robot_id) + suffix;
 }
 inline std::string status_robot(int robot_id, const std::string& suffix = "") {
-  return "STATUS_ROBOT_" + std::to_string(robot_id) + suffix;
+  return std::string(kStatusRobotPrefix) + std::to_string(robot_id) + suffix;
 }
 /// Patterns (regular expressions, transport.hpp) matching a per-robot channel of
 /// every robot: for subscribers that hear the whole team.
@@ -24,10 +34,9 @@ inline std::string any_status_robot(const std::string& suffix = "") { return "ST
 /// The robot id of a per-robot channel "<prefix><id><suffix>" (SENSOR_, POSE_,
 /// STATUS_ROBOT_; id a positive decimal of at most 6 digits), -1 when `channel` is
 /// not one: for readers of recordings, which see every channel.
-inline int robot_of(const std::string& channel, const std::string& prefix, const std::string& suffix = "") {
+inline int robot_of(std::string_view channel, std::string_view prefix, std::string_view suffix = "") {
   if (channel.size() <= prefix.size() + suffix.size() || channel.size() > prefix.size() + suffix.size() + 6 ||
-      channel.compare(0, prefix.size(), prefix) != 0 ||
-      channel.compare(channel.size() - suffix.size(), suffix.size(), suffix) != 0)
+      channel.substr(0, prefix.size()) != prefix || channel.substr(channel.size() - suffix.size()) != suffix)
     return -1;
   int id = 0;
   for (std::size_t i = prefix.size(); i < channel.size() - suffix.size(); ++i) {
@@ -37,14 +46,14 @@ inline int robot_of(const std::string& channel, const std::string& prefix, const
   return id > 0 ? id : -1;
 }
 
-inline std::string ground_truth(const std::string& suffix = "") { return "GROUND_TRUTH" + suffix; }
-inline std::string lmap_event(const std::string& suffix = "") { return "LMAP_EVENT" + suffix; }
-inline std::string lmap_snapshot(const std::string& suffix = "") { return "LMAP_SNAPSHOT" + suffix; }
-inline std::string lmap_resync(const std::string& suffix = "") { return "LMAP_RESYNC" + suffix; }
-inline std::string global_map(const std::string& suffix = "") { return "GLOBAL_MAP" + suffix; }
-inline std::string dynamic_notice(const std::string& suffix = "") { return "DYNAMIC_NOTICE" + suffix; }
-inline std::string status_main(const std::string& suffix = "") { return "STATUS_MAIN" + suffix; }
-inline std::string status_sim(const std::string& suffix = "") { return "STATUS_SIM" + suffix; }
-inline std::string run_info(const std::string& suffix = "") { return "RUN_INFO" + suffix; }
+inline std::string ground_truth(const std::string& suffix = "") { return std::string(kGroundTruth) + suffix; }
+inline std::string lmap_event(const std::string& suffix = "") { return std::string(kLmapEvent) + suffix; }
+inline std::string lmap_snapshot(const std::string& suffix = "") { return std::string(kLmapSnapshot) + suffix; }
+inline std::string lmap_resync(const std::string& suffix = "") { return std::string(kLmapResync) + suffix; }
+inline std::string global_map(const std::string& suffix = "") { return std::string(kGlobalMap) + suffix; }
+inline std::string dynamic_notice(const std::string& suffix = "") { return std::string(kDynamicNotice) + suffix; }
+inline std::string status_main(const std::string& suffix = "") { return std::string(kStatusMain) + suffix; }
+inline std::string status_sim(const std::string& suffix = "") { return std::string(kStatusSim) + suffix; }
+inline std::string run_info(const std::string& suffix = "") { return std::string(kRunInfo) + suffix; }
 
 }  // namespace elaslam::channels

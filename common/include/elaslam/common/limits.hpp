@@ -12,6 +12,9 @@
 
 #include <Eigen/Core>
 
+#include "elaslam/global_map_t.hpp"
+#include "elaslam/pose_estimate_t.hpp"
+
 namespace elaslam {
 
 namespace config {
@@ -79,6 +82,20 @@ std::string check_cov2(const Eigen::Matrix2d& c, const MessageLimits& l, const c
 /// A robot pose's covariance (x [m], y [m], theta [rad]): finite, symmetric, positive
 /// semi-definite, variances at most cov_ceiling.
 std::string check_pose_cov(const double (&c)[3][3], const MessageLimits& l, const char* field);
+
+/// A POSE's content as every receiver checks it (main_robot, evaluate): frame not
+/// negative, position within `l`, heading finite, covariance a covariance within `l`.
+/// The robot id is the caller's (main: in its team; evaluate: in the contract).
+std::string check_pose(const pose_estimate_t& p, const MessageLimits& l, Refusal* reason);
+
+/// One GLOBAL_MAP chunk as every receiver checks it (robot_node before it takes the
+/// moving set, evaluate before it scores a recording): the arrays match their counts;
+/// frame at least -1 (-1: main_robot's map before any robot has finished a frame);
+/// landmark ids not negative, ascending, each once, with positions and covariances
+/// within `l`; moving ids in [0, max_moving_id), ascending, each once, moving_by 0 or
+/// a member of l's team, moving frames not negative. "" when it holds, else the
+/// problem (`reason` its kind).
+std::string check_global_map(const global_map_t& m, const MessageLimits& l, int max_moving_id, Refusal* reason);
 
 /// Sequence numbers are believed up to this value (2^62): far beyond any real
 /// stream, and differences of two never overflow an int64.

@@ -172,9 +172,7 @@ class MainPorts {
   }
   void publish_status() {
     node_status_t m = node_.status_msg(shell_.now_utime());
-    const auto c = shell_.counters();  // the transport's authentication refusals
-    m.auth_refused = c.auth_refused;
-    m.auth_unauthenticated = c.auth_unauthenticated;
+    shell_.stamp_auth(&m);
     shell_.publish(status_, m);
   }
 

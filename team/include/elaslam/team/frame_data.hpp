@@ -64,8 +64,8 @@ class GlobalMapAssembly {
 constexpr std::int64_t kClockSlackUs = 100000;  // [us] skew allowed between the sender's and the recorder's clocks
 std::string check_logged(const pose_estimate_t& p, std::int64_t received_us, const MessageLimits& l, Refusal* reason);
 std::string check_logged(const sensor_frame_t& s, const MessageLimits& l, Refusal* reason);
-/// One GLOBAL_MAP chunk: ids ascending without repeats, positions and covariances
-/// within limits, moving ids without repeats.
+/// One GLOBAL_MAP chunk: the check robot_node applies (limits.hpp, check_global_map),
+/// with ids bounded by the contract.
 std::string check_logged(const global_map_t& g, const MessageLimits& l, Refusal* reason);
 
 }  // namespace elaslam

@@ -132,6 +132,14 @@ class NodeShell {
   const std::string& suffix() const { return options_.channel_suffix; }
   Transport& transport() { return transport_; }
   ShellCounters counters() const;
+  /// Fill a node's STATUS message (node_status_t) with the transport's authentication
+  /// refusals: they happen before any input, so the node's own counters never see them.
+  template <class Status>
+  void stamp_auth(Status* status) const {
+    const ShellCounters c = counters();
+    status->auth_refused = c.auth_refused;
+    status->auth_unauthenticated = c.auth_unauthenticated;
+  }
 
  private:
   class InputBase {
