@@ -26,13 +26,22 @@ using namespace elaslam;
 const char* const kFiles[] = {"Barcodes.dat", "Landmark_Groundtruth.dat", "Robot1_Odometry.dat",
                               "Robot1_Groundtruth.dat", "Robot1_Measurement.dat"};
 
+// A directory of its own under TMPDIR (tools/fuzz.sh points it at tmpfs), removed at exit.
+struct WorkDir {
+  WorkDir() {
+    path = (std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + std::string("/elaslam_fuzz_XXXXXX");
+    if (!mkdtemp(path.data())) std::abort();
+  }
+  ~WorkDir() {
+    for (const char* f : kFiles) std::remove((path + "/" + f).c_str());
+    rmdir(path.c_str());
+  }
+  std::string path;
+};
+
 const std::string& work_dir() {
-  static const std::string dir = [] {
-    std::string t = (std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + std::string("/elaslam_fuzz_XXXXXX");
-    if (!mkdtemp(t.data())) std::abort();
-    return t;
-  }();
-  return dir;
+  static const WorkDir dir;
+  return dir.path;
 }
 
 }  // namespace

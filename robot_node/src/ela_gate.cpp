@@ -1,5 +1,7 @@
 #include "elaslam/robot_node/ela_gate.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -81,6 +83,12 @@ double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j) {
 }
 
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active) {
+  // Each neighbour's prediction of view[i] once (O(n)); the residual covariance's
+  // double sum below then costs O(n^2) small products.
+  constexpr int kMax = contract::kMaxObsPerFrame;
+  n = std::min(n, kMax);  // a frame holds at most kMaxObsPerFrame observations (the message bound)
+  std::array<Eigen::Matrix2d, kMax> info;   // C_j^-1 of neighbour j's prediction
+  std::array<std::uint8_t, kMax> use{};     // j shapes the ELA (active, not i, C_j positive definite)
   // Mean (eq 16): product of the Gaussians predicted from each neighbour j, i.e.
   // information weights W_j = (sum_k C_k^-1)^-1 C_j^-1, summing to I.
   Eigen::Matrix2d Lambda = Eigen::Matrix2d::Zero();
@@ -90,9 +98,11 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
     const LocalPrediction p = predict_from_neighbour(ekf, view[i].id, view[j]);
     const Eigen::LLT<Eigen::Matrix2d> llt(p.cov);
     if (llt.info() != Eigen::Success) continue;  // a degenerate neighbour adds no information
-    const Eigen::Matrix2d info = llt.solve(Eigen::Matrix2d::Identity());
-    Lambda += info;
-    eta += info * p.mean;
+    const auto uj = static_cast<std::size_t>(j);
+    info[uj] = llt.solve(Eigen::Matrix2d::Identity());
+    use[uj] = 1;
+    Lambda += info[uj];
+    eta += info[uj] * p.mean;
   }
   const Eigen::LLT<Eigen::Matrix2d> llt(Lambda);
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
@@ -109,28 +119,25 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
   const Eigen::Matrix2d Rt = rotation(pose.theta).transpose();
   const double var_th = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  std::array<Eigen::Matrix2d, kMax> A;  // A_j = W_j R^T
+  for (int j = 0; j < n; ++j)
+    if (use[static_cast<std::size_t>(j)]) A[static_cast<std::size_t>(j)] = fused_cov * info[static_cast<std::size_t>(j)] * Rt;
   Eigen::Matrix2d cov = view[i].M;
   Eigen::Vector2d J = Eigen::Vector2d::Zero();
   Eigen::Matrix2d map_cov = Rt * ekf.landmark_cov(view[i].id) * Rt.transpose();  // R^T P_ii R
   for (int j = 0; j < n; ++j) {
-    if (j == i || (active && !active[j])) continue;
-    const LocalPrediction p = predict_from_neighbour(ekf, view[i].id, view[j]);
-    const Eigen::LLT<Eigen::Matrix2d> lj(p.cov);
-    if (lj.info() != Eigen::Success) continue;
-    const Eigen::Matrix2d Wj = fused_cov * lj.solve(Eigen::Matrix2d::Identity());
-    const Eigen::Matrix2d Aj = Wj * Rt;
+    const auto uj = static_cast<std::size_t>(j);
+    if (!use[uj]) continue;
+    const Eigen::Matrix2d Wj = fused_cov * info[uj];
+    const Eigen::Matrix2d& Aj = A[uj];
     cov += Wj * view[j].M * Wj.transpose();
     const Eigen::Vector2d d = ekf.landmark(view[i].id) - ekf.landmark(view[j].id);
     J += Wj * Eigen::Vector2d(-s * d.x() + c * d.y(), -c * d.x() - s * d.y());
     const Eigen::Matrix2d cross = Rt * ekf.landmark_cross_cov(view[i].id, view[j].id) * Aj.transpose();
     map_cov -= cross + cross.transpose();  // - R^T P_ij A_j^T - A_j P_ji R
     for (int k = 0; k < n; ++k) {
-      if (k == i || (active && !active[k])) continue;
-      const LocalPrediction pk = predict_from_neighbour(ekf, view[i].id, view[k]);
-      const Eigen::LLT<Eigen::Matrix2d> lk(pk.cov);
-      if (lk.info() != Eigen::Success) continue;
-      const Eigen::Matrix2d Ak = fused_cov * lk.solve(Eigen::Matrix2d::Identity()) * Rt;
-      map_cov += Aj * ekf.landmark_cross_cov(view[j].id, view[k].id) * Ak.transpose();  // A_j P_jk A_k^T
+      if (!use[static_cast<std::size_t>(k)]) continue;
+      map_cov += Aj * ekf.landmark_cross_cov(view[j].id, view[k].id) * A[static_cast<std::size_t>(k)].transpose();  // A_j P_jk A_k^T
     }
   }
   cov += map_cov + var_th * J * J.transpose();

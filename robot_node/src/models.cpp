@@ -52,8 +52,14 @@ Eigen::Matrix3d dead_reckoning_cov(const Eigen::Matrix3d& P0, int steps, double 
   Eigen::Matrix3d F_x, F_u;
   motion({0.0, 0.0, 0.0}, {step_m, 0.0, 0.0}, &F_x, &F_u);
   const Eigen::Matrix3d Q = F_u * U * F_u.transpose();
-  Eigen::Matrix3d P = P0;
-  for (int k = 0; k < std::min(steps, kMaxDeadReckoningSteps); ++k) P = (F_x * P * F_x.transpose() + Q).eval();
+  // P_k = F^k P0 F^kT + sum_{i<k} F^i Q F^iT, in closed form (O(1) for any k): on the
+  // straight path F = I + N with N nilpotent (only N(y, th) = step_m), so
+  // F^i = I + i N and F^i X F^iT = X + i (N X + X N^T) + i^2 N X N^T.
+  const double k = std::max(0, std::min(steps, kMaxDeadReckoningSteps));
+  const Eigen::Matrix3d N = F_x - Eigen::Matrix3d::Identity();
+  const double s1 = k * (k - 1.0) / 2.0, s2 = (k - 1.0) * k * (2.0 * k - 1.0) / 6.0;  // sum of i, i^2 for i < k
+  const Eigen::Matrix3d P = P0 + k * (N * P0 + P0 * N.transpose()) + k * k * (N * P0 * N.transpose()) + k * Q +
+                            s1 * (N * Q + Q * N.transpose()) + s2 * (N * Q * N.transpose());
   // Largest eigenvalue of the symmetric 2x2 position block.
   const double a = P(0, 0), c = P(1, 1), b = 0.5 * (P(0, 1) + P(1, 0));
   const double lambda = 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b);

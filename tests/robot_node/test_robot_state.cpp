@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -428,6 +429,31 @@ TEST(LateStart, ThePriorGrowsWithTheFramesMissed) {
   const Eigen::Matrix3d P = dead_reckoning_cov(P0, 100, 0.15, deg2rad(1.5), noise);
   EXPECT_NEAR(P(2, 2), 1e-6 + 100 * (3e-4 * 0.15 + 1e-3 * deg2rad(1.5)), 1e-12);
   EXPECT_EQ(dead_reckoning_cov(P0, 0, 0.15, 0.1, noise), P0);
+}
+
+// The closed form against eq 5 applied step by step, as the prior is defined.
+TEST(LateStart, TheClosedFormIsTheStepByStepRecursion) {
+  const OdometryNoise noise{4e-4, 1e-3, 3e-4};
+  const Eigen::Matrix3d P0 = (Eigen::Matrix3d() << 2e-4, 1e-5, -3e-6, 1e-5, 1e-4, 2e-6, -3e-6, 2e-6, 5e-5).finished();
+  const double step = 0.15, turn = deg2rad(1.5);
+  const Eigen::Matrix3d U = odometry_covariance({step, 0.0, turn}, noise);
+  Eigen::Matrix3d F_x, F_u;
+  motion({0.0, 0.0, 0.0}, {step, 0.0, 0.0}, &F_x, &F_u);
+  Eigen::Matrix3d P = P0;
+  for (int k = 1; k <= 3000; ++k) {
+    P = (F_x * P * F_x.transpose() + F_u * U * F_u.transpose()).eval();
+    if (k != 1 && k != 7 && k != 100 && k != 3000) continue;
+    const double a = P(0, 0), c = P(1, 1), b = 0.5 * (P(0, 1) + P(1, 0));
+    const double lambda = 0.5 * (a + c) + std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+    const Eigen::Matrix3d got = dead_reckoning_cov(P0, k, step, turn, noise);
+    EXPECT_NEAR(got(0, 0), lambda, 1e-12 * lambda) << k;
+    EXPECT_NEAR(got(2, 2), P(2, 2), 1e-12 * P(2, 2)) << k;
+    EXPECT_EQ(got(0, 1), 0.0);
+  }
+  // Capped, and finite at the largest frame a message can carry.
+  EXPECT_EQ(dead_reckoning_cov(P0, std::numeric_limits<int>::max(), step, turn, noise),
+            dead_reckoning_cov(P0, kMaxDeadReckoningSteps, step, turn, noise));
+  EXPECT_TRUE(dead_reckoning_cov(P0, kMaxDeadReckoningSteps, step, turn, noise).allFinite());
 }
 
 }  // namespace
