@@ -90,7 +90,8 @@ int run(const Args& a) {
   }
   if (a.check) {  // e.g. after editing /etc/elaslam/elaslam.yaml, before restarting the service
     std::printf("main_robot: %s (%s): valid\n", cfg.path.c_str(), cfg.origin.c_str());
-    return 0;
+    std::fflush(stdout);
+    return transport::check_team_key(a.transport, cfg.path, "main_robot");
   }
   int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
   const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::auth::kSenderMain, "main_robot", &open_rc);

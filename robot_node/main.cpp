@@ -177,7 +177,8 @@ int run(const Args& a) {
     std::printf("robot_node %d: %s (%s): valid, mode %s\n", a.robot, cfg.path.c_str(), cfg.origin.c_str(),
                 to_string(o.mode));
     if (a.verbose) std::printf("%s\n", effective.c_str());
-    return 0;
+    std::fflush(stdout);
+    return transport::check_team_key(a.transport, cfg.path, "robot_node " + std::to_string(a.robot));
   }
   const std::string name = "robot_node " + std::to_string(a.robot);
   int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)

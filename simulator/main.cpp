@@ -120,8 +120,8 @@ int simulator_main(int argc, char** argv) {
   if (!load(&args, &options)) return elaslam::cli::kExitBadInput;
   if (args.check) {
     std::cout << "simulator: " << args.run.config_path << " (" << args.config_choice.origin << "): valid\n"
-              << elaslam::sim::describe(options);
-    return 0;
+              << elaslam::sim::describe(options) << std::flush;
+    return elaslam::transport::check_team_key(args.transport, args.run.config_path, "simulator");
   }
   if (args.list_robots) {
     for (std::size_t i = 0; i < options.robots.size(); ++i) std::printf("%s%d", i ? " " : "", options.robots[i].id);

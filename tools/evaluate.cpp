@@ -46,6 +46,7 @@
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/team/frame_accounting.hpp"
+#include "elaslam/team/log_auth.hpp"
 #include "elaslam/team/log_reader.hpp"
 #include "elaslam/team/log_summary.hpp"
 #include "elaslam/team/frame_data.hpp"
@@ -91,6 +92,10 @@ struct LogData {
   std::int64_t bytes_skipped = 0;  // [bytes] between events, not an event (a damaged log)
   bool complete = true;            // false: the log ends in a truncated event
   GlobalMapAssembly map_assembly;  // GLOBAL_MAP chunks -> the map of one publication
+  // With the team key (--key-file, team.key_file): events are verified as the nodes
+  // verify them; what a keyed receiver refuses (forged, replayed...) is not evaluated.
+  std::unique_ptr<LogAuth> auth;
+  std::string key_file;
 };
 
 template <typename Msg>
@@ -189,10 +194,16 @@ bool read_log(const std::string& path, const std::string& suffix, LogData* d, st
   LogEvent ev;
   while (log->next(&ev)) {
     ++d->events;
+    if (d->auth && !d->auth->admit(&ev)) continue;
     on_event(ev, suffix, d);
   }
   d->bytes_skipped = log->skipped();
   d->complete = log->complete();
+  if (d->truth.empty() && d->auth && d->auth->refused() > 0 && d->auth->accepted() == 0) {
+    *why = "no event of " + path + " verifies with the team key " + d->key_file + " (" +
+           std::to_string(d->auth->refused()) + " refused): a team without this key recorded it";
+    return false;
+  }
   if (d->truth.empty()) {
     *why = "no " + channels::ground_truth(suffix) + " in " + path + " (was the simulator's channel recorded?)";
     return false;
@@ -313,7 +324,7 @@ nlohmann::json run_info_json(const run_info_t& m) {
 }
 
 struct Args {
-  std::string log_path, out_dir, config, baseline, mode, channel_suffix;
+  std::string log_path, out_dir, config, baseline, mode, channel_suffix, key_file;
   bool quiet = false;
   double dynamism = -1.0, speed = -1.0;
   long long seed = -1;
@@ -409,6 +420,7 @@ void add_log_figures(const LogData& d, const Assembled& x, nlohmann::json* j) {
   for (const auto& [ch, n] : d.decode_errors) (*j)["decode_errors"][ch] = n;
   for (const auto& [ch, reasons] : d.invalid)
     for (const auto& [why, n] : reasons) (*j)["invalid_messages"][ch][why] = n;
+  (*j)["authentication"] = d.auth ? d.auth->to_json(d.key_file) : nlohmann::json(nullptr);
   (*j)["capacity_faults"] = d.capacity_faults;  // STATUS channels that raised FAULT_CAPACITY
   for (const auto& [ch, counts] : d.refused)
     for (int k = 0; k < kNumRefusals; ++k)
@@ -448,6 +460,12 @@ void print_report(const LogData& d, const Assembled& x, const RunInfo& info, con
   for (const auto& [ch, reasons] : d.invalid)
     for (const auto& [why, n] : reasons)
       std::cout << "  invalid messages on " << ch << " (" << why << "), not evaluated: " << n << "\n";
+  if (d.auth) {
+    std::cout << "  authentication (team key " << d.key_file << "): " << d.auth->accepted() << " events verified, "
+              << d.auth->refused() << " refused and not evaluated\n";
+    for (const auto& [ch, reasons] : d.auth->refused_by_channel())
+      for (const auto& [why, n] : reasons) std::cout << "    refused on " << ch << " (" << why << "): " << n << "\n";
+  }
   for (const auto& ch : d.capacity_faults)
     std::cout << "  FAULT_CAPACITY raised by " << ch << ": a capacity was exceeded, results are not what the inputs said\n";
   if (d.bytes_skipped > 0 || !d.complete)
@@ -469,6 +487,8 @@ int parse_args(int argc, char** argv, Args* a) {
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--quiet", a->quiet, "no summary on stdout");
   app.add_option("--channel-suffix", a->channel_suffix, "the team's channel suffix (its processes' --channel-suffix)");
+  app.add_option("--key-file", a->key_file, "the team key: verify every event as the nodes do and leave out what they "
+                                            "would refuse (default: the config's team.key_file; none: trust the log)");
   // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed),
   // in the simulator's ranges.
   app.add_option("--mode", a->mode, "mode to record when the robots' STATUS does not say");
@@ -494,6 +514,12 @@ int evaluate_main(int argc, char** argv) {
   TeamConfig file_config;
   if (!a.config.empty()) file_config = load_team_config(a.config);
   LogData d;
+  try {
+    d.auth = open_log_auth(a.key_file, a.config, a.channel_suffix, &d.key_file);
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "evaluate: %s\n", e.what());
+    return cli::kExitBadInput;
+  }
   std::string why;
   if (!read_log(a.log_path, a.channel_suffix, &d, &why)) {
     std::fprintf(stderr, "evaluate: %s\n", why.c_str());

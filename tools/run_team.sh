@@ -202,12 +202,13 @@ fi
 BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
 BIN="$BUILD_DIR/bin"
 # The whole configuration with the overrides, checked by the simulator before anything starts.
-"$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" --check >"$OUT/logs/check.log" 2>&1 ||
+"$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" ${KEY_FILE:+--key-file "$KEY_FILE"} --check >"$OUT/logs/check.log" 2>&1 ||
   { sed 's/^/  /' "$OUT/logs/check.log" >&2; die "the configuration with these arguments is not valid"; }
 
 # The robots' mode (the override, else the config's robot.mode) as robot_node reads
 # it: its --check validates the robot section and says "valid, mode M".
-"$BIN/robot_node" --config "$CONFIG" --robot 1 ${MODE:+--mode "$MODE"} --check >"$OUT/logs/check_robot.log" 2>&1 ||
+"$BIN/robot_node" --config "$CONFIG" --robot 1 ${MODE:+--mode "$MODE"} ${KEY_FILE:+--key-file "$KEY_FILE"} --check \
+  >"$OUT/logs/check_robot.log" 2>&1 ||
   { sed 's/^/  /' "$OUT/logs/check_robot.log" >&2; die "the robots' configuration is not valid"; }
 MODE_NAME="$(sed -n 's/.*: valid, mode \([a-z]*\)$/\1/p' "$OUT/logs/check_robot.log")"
 BASE_ARGS=()
@@ -496,6 +497,8 @@ stop_all || status=1
 [ -z "$LOSS" ] || loss_report
 [ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
 echo "run_team.sh: recorded $OUT/run.lcmlog"
+# A keyed team's recording is read as its nodes read the wire: what they would refuse
+# (injected by someone without the key, also recorded) is counted, not evaluated.
 "$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --config "$CONFIG" "${BASE_ARGS[@]}" ${MODE_NAME:+--mode "$MODE_NAME"} \
-  "${EVAL_ARGS[@]}"
+  ${KEY_FILE:+--key-file "$KEY_FILE"} "${EVAL_ARGS[@]}"
 echo "run_team.sh: results in $OUT (metrics.json, frames.csv, map.csv, trajectories/, logs/)"

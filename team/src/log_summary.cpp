@@ -22,6 +22,7 @@
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/team/log_auth.hpp"
 #include "elaslam/team/log_reader.hpp"
 
 namespace elaslam {
@@ -293,7 +294,7 @@ void frames_of_run(const Reader& r, LogSummary* s) {
 
 }  // namespace
 
-LogSummary summarize_log(const std::string& path) {
+LogSummary summarize_log(const std::string& path, LogAuth* auth, const std::string& key_file) {
   LogSummary s;
   s.file = printable(path);
   LogReader in(path);
@@ -316,9 +317,20 @@ LogSummary summarize_log(const std::string& path) {
     c.bytes += static_cast<std::int64_t>(ev.data.size());
     c.first_us = std::min(c.first_us, ev.timestamp);
     c.last_us = std::max(c.last_us, ev.timestamp);
+    if (auth && !auth->admit(&ev)) {
+      ++c.auth_refused;
+      continue;
+    }
     const Decoded d = reader->on_event(ev, it->second.cls);
     if (d != Decoded::kOk) ++c.decode_errors;
     if (d == Decoded::kOtherFingerprint) ++c.fingerprint_mismatches;
+  }
+  if (auth) {
+    s.key_file = printable(key_file);
+    s.auth_accepted = auth->accepted();
+    s.auth_refused = auth->refused();
+    for (const auto& [ch, reasons] : auth->refused_by_channel())
+      for (const auto& [why, n] : reasons) s.auth_refused_by[why] += n;
   }
   s.bytes_skipped = in.skipped();
   const std::int64_t pos = in.end_of_last_event();
@@ -444,6 +456,10 @@ void print_channels(std::ostream& out, const std::vector<ChannelSummary>& channe
       out << "  WARNING: " << c.fingerprint_mismatches << " of " << c.count << " " << c.name
           << " events carry another fingerprint than this build's " << c.type
           << ": recorded with another version of the type, or damaged\n";
+  for (const auto& c : channels)
+    if (c.auth_refused > 0)
+      out << "  " << c.auth_refused << " of " << c.count << " " << c.name
+          << " events refused by the team key (a keyed node would drop them; not decoded)\n";
 }
 
 void print_robots(std::ostream& out, const LogSummary& s) {
@@ -508,6 +524,15 @@ void print_log_summary(std::ostream& out, const LogSummary& s) {
     out << "start:     " << iso_utc(s.first_us) << "\n"
         << "end:       " << iso_utc(s.last_us) << "\n"
         << "duration:  " << num(s.duration_s(), "%.3f") << " s\n";
+  if (!s.key_file.empty()) {
+    out << "key:       " << s.key_file << ": " << s.auth_accepted << " events verified, " << s.auth_refused << " refused";
+    const char* sep = " (";
+    for (const auto& [why, n] : s.auth_refused_by) {
+      out << sep << why << " " << n;
+      sep = ", ";
+    }
+    out << (s.auth_refused_by.empty() ? "" : ")") << "\n";
+  }
   print_run_info(out, s.run_info);
   if (s.frames_source.empty()) {
     out << "frames:    none (no GROUND_TRUTH, SENSOR or POSE in the log)\n";
@@ -565,7 +590,14 @@ nlohmann::json to_json(const LogSummary& s) {
                              {"last_utime_us", c.last_us},
                              {"rate_hz", c.count >= 2 && c.rate_hz > 0.0 ? nlohmann::json(c.rate_hz) : nlohmann::json(nullptr)},
                              {"decode_errors", c.type == "other" ? nlohmann::json(nullptr) : nlohmann::json(c.decode_errors)},
-                             {"fingerprint_mismatches", c.fingerprint_mismatches}});
+                             {"fingerprint_mismatches", c.fingerprint_mismatches},
+                             {"auth_refused", s.key_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.auth_refused)}});
+  if (s.key_file.empty()) {
+    j["authentication"] = nullptr;
+  } else {
+    j["authentication"] = {{"key_file", s.key_file}, {"accepted", s.auth_accepted}, {"refused", s.auth_refused},
+                           {"refused_by", s.auth_refused_by}};
+  }
   const RunInfoSummary& r = s.run_info;
   if (!r.present) {
     j["run_info"] = nullptr;

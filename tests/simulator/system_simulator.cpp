@@ -4,6 +4,7 @@
 // All waits are bounded; nothing sleeps for synchronisation: the subscriptions
 // exist before the child starts, and loops run handleTimeout until a deadline.
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -219,6 +221,31 @@ TEST(SystemSimulator, NodesCheckTheirConfigWithoutStarting) {
   Child main_bad(bin + "main_robot", {"--config", bad, "--check"});
   EXPECT_EQ(main_bad.wait(), 2);
   EXPECT_NE(main_bad.stderr_text().find("main: missing"), std::string::npos) << main_bad.stderr_text();
+}
+
+// --check also loads the team key as the process would at start: a key file that
+// others may read stops the check (exit 2, naming the file and its mode), not the
+// service's first start; a good one passes.
+TEST(SystemSimulator, CheckLoadsTheTeamKeyAsTheStartWould) {
+  const std::string bin = std::string(ELASLAM_BINARY_DIR) + "/bin/";
+  const std::string key = testing::TempDir() + "/check_team.key";
+  std::ofstream(key) << std::string(64, 'a') << "\n";
+  const std::vector<std::pair<std::string, std::vector<std::string>>> programs = {
+      {bin + "robot_node", {"--robot", "2"}}, {bin + "main_robot", {}}, {kSimulator, {}}};
+  for (const mode_t mode : {0644, 0600}) {
+    ASSERT_EQ(chmod(key.c_str(), mode), 0);
+    for (const auto& [program, extra] : programs) {
+      std::vector<std::string> args = extra;
+      for (const char* a : {"--config", kConfig.c_str(), "--key-file", key.c_str(), "--check"}) args.emplace_back(a);
+      Child c(program, args);
+      if (mode == 0600) {
+        EXPECT_EQ(c.wait(), 0) << program << ": " << c.stderr_text();
+      } else {
+        EXPECT_EQ(c.wait(), 2) << program;
+        EXPECT_NE(c.stderr_text().find(key + ": has mode 0644"), std::string::npos) << program << ": " << c.stderr_text();
+      }
+    }
+  }
 }
 
 }  // namespace

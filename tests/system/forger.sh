@@ -10,7 +10,9 @@
 # input, the same poses) requires the same map; exit 3 (notice timing differed) is
 # reported, not failed. Every robot and main_robot reported auth_refused > 0.
 # The unattacked keyed recording is read by evaluate (run_team.sh) and by the Python
-# tools (decode_log.py): sealed messages decode unchanged.
+# tools (decode_log.py): sealed messages decode unchanged. evaluate and log_info with
+# the key (--key-file) leave out what the nodes refused: the attacked recording scores
+# as the unattacked one.
 # Last, the same attack on the team without a key: its map is not the unattacked one
 # (the attack is real; skipped with UNKEYED=0).
 # Needs root and ip netns (exit 77 otherwise) and the .venv (tools/setup.sh).
@@ -81,6 +83,29 @@ if ! check compare-maps "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --tol 1
   [ "$poses" -ne 0 ] || fail "the same poses, but the attacked team's map differs"
   echo "forger: (not a failure) the robots' inputs differed by notice timing"
 fi
+# evaluate with the key (run_team.sh passes it) leaves out what the nodes refused: the
+# attacked recording scores as the unattacked one; log_info --key-file counts it.
+python3 - "$OUT/ref/metrics.json" "$OUT/attacked/metrics.json" "$poses" <<'PY' || fail "evaluate --key-file"
+import json, sys
+ref, att, poses = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), int(sys.argv[3])
+a = att["authentication"]
+assert a and a["refused"] > 0, f"evaluate refused nothing in the attacked recording: {a}"
+assert ref["authentication"]["refused"] == 0, ref["authentication"]
+print(f"forger: evaluate --key-file on the attacked recording: {a['accepted']} events verified, "
+      f"{a['refused']} refused {dict((ch, r) for ch, r in a['refused_by'].items())}")
+if poses == 0:  # the same poses; the recorder may have lost a few of either run's (compare-poses --allow-missing)
+    for r, s in zip(ref["robots"], att["robots"]):
+        assert abs(r["error_mean"] - s["error_mean"]) <= 0.02 * r["error_mean"] + 1e-9, (r, s)
+    print("forger: evaluate scores the attacked recording as the unattacked one (robot errors within 2 %: "
+          + ", ".join(f"{r['error_mean']:.4f}/{s['error_mean']:.4f}" for r, s in zip(ref["robots"], att["robots"])) + ")")
+PY
+"$BUILD/bin/log_info" "$OUT/attacked/run.lcmlog" --key-file "$KEY" --json > "$OUT/info.json"
+python3 - "$OUT/info.json" <<'PY' || fail "log_info --key-file"
+import json, sys
+a = json.load(open(sys.argv[1]))["authentication"]
+assert a["refused"] > 0 and a["accepted"] > 0, a
+print(f"forger: log_info --key-file: {a['accepted']} verified, {a['refused']} refused {a['refused_by']}")
+PY
 nodes=("${ROBOTS[@]/#/ROBOT_}" MAIN)
 check auth-refused "$OUT/attacked/run.lcmlog" --nodes "${nodes[@]}" || fail "a node refused nothing"
 

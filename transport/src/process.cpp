@@ -105,20 +105,39 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
   return nullptr;
 }
 
-std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
-                                    const std::string& who, int* exit_code, std::FILE* log) {
-  std::string key_path, origin;
+bool configured_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who,
+                         TeamKey* key, std::string* path, std::string* origin) {
   try {
-    key_path = team_key_file(args, config_path, &origin);
+    *path = team_key_file(args, config_path, origin);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
-    *exit_code = 2;
-    return nullptr;
+    return false;
   }
-  TeamKey key;
   std::string why;
-  if (!key_path.empty() && !load_team_key(key_path, &key, &why)) {
-    std::fprintf(stderr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin.c_str());
+  if (!path->empty() && !load_team_key(*path, key, &why)) {
+    std::fprintf(stderr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin->c_str());
+    return false;
+  }
+  return true;
+}
+
+int check_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who) {
+  TeamKey key;
+  std::string path, origin;
+  if (!configured_team_key(args, config_path, who, &key, &path, &origin)) return 2;
+  if (key.empty())
+    std::printf("%s: authentication off (no team key configured: team.key_file, --key-file)\n", who.c_str());
+  else
+    std::printf("%s: authentication on, team key %s (%s): readable and valid\n", who.c_str(), path.c_str(),
+                origin.c_str());
+  return 0;
+}
+
+std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
+                                    const std::string& who, int* exit_code, std::FILE* log) {
+  TeamKey key;
+  std::string key_path, origin;
+  if (!configured_team_key(args, config_path, who, &key, &key_path, &origin)) {
     *exit_code = 2;
     return nullptr;
   }

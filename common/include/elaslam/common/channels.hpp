@@ -56,4 +56,16 @@ inline std::string status_main(const std::string& suffix = "") { return std::str
 inline std::string status_sim(const std::string& suffix = "") { return std::string(kStatusSim) + suffix; }
 inline std::string run_info(const std::string& suffix = "") { return std::string(kRunInfo) + suffix; }
 
+/// Is `channel` one of the team's channels with `suffix` (DESIGN.md section 3)?
+inline bool is_team_channel(std::string_view channel, std::string_view suffix = "") {
+  for (std::string_view p : {kSensorPrefix, kPosePrefix, kStatusRobotPrefix})
+    if (robot_of(channel, p, suffix) > 0) return true;
+  if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
+  const std::string_view base = channel.substr(0, channel.size() - suffix.size());
+  for (std::string_view n : {kGroundTruth, kLmapEvent, kLmapSnapshot, kLmapResync, kGlobalMap, kDynamicNotice,
+                             kStatusMain, kStatusSim, kRunInfo})
+    if (base == n) return true;
+  return false;
+}
+
 }  // namespace elaslam::channels

@@ -18,6 +18,8 @@
 
 namespace elaslam {
 
+class LogAuth;
+
 // ---------------------------------------------------------------------------------
 // Log summary
 // ---------------------------------------------------------------------------------
@@ -33,6 +35,7 @@ struct ChannelSummary {
   long decode_errors = 0;         // events of an elaslam type that did not decode (0 for "other")
   long fingerprint_mismatches = 0;  // of those, events whose LCM fingerprint is another type's:
                                     // recorded with another version of the message, as a rule
+  long auth_refused = 0;          // with the team key: events a keyed node would refuse (not decoded)
 };
 
 /// The last RUN_INFO that decoded (run_info_t; -1 marks "unknown" as in the message).
@@ -76,6 +79,10 @@ struct LogSummary {
   std::int64_t last_us = 0;
   std::vector<ChannelSummary> channels;  // sorted by name
   RunInfoSummary run_info;
+  std::string key_file;            // with the team key (summarize_log's auth): its file
+  std::int64_t auth_accepted = 0;  // events that verified
+  std::int64_t auth_refused = 0;   // events a keyed node would refuse: counted, not decoded
+  std::map<std::string, std::int64_t> auth_refused_by;  // per reason (forged, replayed, ...)
 
   std::string frames_source;       // "GROUND_TRUTH", "SENSOR", or "" when neither is in the log
   int first_frame = 0, last_frame = -1;
@@ -92,7 +99,9 @@ struct LogSummary {
 /// opened or does not start with an LCM event (an empty file is a log of no
 /// events). Never throws on bad content: undecodable events are counted per
 /// channel, and a truncated or corrupt tail ends the read (complete = false).
-LogSummary summarize_log(const std::string& path);
+/// With `auth` (the team key: log_auth.hpp), every event is verified as a keyed node
+/// does and only what verifies is decoded; refusals are counted per channel.
+LogSummary summarize_log(const std::string& path, LogAuth* auth = nullptr, const std::string& key_file = {});
 
 /// Human-readable summary (what `log_info` prints).
 void print_log_summary(std::ostream& out, const LogSummary& s);

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "elaslam/transport/team_key.hpp"
 #include "elaslam/transport/transport.hpp"
 
 namespace CLI {
@@ -44,6 +45,16 @@ void add_transport_options(CLI::App& app, TransportArgs* args);
 /// says where the path came from. Throws config::ConfigError when the config's team:
 /// section is not valid.
 std::string team_key_file(const TransportArgs& args, const std::string& config_path, std::string* origin = nullptr);
+
+/// The configured team key (team_key_file), loaded and checked as a process does at
+/// start: *key empty when none is configured. False, after printing why to stderr as
+/// `who`, when the team: section or the key file is not acceptable.
+bool configured_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who,
+                         TeamKey* key, std::string* path, std::string* origin);
+
+/// --check's part for authentication: prints whether it is on and with which key file,
+/// on stdout; 0, or 2 (said why on stderr) when the key would stop the process at start.
+int check_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who);
 
 /// The URL for start-up lines: the given one, else $LCM_DEFAULT_URL (so marked), else
 /// LCM's default.

@@ -1,0 +1,106 @@
+// Reading a keyed team's recording as its nodes read the wire (log_auth.hpp): what
+// verifies loses its trailer and is decoded as recorded; forged, altered, replayed,
+// unauthenticated and misattributed events are refused and counted per channel and
+// reason; channels that are not the team's pass untouched.
+#include "elaslam/team/log_auth.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "elaslam/common/channels.hpp"
+#include "elaslam/pose_estimate_t.hpp"
+
+namespace elaslam {
+namespace {
+
+using transport::TeamKey;
+namespace auth = transport::auth;
+
+TeamKey key_of(std::uint8_t seed) {
+  std::array<std::uint8_t, TeamKey::kBytes> b{};
+  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<std::uint8_t>(seed + 7 * i);
+  return TeamKey(b);
+}
+
+std::vector<std::uint8_t> encoded_pose(int robot, int frame) {
+  pose_estimate_t m{};
+  m.robot_id = static_cast<std::int16_t>(robot);
+  m.frame = frame;
+  m.x = 1.5;
+  std::vector<std::uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+// An event as lcm-logger records it: the sealed datagram.
+LogEvent sealed(auth::Authenticator* sender, const std::string& channel, std::vector<std::uint8_t> payload) {
+  const std::size_t n = payload.size();
+  payload.resize(n + auth::kTrailerBytes);
+  payload.resize(sender->seal(channel, payload.data(), n));
+  return LogEvent{0, channel, payload};
+}
+
+TEST(LogAuth, GenuineEventsVerifyAndDecodeAsSentTheRestIsRefusedPerReason) {
+  const std::string sfx = "_T";
+  auth::Authenticator robot1(key_of(1), 1, 1000, sfx);
+  auth::Authenticator stranger(key_of(2), 1, 1000, sfx);  // the same id, another key
+  LogAuth reader(key_of(1), sfx);
+
+  const std::vector<std::uint8_t> payload = encoded_pose(1, 7);
+  LogEvent ok = sealed(&robot1, channels::pose(1, sfx), payload);
+  const LogEvent replay = ok;
+  ASSERT_TRUE(reader.admit(&ok));
+  EXPECT_EQ(ok.data, payload);  // the trailer is gone: LCM's decoder sees what was encoded
+  pose_estimate_t m;
+  ASSERT_GE(m.decode(ok.data.data(), 0, static_cast<int>(ok.data.size())), 0);
+  EXPECT_EQ(m.frame, 7);
+
+  LogEvent again = replay;
+  EXPECT_FALSE(reader.admit(&again));  // the same datagram twice: a replay
+  LogEvent forged = sealed(&stranger, channels::pose(1, sfx), encoded_pose(1, 8));
+  EXPECT_FALSE(reader.admit(&forged));
+  LogEvent altered = sealed(&robot1, channels::pose(1, sfx), encoded_pose(1, 9));
+  altered.data[20] ^= 0x01;
+  EXPECT_FALSE(reader.admit(&altered));
+  LogEvent plain{0, channels::pose(1, sfx), encoded_pose(1, 10)};
+  EXPECT_FALSE(reader.admit(&plain));
+  LogEvent not_its = sealed(&robot1, channels::pose(2, sfx), encoded_pose(2, 11));  // robot 1 on robot 2's channel
+  EXPECT_FALSE(reader.admit(&not_its));
+  LogEvent self_test{0, "LCM_SELF_TEST", {1, 2, 3}};
+  EXPECT_TRUE(reader.admit(&self_test));  // not the team's: as is
+  EXPECT_EQ(self_test.data, (std::vector<std::uint8_t>{1, 2, 3}));
+
+  EXPECT_EQ(reader.accepted(), 1);
+  EXPECT_EQ(reader.refused(), 5);
+  const auto& by = reader.refused_by_channel();
+  ASSERT_EQ(by.count(channels::pose(1, sfx)), 1u);
+  const auto& p1 = by.at(channels::pose(1, sfx));
+  EXPECT_EQ(p1.at(auth::to_string(auth::Verdict::kReplayed)), 1);
+  EXPECT_EQ(p1.at(auth::to_string(auth::Verdict::kForged)), 2);  // another key, and altered bytes
+  EXPECT_EQ(p1.at(auth::to_string(auth::Verdict::kUnauthenticated)), 1);
+  EXPECT_EQ(by.at(channels::pose(2, sfx)).at(auth::to_string(auth::Verdict::kWrongSender)), 1);
+  const nlohmann::json j = reader.to_json("k");
+  EXPECT_EQ(j["refused"], 5);
+  EXPECT_EQ(j["refused_by"][channels::pose(2, sfx)][auth::to_string(auth::Verdict::kWrongSender)], 1);
+}
+
+TEST(Channels, TeamChannelsAreRecognisedWithTheirSuffixOnly) {
+  for (const std::string sfx : {"", "_SIM2"}) {
+    EXPECT_TRUE(channels::is_team_channel(channels::sensor(3, sfx), sfx));
+    EXPECT_TRUE(channels::is_team_channel(channels::status_robot(8, sfx), sfx));
+    EXPECT_TRUE(channels::is_team_channel(channels::global_map(sfx), sfx));
+    EXPECT_TRUE(channels::is_team_channel(channels::run_info(sfx), sfx));
+    EXPECT_FALSE(channels::is_team_channel("LCM_SELF_TEST", sfx));
+    EXPECT_FALSE(channels::is_team_channel("POSE_x" + sfx, sfx));
+    EXPECT_FALSE(channels::is_team_channel(channels::global_map(sfx) + "X", sfx));
+  }
+  EXPECT_FALSE(channels::is_team_channel(channels::global_map("_A"), "_B"));
+  EXPECT_FALSE(channels::is_team_channel(channels::pose(1, ""), "_B"));
+}
+
+}  // namespace
+}  // namespace elaslam
