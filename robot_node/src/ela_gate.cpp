@@ -22,24 +22,36 @@ double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C) {
   return r.dot(inv * r);
 }
 
-// Relative vector d_ij = l_i - l_j in W and its covariance S_ij.
-void relative(const EkfSlam& ekf, int id_i, int id_j, Eigen::Vector2d* d, Eigen::Matrix2d* S) {
+// The heading's covariance with landmark `id`: row theta of P_Rl.
+Eigen::RowVector2d heading_landmark_cov(const EkfSlam& ekf, int id) {
+  return ekf.pose_landmark_cov(id).row(StateLayout::kTheta);
+}
+
+// Relative vector d_ij = l_i - l_j in W, its covariance S_ij and its covariance with
+// the heading c_ij = P_th,li - P_th,lj.
+void relative(const EkfSlam& ekf, int id_i, int id_j, Eigen::Vector2d* d, Eigen::Matrix2d* S, Eigen::RowVector2d* c) {
   *d = ekf.landmark(id_i) - ekf.landmark(id_j);
   const Eigen::Matrix2d Pij = ekf.landmark_cross_cov(id_i, id_j);
   *S = ekf.landmark_cov(id_i) + ekf.landmark_cov(id_j) - Pij - Pij.transpose();
+  *c = heading_landmark_cov(ekf, id_i) - heading_landmark_cov(ekf, id_j);
 }
 
-// R(th)^T d and the covariance it carries: R^T S R + J var(th) J^T.
-LocalPrediction rotate_into_body(const EkfSlam& ekf, const Eigen::Vector2d& d_W, const Eigen::Matrix2d& S_W) {
+// R(th)^T d and the covariance it carries, exactly to first order in the joint
+// estimate (th, d): R^T S R + J var(th) J^T + R^T c^T J^T + J c R, with
+// J = d(R(th)^T d)/d th. The cross term is large in SLAM: a map built under a
+// heading error is rotated by it, so d's error and th's are strongly correlated.
+LocalPrediction rotate_into_body(const EkfSlam& ekf, const Eigen::Vector2d& d_W, const Eigen::Matrix2d& S_W,
+                                 const Eigen::RowVector2d& c_W) {
   const Pose2 pose = ekf.pose();
   const double var_th = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
   const Eigen::Matrix2d Rt = rotation(pose.theta).transpose();
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   // d/dth of R(th)^T d = [-s c; -c -s] d
   const Eigen::Vector2d J(-s * d_W.x() + c * d_W.y(), -c * d_W.x() - s * d_W.y());
+  const Eigen::Matrix2d cross = J * (c_W * Rt.transpose());  // J Cov(th, d) R
   LocalPrediction p;
   p.mean = Rt * d_W;
-  p.cov = Rt * S_W * Rt.transpose() + var_th * J * J.transpose();
+  p.cov = Rt * S_W * Rt.transpose() + var_th * J * J.transpose() + cross + cross.transpose();
   return p;
 }
 
@@ -67,8 +79,9 @@ void set_local(InView* v, const Eigen::Matrix2d& W) {
 LocalPrediction predict_from_neighbour(const EkfSlam& ekf, int id_i, const InView& j) {
   Eigen::Vector2d d;
   Eigen::Matrix2d S;
-  relative(ekf, id_i, j.id, &d, &S);
-  LocalPrediction p = rotate_into_body(ekf, d, S);
+  Eigen::RowVector2d c;
+  relative(ekf, id_i, j.id, &d, &S, &c);
+  LocalPrediction p = rotate_into_body(ekf, d, S, c);
   p.mean += j.m;
   p.cov += j.M;
   return p;
@@ -77,8 +90,9 @@ LocalPrediction predict_from_neighbour(const EkfSlam& ekf, int id_i, const InVie
 double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j) {
   Eigen::Vector2d d;
   Eigen::Matrix2d S;
-  relative(ekf, i.id, j.id, &d, &S);
-  const LocalPrediction rel = rotate_into_body(ekf, d, S);
+  Eigen::RowVector2d c;
+  relative(ekf, i.id, j.id, &d, &S, &c);
+  const LocalPrediction rel = rotate_into_body(ekf, d, S, c);
   return mahalanobis2((i.m - j.m) - rel.mean, i.M + j.M + rel.cov);
 }
 
@@ -113,8 +127,12 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
   // predictions as independent, but they all contain l_i, the heading and
   // correlated map errors; (sum_j W_j C_j W_j^T) would be overconfident (a static
   // landmark then fails ~5x more often than the gate allows). So the weights are
-  // kept and the residual's covariance is computed exactly from its parts:
-  //   r = m_i - sum_j W_j (m_j + R^T (l_i - l_j)) - (sum_j W_j J_j) dth
+  // kept and the residual's covariance is computed exactly (to first order) from its
+  // parts, the residual being linear in the estimate's errors e and the noises n:
+  //   r = n_i - sum_j W_j n_j - R^T e_li + sum_j A_j e_lj - g e_th,
+  //   A_j = W_j R^T, g = sum_j W_j J_j,
+  // so cov(r) = M_i + sum_j W_j M_j W_j^T + H P H^T over (th, l_i, l_j...), the
+  // heading-landmark cross-covariances included.
   const Pose2 pose = ekf.pose();
   const Eigen::Matrix2d Rt = rotation(pose.theta).transpose();
   const double var_th = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
@@ -125,6 +143,7 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
   Eigen::Matrix2d cov = view[i].M;
   Eigen::Vector2d J = Eigen::Vector2d::Zero();
   Eigen::Matrix2d map_cov = Rt * ekf.landmark_cov(view[i].id) * Rt.transpose();  // R^T P_ii R
+  Eigen::RowVector2d th_l = heading_landmark_cov(ekf, view[i].id) * Rt.transpose();  // P_th,li R - sum_j P_th,lj A_j^T
   for (int j = 0; j < n; ++j) {
     const auto uj = static_cast<std::size_t>(j);
     if (!use[uj]) continue;
@@ -135,12 +154,14 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
     J += Wj * Eigen::Vector2d(-s * d.x() + c * d.y(), -c * d.x() - s * d.y());
     const Eigen::Matrix2d cross = Rt * ekf.landmark_cross_cov(view[i].id, view[j].id) * Aj.transpose();
     map_cov -= cross + cross.transpose();  // - R^T P_ij A_j^T - A_j P_ji R
+    th_l -= heading_landmark_cov(ekf, view[j].id) * Aj.transpose();
     for (int k = 0; k < n; ++k) {
       if (!use[static_cast<std::size_t>(k)]) continue;
       map_cov += Aj * ekf.landmark_cross_cov(view[j].id, view[k].id) * A[static_cast<std::size_t>(k)].transpose();  // A_j P_jk A_k^T
     }
   }
-  cov += map_cov + var_th * J * J.transpose();
+  const Eigen::Matrix2d th_cross = J * th_l;  // cov(-g e_th, -R^T e_li + sum_j A_j e_lj)
+  cov += map_cov + var_th * J * J.transpose() + th_cross + th_cross.transpose();
   return mahalanobis2(residual, 0.5 * (cov + cov.transpose()));
 }
 

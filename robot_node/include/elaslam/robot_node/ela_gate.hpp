@@ -70,20 +70,25 @@ struct LocalPrediction {
 };
 
 /// Where landmark i should appear, predicted from neighbour j's observation and the
-/// map's relative vector: m_j + R(th)^T d_ij, covariance M_j + R^T S_ij R + J s_th^2 J^T
-/// with S_ij = P_ii + P_jj - P_ij - P_ji and J = d(R(th)^T d_ij)/d th.
+/// map's relative vector: m_j + R(th)^T d_ij, covariance
+/// M_j + R^T S_ij R + J s_th^2 J^T + J c_ij R + R^T c_ij^T J^T
+/// with S_ij = P_ii + P_jj - P_ij - P_ji, J = d(R(th)^T d_ij)/d th and
+/// c_ij = P_th,li - P_th,lj the relative vector's covariance with the heading.
 LocalPrediction predict_from_neighbour(const EkfSlam& ekf, int id_i, const InView& j);
 
 /// Mahalanobis distance squared of the pair (i, j): (m_i - m_j) - R^T d_ij against
-/// M_i + M_j + R^T S_ij R + heading share. Symmetric in i and j.
+/// M_i + M_j + R^T S_ij R + the heading's share (its variance and its covariance with
+/// d_ij). Symmetric in i and j.
 double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j);
 
 /// Eq 16: the ELA of view[i] as the product of the Gaussians predicted from every
 /// other landmark in view (only those with active[j] != 0 when `active` is given);
 /// returns d2 of m_i against it. The mean is the paper's product of Gaussians; the
-/// covariance of the residual is computed exactly from its parts (the neighbours'
-/// predictions share l_i, the heading and correlated map errors), so that a static
-/// landmark fails at the gate's nominal rate. O(n^2) per landmark.
+/// covariance of the residual is computed exactly, to first order, from the joint
+/// covariance of the heading and the landmarks (the neighbours' predictions share
+/// l_i, the heading and correlated map errors; the map's errors are correlated with
+/// the heading's), so that a static landmark fails at the gate's nominal rate.
+/// O(n) predictions and O(n^2) small products per landmark.
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active = nullptr);
 
 /// Steps 2-3 of DESIGN.md section 5 for one frame: which observations are inside
