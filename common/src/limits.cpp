@@ -151,6 +151,7 @@ std::string check_cov2(const double (&c)[2][2], const MessageLimits& l, const ch
 std::string check_pose(const pose_estimate_t& p, const MessageLimits& l, Refusal* reason) {
   *reason = Refusal::kMalformed;
   if (p.frame < 0) return contract::got("frame is negative", p.frame);
+  if (p.incarnation < 0) return contract::got("incarnation is negative", p.incarnation);
   *reason = Refusal::kImplausible;
   if (std::string e = check_position(p.x, p.y, l, "position"); !e.empty()) return e;
   if (!std::isfinite(p.theta)) return "theta is not finite";

@@ -67,6 +67,7 @@ std::string MainNode::validate(const landmark_event_t& m, Refusal* reason) const
   if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
   r = Refusal::kMalformed;
   if (m.seq < 1 || m.seq > kMaxSeq) return contract::got("seq not in [1, 2^62]", m.seq);
+  if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
   if (m.kind < landmark_event_t::ADD || m.kind > landmark_event_t::RETURN) return contract::got("unknown kind", int(m.kind));
   if (m.landmark_id < 0 || m.landmark_id >= map_.max_landmark_id())
@@ -86,6 +87,7 @@ std::string MainNode::validate(const lmap_snapshot_t& m, Refusal* reason) const 
   if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
   r = Refusal::kMalformed;
   if (m.seq < 0 || m.seq > kMaxSeq) return contract::got("seq not in [0, 2^62]", m.seq);
+  if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
   if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks) return contract::got("chunk outside [0, num_chunks)", m.chunk);
   if (m.id_begin < 0 || m.id_end <= m.id_begin || m.id_end > map_.max_landmark_id())

@@ -181,6 +181,33 @@ TEST(MainLimits, AFarFutureFrameNeverPinsTheMapFrame) {
   EXPECT_EQ(node.on_pose(pose(1, 501)), 501);
 }
 
+// Found by fuzz_main_robot: an event, snapshot or POSE with a negative incarnation
+// (a start time, microseconds since the epoch: never negative) was followed, and the
+// state main saved then did not load back ("robots[1].incarnation not in [0, ...]").
+// Refused as malformed now; the saved state of what was accepted loads back.
+TEST(MainLimits, ANegativeIncarnationIsRefusedAndTheStateStillLoadsBack) {
+  MainNode node(options("1"));
+  std::string why;
+  landmark_event_t e = add(1, 1, 3);
+  e.incarnation = -1413842209176143135;
+  EXPECT_FALSE(node.on_event(e, &why));
+  EXPECT_NE(why.find("incarnation is negative"), std::string::npos) << why;
+  lmap_snapshot_t s = snapshot(1, 0, 5, {2});
+  s.incarnation = -1;
+  EXPECT_FALSE(node.on_snapshot(s, &why));
+  EXPECT_NE(why.find("incarnation is negative"), std::string::npos) << why;
+  pose_estimate_t p = pose(1, 0);
+  p.incarnation = -7;
+  EXPECT_EQ(node.on_pose(p, &why), -1);
+  EXPECT_NE(why.find("incarnation is negative"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kMalformed], 3);
+  e.incarnation = 1000;
+  EXPECT_TRUE(node.on_event(e, &why)) << why;
+  GlobalMap loaded(options("1"));
+  EXPECT_TRUE(loaded.from_json(node.map().to_json(), &why)) << why;
+  EXPECT_EQ(loaded.stream(1).incarnation, 1000);
+}
+
 TEST(MainLimits, StatusCountsEveryRefusalPerReason) {
   MainNode node(options("1"));
   node.on_event(add(1, 1, 3, 0.0));
