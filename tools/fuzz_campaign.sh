@@ -18,7 +18,9 @@
 #   chunk in <target>.tsv: UTC time, commit, executions, exec/s, corpus, result.
 # - --status: print the totals and exit.
 # Exit 0 when every target reached the goal clean, 1 when a chunk failed (its
-# artefact is in DIR/artifacts/; the campaign stops there), 2 bad arguments.
+# artefact is in DIR/artifacts/; the campaign stops there, and goes on for that
+# target once the commit has changed: the fix), 2 bad arguments. Executions of
+# every chunk count, the failed ones' included.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 GOAL=10000000
@@ -48,20 +50,22 @@ for t in $TARGETS; do [ -f "$ROOT/fuzz/$t.cpp" ] || die "no such target: $t (fuz
 mkdir -p "$LEDGER" || die "cannot create $LEDGER"
 
 total() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' '{ s += $3 } END { print s + 0 }' "$LEDGER/$1.tsv" || echo 0; }
-failed_before() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' '$6 != "clean" { f = 1 } END { exit !f }' "$LEDGER/$1.tsv"; }
+# A failed chunk stops the campaign for its target until the commit changes (the fix).
+failed_before() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' -v c="$commit" '$6 != "clean" && $2 == c { f = 1 } END { exit !f }' "$LEDGER/$1.tsv"; }
+failures() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' '$6 != "clean" { n++ } END { print n + 0 }' "$LEDGER/$1.tsv" || echo 0; }
 report() {
   printf '%-18s %14s %8s  %s\n' target executions chunks result
   for t in $TARGETS; do
     n=0; [ -f "$LEDGER/$t.tsv" ] && n=$(wc -l <"$LEDGER/$t.tsv")
-    r="clean"; failed_before "$t" && r="FAILED (see $LEDGER/$t.tsv)"
+    r="clean"; f=$(failures "$t"); [ "$f" -eq 0 ] || r="clean since the fix of $f failed chunk(s) (see $LEDGER/$t.tsv)"
+    failed_before "$t" && r="FAILED at this commit (see $LEDGER/$t.tsv)"
     [ "$n" -gt 0 ] || r="not run"
     printf '%-18s %14s %8s  %s\n' "$t" "$(total "$t")" "$n" "$r"
   done
 }
-if [ "$STATUS" -eq 1 ]; then report; exit 0; fi
-
 commit=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 git -C "$ROOT" diff --quiet HEAD -- 2>/dev/null || commit="$commit+dirty"
+if [ "$STATUS" -eq 1 ]; then report; exit 0; fi
 while :; do
   next=""; least=""
   for t in $TARGETS; do
