@@ -236,6 +236,16 @@ void ElaGate::judge_view(const EkfSlam& ekf, LMap* lmap) {
   if (drift_lambda_ > 0.0) judge_drift(lmap);
 }
 
+// Is landmark a a worse candidate to set aside than b (both outside their ELAs)? The
+// larger eq-16 d2; on a tie, the larger prior innovation (as consensus ranks). With
+// two landmarks in view the eq-16 residuals are each other's negatives with the same
+// covariance, so their d2 tie (up to rounding) and only the prior can tell the mover.
+bool ElaGate::worse(int a, int b) const {
+  const double da = d2_[static_cast<std::size_t>(a)], db = d2_[static_cast<std::size_t>(b)];
+  if (std::abs(da - db) > 1e-9 * std::max(da, db)) return da > db;
+  return prior_d2(a) > prior_d2(b);
+}
+
 // Eq 16 for every landmark in view. A landmark found outside its ELA stops shaping
 // the others' ELAs: the worst one is set aside and the rest re-tested, until all
 // that remain agree (one moving neighbour would otherwise shift every other
@@ -250,8 +260,11 @@ void ElaGate::judge_eq16(const EkfSlam& ekf) {
       const auto ui = static_cast<std::size_t>(i);
       if (!mask_[ui]) continue;
       d2_[ui] = ela_multi_d2(ekf, view_.data(), n, i, mask_.data());
-      if (d2_[ui] > ela_threshold_ && (worst < 0 || d2_[ui] > d2_[static_cast<std::size_t>(worst)])) worst = i;
     }
+    for (int i = 0; i < n; ++i)
+      if (mask_[static_cast<std::size_t>(i)] && d2_[static_cast<std::size_t>(i)] > ela_threshold_ &&
+          (worst < 0 || worse(i, worst)))
+        worst = i;
     if (worst < 0) break;
     mask_[static_cast<std::size_t>(worst)] = 0;
     --active;

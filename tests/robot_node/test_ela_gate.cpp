@@ -239,6 +239,26 @@ TEST(ElaGateFrame, OneVerdictAndOneRecordPerLandmarkInViewEq16) {
   }
 }
 
+// Issue 16, F1: with two landmarks in view eq 16 cannot tell which one moved (the
+// residuals are r and -r with one covariance); the prior innovation breaks the tie,
+// whichever comes first in the view. Before, the first was set aside: a static
+// landmark flagged, and the mover then failed its lone test too.
+TEST(ElaGateFrame, TwoInViewTheMoverIsSetAsideWhicheverComesFirst) {
+  const Pose2 pose{0.0, 0.0, 0.2};
+  for (int mover : {0, 1}) {
+    auto lms = test::ring(2, 3.0);
+    const EkfSlam ekf = test::mapped_filter(pose, lms);
+    lms[static_cast<std::size_t>(mover)] += Eigen::Vector2d(0.5, -0.3);
+    ElaGate gate(test::robot_options(Mode::kEla));
+    LMap lmap(64);
+    judge(&gate, &lmap, ekf, pose, lms, {0, 1});
+    ASSERT_EQ(gate.records().size(), 2u);
+    EXPECT_FALSE(gate.verdict(mover).inside) << "mover " << mover;
+    EXPECT_TRUE(gate.verdict(1 - mover).inside) << "mover " << mover;
+    for (const GateRecord& g : gate.records()) expect_consistent(g);
+  }
+}
+
 TEST(ElaGateFrame, ALoneLandmarkIsJudgedByItsPriorInnovation) {
   const Pose2 pose{0.0, 0.0, 0.0};
   auto lms = test::ring(4, 3.0);

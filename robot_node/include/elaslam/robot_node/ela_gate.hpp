@@ -130,6 +130,7 @@ class ElaGate {
   void decide(int k, const GateRecord& g, bool alone);
   void decide_alone(int k);
   double prior_d2(int k) const;
+  bool worse(int a, int b) const;
 
   Mode mode_;
   double ela_threshold_;    // chi2(ela_gate_probability, 2 dof): eq 16, pairs, single, candidates
