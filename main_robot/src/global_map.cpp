@@ -160,7 +160,12 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
     remove_as_moving(e.landmark_id, e.robot_id, e.frame, notices);
   } else {
     RobotEstimate& est = g.by_robot[static_cast<std::size_t>(e.robot_id - 1)];
-    est = {true, e.position, e.cov, e.frame};
+    // While it is MOVING (confirmed), an ADD or UPDATE may be of where it was before
+    // it moved (sent before the robot had the notice): kept, but out of the fusion,
+    // also after a RETURN (issue 16, F4). The robot's next estimate counts again.
+    const bool held_out =
+        g.status == GlobalStatus::kMoving && !g.moving_unconfirmed && e.kind != landmark_event_t::RETURN;
+    est = {!held_out, e.position, e.cov, e.frame};
     if (g.status == GlobalStatus::kAbsent) g.history_unknown = s.gap_pending;
     // While MOVING, estimates are kept but the landmark stays out until a RETURN
     // (or, for an unconfirmed moving status, any robot's estimate: see GlobalEntry).
@@ -232,6 +237,8 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
       g.status_frame = frame;
       g.moving_unconfirmed = false;
     }
+    // Still MOVING: r's estimate may predate the move; out of the fusion (as events).
+    if (g.status == GlobalStatus::kMoving && !g.moving_unconfirmed) g.by_robot[r].valid = false;
   }
   for (int id = id_begin; id < id_end; ++id) {
     GlobalEntry& g = entries_[static_cast<std::size_t>(id)];

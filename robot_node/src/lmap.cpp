@@ -56,9 +56,11 @@ void LMap::restart_streak(LMapEntry* e, int sightings) {
 // The one step every way of becoming moving shares (a STATIC landmark out of its ELA
 // or missing, a candidate inconsistent moving_after times, a dynamic notice): from
 // now on it needs return_frames consistent sightings to come back, and coming back
-// is a RETURN.
-void LMap::become_moving(LMapEntry* e, int frame) {
-  e->was_moving = e->reported_moving = true;
+// is a RETURN. `reported`: this robot's own finding, which its stream reports as
+// MOVING (a notice is another robot's: see told_moving).
+void LMap::become_moving(LMapEntry* e, int frame, bool reported) {
+  e->was_moving = true;
+  if (reported) e->reported_moving = true;
   e->moving_frame = frame;
   ++e->times_moving;
 }
@@ -93,7 +95,7 @@ bool LMap::candidate_consistent(int id) {
 bool LMap::candidate_inconsistent(int id) {
   LMapEntry& e = at(id);
   if (++e.outside_streak < rules_.moving_after || e.reported_moving) return false;
-  become_moving(&e, e.last_seen_frame);  // seen in this frame (seen() comes first)
+  become_moving(&e, e.last_seen_frame, true);  // seen in this frame (seen() comes first)
   return true;
 }
 
@@ -133,7 +135,7 @@ const Eigen::Vector2d& LMap::add_drift(int id, double lambda, const Eigen::Vecto
 
 void LMap::found_moving(int id, int frame, bool reanchored) {
   LMapEntry& e = at(id);
-  become_moving(&e, frame);
+  become_moving(&e, frame, true);
   e.missing_frames = 0;
   e.outside_streak = 0;
   e.moved_frame = frame;
@@ -144,9 +146,13 @@ void LMap::found_moving(int id, int frame, bool reanchored) {
   }
 }
 
+// A notice is another robot's finding: this robot's stream has not said MOVING, so
+// its own later finding is still reported (issue 16, F3: a notice used to set
+// reported_moving, which silenced this robot's MOVING for good once another robot
+// had RETURNed the landmark at main).
 void LMap::told_moving(int id, int frame, bool left_filter) {
   LMapEntry& e = at(id);
-  become_moving(&e, frame);
+  become_moving(&e, frame, false);
   if (!left_filter) return;
   set_status(id, LandmarkStatus::kMoving, frame);
   restart_streak(&e, 0);

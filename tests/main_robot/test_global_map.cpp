@@ -79,10 +79,16 @@ TEST(GlobalMap, MovingRemovesNotifiesOnceAndReturnLetsBack) {
   // A stale UPDATE while MOVING is kept aside but does not bring it back.
   m.apply(ev(3, 1, landmark_event_t::UPDATE, 5, 2, 2), &notices);
   EXPECT_EQ(m.entry(5).status, GlobalStatus::kMoving);
-  // RETURN lets it back.
+  // RETURN lets it back, with the RETURN's estimate only: the UPDATE sent while it
+  // was MOVING may be of where it was before (issue 16, F4: it used to be fused).
   m.apply(ev(1, 3, landmark_event_t::RETURN, 5, 3, 3, 0.01, 20), &notices);
   EXPECT_EQ(m.entry(5).status, GlobalStatus::kStatic);
   EXPECT_EQ(m.entry(5).status_frame, 20);
+  EXPECT_EQ(m.entry(5).contributors(), 0b001);
+  EXPECT_TRUE(m.entry(5).fused.isApprox(Eigen::Vector2d(3, 3), 1e-12)) << m.entry(5).fused.transpose();
+  // Robot 3's next estimate, after the RETURN, counts again.
+  m.apply(ev(3, 2, landmark_event_t::UPDATE, 5, 3.2, 3, 0.01, 21), &notices);
+  EXPECT_EQ(m.entry(5).contributors(), 0b101);
 }
 
 TEST(GlobalMap, DuplicatesAndReorderedEventsAreIgnored) {

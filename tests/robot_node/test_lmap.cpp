@@ -112,6 +112,22 @@ TEST(LMap, ANoticeRaisesTheBarEvenForALandmarkNotHeld) {
   EXPECT_EQ(m[5].times_moving, 2);
 }
 
+// Issue 16, F3: a notice is another robot's finding. It must not silence this
+// robot's own MOVING report (a notice used to set reported_moving: once another robot
+// had RETURNed the landmark at main, this robot never reported it moving again).
+TEST(LMap, ANoticeDoesNotSilenceThisRobotsOwnMovingReport) {
+  LMap m(8, rules());
+  m.told_moving(4, 3, /*left_filter=*/false);  // never held, never reported by this robot
+  EXPECT_FALSE(m[4].reported_moving);
+  m.anchor_candidate(4, 10);
+  EXPECT_FALSE(m.candidate_inconsistent(4));
+  m.anchor_candidate(4, 11);
+  EXPECT_TRUE(m.candidate_inconsistent(4));  // its own finding: reported (once)
+  EXPECT_TRUE(m[4].reported_moving);
+  m.anchor_candidate(4, 12);
+  EXPECT_FALSE(m.candidate_inconsistent(4));
+}
+
 TEST(LMap, MissedCountsExpectedFramesInARow) {
   LMap m(8, rules());
   sightings_until_confirmed(&m, 6, 0);

@@ -48,7 +48,7 @@ struct LMapEntry {
   int moved_frame = -1;          // frame at which a STATIC landmark was last found moving
   int moving_frame = -1;         // frame of the newest finding or notice that it moves (any status)
   bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
-  bool reported_moving = false;  // a MOVING event went out (or a notice came) and no ADD / RETURN since
+  bool reported_moving = false;  // this robot's MOVING event went out and no ADD / RETURN since
   int times_moving = 0;          // how often it has been found (or told) moving
   // A candidate's whitened innovations summed over its consistent sightings: white
   // for a static landmark (|sum|^2 / n is chi-square, 2 dof), drifting for a slow
@@ -137,7 +137,7 @@ class LMap {
   LMapEntry& at(int id) { return entries_[static_cast<std::size_t>(id)]; }
   void set_status(int id, LandmarkStatus s, int frame);
   static void restart_streak(LMapEntry* e, int sightings);
-  static void become_moving(LMapEntry* e, int frame);
+  static void become_moving(LMapEntry* e, int frame, bool reported);
   int sightings_to_confirm(const LMapEntry& e) const;
 
   LifecycleRules rules_;
