@@ -2,11 +2,14 @@
 
 #include <limits>
 
+#include <Eigen/Cholesky>
+
 #include "elaslam/common/stats.hpp"
 
 namespace elaslam {
 
-ConsensusSolver::ConsensusSolver(double prior_probability) {
+ConsensusSolver::ConsensusSolver(double prior_probability)
+    : S_(2 * kMaxNodes, 2 * kMaxNodes), nu_(2 * kMaxNodes), work_(2 * kMaxNodes, 2 * kMaxNodes), v_(2 * kMaxNodes) {
   joint_threshold_[0] = 0.0;
   for (int k = 1; k <= kMaxNodes; ++k)
     joint_threshold_[static_cast<std::size_t>(k)] = chi2_quantile(prior_probability, 2 * k);
@@ -16,6 +19,7 @@ void ConsensusSolver::reset(int n) {
   n_ = n < 0 ? 0 : (n > kMaxNodes ? kMaxNodes : n);
   adj_.fill(0);
   prior_d2_.fill(0.0);
+  joint_ = false;
 }
 
 void ConsensusSolver::add_edge(int a, int b) {
@@ -59,11 +63,37 @@ void ConsensusSolver::bron_kerbosch(std::uint64_t R, std::uint64_t P, std::uint6
   }
 }
 
+// The clique's joint prior d2: nu_C^T S_C^-1 nu_C over its nodes' innovations (their
+// errors share the pose's). O(k^3) for k nodes, in place, no allocation. +inf when
+// S_C is not positive definite or a node has no innovation.
+double ConsensusSolver::clique_d2(std::uint64_t clique) const {
+  const Eigen::Index m = 2 * __builtin_popcountll(clique);
+  Eigen::Index r = 0;
+  for (std::uint64_t a = clique; a; a &= a - 1, r += 2) {
+    const int i = __builtin_ctzll(a);
+    if (!(prior_d2_[static_cast<std::size_t>(i)] < 1e12)) return std::numeric_limits<double>::infinity();
+    v_.segment<2>(r) = nu_.segment<2>(2 * i);
+    Eigen::Index c = 0;
+    for (std::uint64_t b = clique; b; b &= b - 1, c += 2)
+      work_.block<2, 2>(r, c) = S_.block<2, 2>(2 * i, 2 * __builtin_ctzll(b));
+  }
+  Eigen::Ref<Eigen::MatrixXd> block = work_.topLeftCorner(m, m);
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(block);
+  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  auto v = v_.head(m);
+  llt.matrixL().solveInPlace(v);
+  return v.squaredNorm();
+}
+
 void ConsensusSolver::consider(std::uint64_t clique) {
   ++visited_;
   const int size = __builtin_popcountll(clique);
   double sum = 0.0;
-  for (std::uint64_t c = clique; c; c &= c - 1) sum += prior_d2_[static_cast<std::size_t>(__builtin_ctzll(c))];
+  if (joint_) {
+    sum = clique_d2(clique);
+  } else {
+    for (std::uint64_t c = clique; c; c &= c - 1) sum += prior_d2_[static_cast<std::size_t>(__builtin_ctzll(c))];
+  }
   const bool prior_ok = sum <= joint_threshold_[static_cast<std::size_t>(size)];
   const bool better = (prior_ok != best_prior_ok_) ? prior_ok
                       : (size != best_size_)       ? size > best_size_

@@ -178,6 +178,8 @@ ElaGate::ElaGate(const RobotOptions& options)
   constexpr auto n = static_cast<std::size_t>(contract::kMaxObsPerFrame);
   view_.reserve(n);
   prior_.reserve(n);
+  Hx_.resize(n);
+  Hl_.resize(n);
   d2_.reserve(n);
   mask_.reserve(n);
   verdicts_.reserve(n);
@@ -279,11 +281,41 @@ void ElaGate::judge_eq16(const EkfSlam& ekf) {
   }
 }
 
+// The joint covariance of the landmarks' innovations against the prior, for the
+// consensus solver's joint prior test: block (i, j) = H_i P H_j^T (+ W when i = j),
+// H_i = [H_x, H_l] of landmark i (pose and landmark columns only). O(n^2).
+void ElaGate::set_joint_prior(const EkfSlam& ekf) {
+  const int n = view_size();
+  const Pose2 pose = ekf.pose();
+  const Eigen::Matrix3d Ppp = ekf.pose_cov();
+  for (int i = 0; i < n; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    observe(pose, ekf.landmark(view_[ui].id), &Hx_[ui], &Hl_[ui]);
+    solver_.set_innovation(i, prior_[ui].innovation);
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    const Eigen::Matrix<double, 3, 2> Ppi = ekf.pose_landmark_cov(view_[ui].id);
+    for (int j = 0; j <= i; ++j) {
+      const auto uj = static_cast<std::size_t>(j);
+      const Eigen::Matrix<double, 3, 2> Ppj = ekf.pose_landmark_cov(view_[uj].id);
+      Eigen::Matrix2d S = Hx_[ui] * Ppp * Hx_[uj].transpose() + Hx_[ui] * Ppj * Hl_[uj].transpose() +
+                          Hl_[ui] * Ppi.transpose() * Hx_[uj].transpose() +
+                          Hl_[ui] * ekf.landmark_cross_cov(view_[ui].id, view_[uj].id) * Hl_[uj].transpose();
+      if (i == j) S += ekf.measurement_cov();
+      solver_.set_joint_block(i, j, S);
+      solver_.set_joint_block(j, i, S.transpose());
+    }
+  }
+  solver_.joint(true);
+}
+
 // Largest mutually consistent set of the landmarks in view; outside it = moving.
 // A best set of fewer than two falls back to each landmark's single test.
 void ElaGate::judge_consensus(const EkfSlam& ekf) {
   const int n = view_size();
   solver_.reset(n);
+  set_joint_prior(ekf);
   for (int i = 0; i < n; ++i) {
     const InView& vi = view_[static_cast<std::size_t>(i)];
     const double d2 = prior_d2(i);

@@ -122,10 +122,13 @@ class ElaGate {
   void record(const GateRecord& g) { records_.push_back(g); }
   /// This frame's records: the landmarks in view first (view order), then the rest.
   const std::vector<GateRecord>& records() const { return records_; }
+  /// Mode consensus: the solver of this frame's view (tests, diagnostics).
+  const ConsensusSolver& consensus() const { return solver_; }
 
  private:
   void judge_eq16(const EkfSlam& ekf);
   void judge_consensus(const EkfSlam& ekf);
+  void set_joint_prior(const EkfSlam& ekf);
   void judge_drift(LMap* lmap);
   void decide(int k, const GateRecord& g, bool alone);
   void decide_alone(int k);
@@ -146,6 +149,8 @@ class ElaGate {
   std::vector<std::uint8_t> mask_;   // who shapes the others' ELAs (eq 16 survivors / the clique)
   std::vector<ElaVerdict> verdicts_;
   std::vector<GateRecord> records_;  // view first, then candidates / classic observations
+  std::vector<Eigen::Matrix<double, 2, 3>> Hx_;  // per landmark in view: the observation's Jacobians
+  std::vector<Eigen::Matrix2d> Hl_;
 };
 
 }  // namespace elaslam
