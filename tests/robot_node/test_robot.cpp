@@ -2,8 +2,15 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
 
 #include "elaslam/common/stats.hpp"
+#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/simulator/messages.hpp"
+#include "elaslam/simulator/world.hpp"
+#include "elaslam/team/team_config.hpp"
 #include "scene.hpp"
 
 namespace elaslam {
@@ -265,6 +272,51 @@ TEST(DriftTest, StaticLandmarksAreNotFlaggedByTheDriftTest) {
   }
   EXPECT_EQ(moving, 0);
   for (int id = 0; id < 6; ++id) EXPECT_EQ(r.lmap()[id].status, LandmarkStatus::kStatic);
+}
+
+// Issue 16: the candidate's drift test sums its whitened innovations over its
+// consistent sightings, and a candidate is refined by landmark-only (Schmidt)
+// updates, under which the innovations need not be white (they share the pose's
+// error): the sum's d2 need not be chi-square. Measured instead: the paper's robots
+// in a static world (20 seeds x 3 robots x 300 frames, config/paper.yaml), every
+// candidate and static test's record. No test may fire above its nominal rate
+// (1 - ela_gate_probability = 1 %) by more than 4 binomial sigma; the eq-16 and
+// single tests of static landmarks fire at it. Measured: candidate single test
+// 1.30 %, candidate drift test 0.40 % (conservative), static tests 0.99 %.
+TEST(DriftTest, InAStaticWorldNoTestFiresAboveItsNominalRate) {
+  long cand = 0, cand_fail = 0, drift_fail = 0, stat = 0, stat_fail = 0;
+  for (int seed = 101; seed <= 120; ++seed) {
+    TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+    c.robot.mode = Mode::kEla;
+    c.scenario.seed = static_cast<std::uint64_t>(seed);
+    c.scenario.dynamism_percent = 0.0;
+    sim::World world(c.scenario);
+    std::vector<RobotNode> nodes;
+    for (int i = 0; i < world.num_robots(); ++i) nodes.emplace_back(c.robot, world.sensor_frame(i).robot_id);
+    for (int k = 0; k < c.scenario.frames; ++k) {
+      if (k > 0) world.step();
+      for (int i = 0; i < world.num_robots(); ++i) {
+        nodes[static_cast<std::size_t>(i)].on_sensor(sim::to_message(world.sensor_frame(i), k), 0);
+        for (const GateRecord& g : nodes[static_cast<std::size_t>(i)].robot().gate_records()) {
+          if (g.kind == GateKind::kCandidate) ++cand, cand_fail += !g.inside;
+          if (g.kind == GateKind::kCandidateDrift) ++cand, ++drift_fail;
+          if (g.kind == GateKind::kMulti || g.kind == GateKind::kInnovation || g.kind == GateKind::kDrift)
+            ++stat, stat_fail += !g.inside;
+        }
+      }
+    }
+  }
+  const double nominal = 1.0 - load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml").robot.ela_gate_probability;
+  const auto limit = [nominal](long n) { return nominal + 4.0 * std::sqrt(nominal * (1.0 - nominal) / static_cast<double>(n)); };
+  ASSERT_GT(cand, 2000);
+  const double cand_rate = static_cast<double>(cand_fail) / cand, drift_rate = static_cast<double>(drift_fail) / cand;
+  const double stat_rate = static_cast<double>(stat_fail) / stat;
+  EXPECT_LE(cand_rate, limit(cand));
+  EXPECT_LE(drift_rate, limit(cand));
+  EXPECT_NEAR(stat_rate, nominal, limit(stat) - nominal);
+  RecordProperty("candidate_rate", std::to_string(cand_rate));
+  RecordProperty("candidate_drift_rate", std::to_string(drift_rate));
+  RecordProperty("static_rate", std::to_string(stat_rate));
 }
 
 TEST(DriftTest, ACreepingCandidateIsNotConfirmed) {
