@@ -82,13 +82,15 @@ class Progress {
     if (const long long refused = shell_.counters().auth_refused; refused > 0)
       out += " | refused (authentication) " + std::to_string(refused);
     long long refused = 0;
-    std::string full;
+    std::string full, lost;
     for (const auto& [node, h] : health_) {
       refused += h.refused;
       if (h.capacity) full += (full.empty() ? "" : ", ") + node;
+      if (h.inconsistent) lost += (lost.empty() ? "" : ", ") + node;
     }
     if (refused > 0) out += " | messages refused " + std::to_string(refused);
     if (!full.empty()) out += " | CAPACITY EXCEEDED: " + full;
+    if (!lost.empty()) out += " | INCONSISTENT (lost?): " + lost;
     if (frame_ < 0) out = "waiting for the first frame" + std::string(frames_ > 0 ? " of " + std::to_string(frames_) : "");
     return out;
   }
@@ -98,12 +100,14 @@ class Progress {
   struct Health {
     long long refused = 0;
     bool capacity = false;
+    bool inconsistent = false;  // FAULT_INCONSISTENT: the robot's consistency monitor
   };
   void note_health(const std::string& node, const node_status_t& m) {
     Health& h = health_[node];
     h.refused = 0;
     for (std::int64_t n : m.refused) h.refused += n;
     h.capacity = (m.fault_flags & node_status_t::FAULT_CAPACITY) != 0;
+    h.inconsistent = (m.fault_flags & node_status_t::FAULT_INCONSISTENT) != 0;
   }
 
   template <typename Msg, typename Fn>

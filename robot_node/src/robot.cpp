@@ -29,7 +29,8 @@ Robot::Robot(const RobotOptions& options, int robot_id)
       robot_id_(robot_id),
       ekf_(options.ekf),
       lmap_(options.ekf.max_landmark_id, lifecycle_rules(options)),
-      gate_(options) {
+      gate_(options),
+      monitor_(options.consistency_window_frames, options.consistency_probability) {
   updated_.reserve(kMaxObservations);
   events_.reserve(event_capacity(options));
 }
@@ -40,6 +41,7 @@ void Robot::reset() {
   lmap_.clear();
   events_.clear();
   gate_.clear();
+  monitor_.restart();
 }
 
 FrameSummary Robot::process(const FrameInput& in) {
@@ -69,7 +71,22 @@ FrameSummary Robot::process(const FrameInput& in) {
   }
   s.events_dropped = events_dropped_;
   events_dropped_ = 0;
+  check_consistency(&s);
   return s;
+}
+
+// The consistency monitor's verdict on this frame's window (consistency.hpp); when
+// the filter is found inconsistent and recovery is on, the pose covariance widens
+// (a zero-motion prediction with the recovery noise: the cross-covariances are
+// kept, so the map moves with the pose) and the window starts over.
+void Robot::check_consistency(FrameSummary* s) {
+  s->inconsistent = monitor_.end_frame();
+  if (!s->inconsistent || !options_.consistency_recover) return;
+  const double xy = options_.recovery_sigma_xy * options_.recovery_sigma_xy;
+  const double th = options_.recovery_sigma_theta * options_.recovery_sigma_theta;
+  if (ekf_.predict(Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal()) != EkfStatus::kOk) ++s->filter_faults;
+  monitor_.restart();
+  s->recovered = true;
 }
 
 // Prediction from the odometer increment (eqs 4-5). The first frame sets the prior
@@ -109,6 +126,7 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
     if (!ekf_.has_landmark(o.landmark_id)) continue;
     const UpdateReport r = ekf_.update(o.landmark_id, o.z, gate);
+    if (r.status == EkfStatus::kOk) monitor_.add(r.d2);
     gate_.record({o.landmark_id, gate ? GateKind::kInnovation : GateKind::kNone, r.d2, r.threshold,
                   r.status != EkfStatus::kGated});
     if (r.status == EkfStatus::kOk) {
@@ -165,7 +183,9 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
 }
 
 void Robot::correct(int id, const RangeBearing& z, FrameSummary* s) {
-  if (ekf_.update(id, z, false).status == EkfStatus::kOk) {
+  const UpdateReport r = ekf_.update(id, z, false);
+  if (r.status == EkfStatus::kOk) {
+    monitor_.add(r.d2);
     ++s->num_accepted;
     updated_.push_back(id);
   } else {

@@ -1,9 +1,10 @@
 #include "elaslam/robot_node/robot_node.hpp"
 
-#include <chrono>
-#include <sstream>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <sstream>
 
 #include "elaslam/common/contract.hpp"
 
@@ -49,6 +50,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
   held_.reserve(kMaxHeldNotices);
+  alert_.reserve(kAlertBytes);
   prepare_snapshot_chunks();
 }
 
@@ -188,6 +190,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   ++counters_.frames;
   counters_.filter_faults += s.filter_faults;
   if (s.filter_full > 0) note_filter_full(s.filter_full);
+  if (s.inconsistent) note_inconsistent(s.recovered);
   fill_events(now_utime);
   if (msg.frame % options_.snapshot_period_frames == 0) {
     make_snapshot(now_utime);
@@ -298,19 +301,38 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
   return num_chunks_;
 }
 
+void RobotNode::note_inconsistent(bool recovered) {
+  ++counters_.inconsistent_frames;
+  if (recovered) ++counters_.recoveries;
+  inconsistent_frame_ = last_frame_;
+  if (last_frame_ - inconsistent_alerted_ < kAlertFrames || !alert_.empty()) return;  // rate-limited
+  inconsistent_alerted_ = last_frame_;
+  // Into the buffer reserved at construction: the frame path allocates nothing.
+  char line[kAlertBytes];
+  std::snprintf(line, sizeof line,
+                "FAULT: robot %d filter inconsistent at frame %d (its innovations exceed their covariance: lost?)%s; "
+                "%lld such frame(s) so far",
+                robot_id_, last_frame_, recovered ? "; pose covariance widened to relocalise" : "",
+                static_cast<long long>(counters_.inconsistent_frames));
+  alert_.assign(line);
+}
+
 void RobotNode::note_filter_full(int n) {
   counters_.filter_full += n;
   full_frame_ = last_frame_;
   if (last_frame_ - alerted_frame_ < kAlertFrames) return;  // rate-limited
   alerted_frame_ = last_frame_;
-  alert_ = "FAULT: robot " + std::to_string(robot_id_) + " filter full (filter.capacity " +
-           std::to_string(options_.ekf.capacity) + " landmarks) at frame " + std::to_string(last_frame_) + ": " +
-           std::to_string(counters_.filter_full) + " landmark(s) left out so far; raise filter.capacity";
+  char line[kAlertBytes];
+  std::snprintf(line, sizeof line,
+                "FAULT: robot %d filter full (filter.capacity %d landmarks) at frame %d: %lld landmark(s) left out so "
+                "far; raise filter.capacity",
+                robot_id_, options_.ekf.capacity, last_frame_, static_cast<long long>(counters_.filter_full));
+  alert_.assign(line);
 }
 
 std::string RobotNode::take_alert() {
-  std::string a;
-  a.swap(alert_);
+  std::string a = alert_;  // a copy: alert_ keeps its reserved buffer
+  alert_.clear();
   return a;
 }
 
@@ -406,6 +428,8 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   s.incarnation = incarnation_;
   s.fault_flags = counters_.foreign_poses > 0 && last_frame_ <= duplicate_until_frame_ ? node_status_t::FAULT_DUPLICATE_SENDER : 0;
   if (full_frame_ >= 0 && last_frame_ - full_frame_ < kAlertFrames) s.fault_flags |= node_status_t::FAULT_CAPACITY;
+  if (inconsistent_frame_ >= 0 && last_frame_ - inconsistent_frame_ < kAlertFrames)
+    s.fault_flags |= node_status_t::FAULT_INCONSISTENT;
   for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = counters_.frames;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;

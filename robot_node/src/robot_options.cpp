@@ -81,6 +81,18 @@ void parse(config::Reader& r, RobotOptions* o) {
     if (o->confirm_jump_frames > o->max_frame_gap)
       n.fail("confirm_jump_frames", "larger than max_frame_gap: a jump that far is refused anyway");
   });
+  r.section(
+      "consistency",
+      [&](config::Reader& c) {
+        c.read("window_frames", &o->consistency_window_frames, 0, 100000);
+        c.read_optional("probability", &o->consistency_probability, 0.5, 1.0 - 1e-12);
+        c.read_optional("recover", &o->consistency_recover);
+        c.read_optional("recovery_sigma_xy_m", &o->recovery_sigma_xy, 0.0, 100.0);
+        double deg = rad2deg(o->recovery_sigma_theta);
+        c.read_optional("recovery_sigma_theta_deg", &deg, 0.0, 180.0);
+        o->recovery_sigma_theta = deg2rad(deg);
+      },
+      /*optional=*/true);
   parse(r, &o->limits);
   if (o->ekf.capacity > o->ekf.max_landmark_id)
     r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");

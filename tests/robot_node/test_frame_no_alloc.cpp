@@ -28,6 +28,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     c.robot.mode = mode;
     c.scenario.dynamism_percent = 50.0;
     c.scenario.landmark_speed_mps = 0.5;
+    // The consistency monitor and its recovery on (they fire at 50 % dynamism).
+    c.robot.consistency_window_frames = 20;
+    c.robot.consistency_recover = true;
     // Every sensor frame of the run, made before the region (the simulator is not
     // part of a robot's frame path).
     sim::World world(c.scenario);

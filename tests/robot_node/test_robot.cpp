@@ -473,3 +473,110 @@ TEST_F(RobotPaths, EveryTestedObservationKeepsItsNumbers) {
 
 }  // namespace
 }  // namespace elaslam
+
+namespace elaslam {
+namespace {
+
+// The consistency monitor (issue 16): a robot whose odometer lies (a 0.5 m jump it
+// did not drive, with the confidence of a normal increment) keeps correcting with
+// innovations far beyond their covariance (eq 16 cancels a position error, so the
+// landmarks are accepted). The monitor finds the filter inconsistent within its
+// window; with recovery the pose covariance widens once and the landmarks pull the
+// pose back at once, where without it the error decays over tens of frames.
+TEST(Consistency, ALostRobotSaysSoAndRecovers) {
+  double error_at_45[2] = {0, 0};
+  for (bool recover : {false, true}) {
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.consistency_window_frames = 20;
+    o.consistency_recover = recover;
+    Robot r(o, 1);
+    const Pose2 truth{0.0, 0.0, 0.0};
+    const auto lms = test::ring(8, 4.0);
+    std::mt19937_64 rng(3);
+    Pose2 odometer = truth;
+    int inconsistent = 0, recovered = 0, first = -1;
+    for (int f = 0; f < 80; ++f) {
+      if (f == 30) odometer = Pose2{0.4, 0.3, 0.0};
+      const FrameSummary s = r.process(test::frame_from(f, truth, odometer, lms, test::all_ids(8), &rng));
+      inconsistent += s.inconsistent;
+      recovered += s.recovered;
+      if (s.inconsistent && first < 0) first = f;
+      if (f < 30) {
+        EXPECT_FALSE(s.inconsistent) << f;  // consistent until the lie
+      }
+      if (f == 45) error_at_45[recover ? 1 : 0] = std::hypot(r.filter().pose().x, r.filter().pose().y);
+    }
+    EXPECT_GE(first, 30);
+    EXPECT_LE(first, 35) << "found within a few frames of the lie";
+    if (recover) {
+      EXPECT_EQ(recovered, 1);  // once: the window starts over and stays consistent
+      EXPECT_EQ(inconsistent, 1);
+    } else {
+      EXPECT_EQ(recovered, 0);
+      EXPECT_GT(inconsistent, 20);  // it stays inconsistent while the error decays
+    }
+  }
+  EXPECT_GT(error_at_45[0], 0.1);   // without recovery: still 0.14 m off
+  EXPECT_LT(error_at_45[1], 0.03);  // with it: back within 1 cm
+}
+
+// The node says it: FAULT_INCONSISTENT in STATUS and one alert line, with the counters.
+TEST(Consistency, TheNodeRaisesFaultInconsistentAndAlertsOnce) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.consistency_window_frames = 20;
+  o.consistency_recover = true;
+  RobotNode node(o, 1);
+  const auto lms = test::ring(8, 4.0);
+  std::mt19937_64 rng(3);
+  Pose2 odometer{0.0, 0.0, 0.0};
+  std::string alert;
+  for (int f = 0; f < 40; ++f) {
+    if (f == 30) odometer = Pose2{0.4, 0.3, 0.0};
+    node.on_sensor(test::to_msg(test::frame_from(f, Pose2{}, odometer, lms, test::all_ids(8), &rng), 1), 0);
+    const std::string a = node.take_alert();
+    if (!a.empty()) alert += a + "\n";
+    if (f == 29) {
+      EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+    }
+  }
+  EXPECT_NE(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  EXPECT_EQ(node.counters().inconsistent_frames, 1);
+  EXPECT_EQ(node.counters().recoveries, 1);
+  EXPECT_NE(alert.find("robot 1 filter inconsistent"), std::string::npos) << alert;
+  EXPECT_NE(alert.find("pose covariance widened"), std::string::npos) << alert;
+}
+
+// In a static world the monitor stays quiet: the paper's robots, 10 seeds x 3
+// robots x 300 frames, a 50-frame window at 0.9999: no frame found inconsistent
+// (measured: 0 of 4,500). (With movers it fires: 2.8 % of frames at 50 %
+// dynamism, 44 % at 80 %, the movers' innovations being accepted before they are
+// found; so config/paper.yaml leaves it off, docs/decisions.md.)
+TEST(Consistency, InAStaticWorldTheMonitorStaysQuiet) {
+  long frames = 0, inconsistent = 0;
+  for (int seed = 101; seed <= 110; ++seed) {
+    TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+    c.robot.mode = Mode::kEla;
+    c.robot.consistency_window_frames = 50;
+    c.robot.consistency_probability = 0.9999;
+    c.scenario.seed = static_cast<std::uint64_t>(seed);
+    c.scenario.dynamism_percent = 0.0;
+    sim::World world(c.scenario);
+    std::vector<RobotNode> nodes;
+    for (int i = 0; i < world.num_robots(); ++i) nodes.emplace_back(c.robot, world.sensor_frame(i).robot_id);
+    for (int k = 0; k < c.scenario.frames; ++k) {
+      if (k > 0) world.step();
+      for (int i = 0; i < world.num_robots(); ++i)
+        nodes[static_cast<std::size_t>(i)].on_sensor(sim::to_message(world.sensor_frame(i), k), 0);
+    }
+    for (const RobotNode& n : nodes) {
+      frames += n.counters().frames;
+      inconsistent += n.counters().inconsistent_frames;
+      EXPECT_EQ(n.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+    }
+  }
+  EXPECT_EQ(frames, 4500);
+  EXPECT_LE(inconsistent, frames / 200);
+}
+
+}  // namespace
+}  // namespace elaslam

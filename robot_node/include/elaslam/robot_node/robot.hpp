@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/robot_node/consistency.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 #include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/lmap.hpp"
@@ -63,6 +64,8 @@ struct FrameSummary {
   int filter_faults = 0;  // filter operations refused by its health checks (filter_full included)
   int filter_full = 0;    // landmarks not added: every slot of the filter taken (a capacity limit)
   int events_dropped = 0; // events beyond the fixed event buffer (should stay 0)
+  bool inconsistent = false;  // the consistency monitor's verdict after this frame
+  bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
 };
 
 class Robot {
@@ -82,6 +85,7 @@ class Robot {
   // ---- outputs of the last frame ----------------------------------------------
   const std::vector<MapEvent>& events() const { return events_; }
   const std::vector<GateRecord>& gate_records() const { return gate_.records(); }
+  const ConsistencyMonitor& consistency() const { return monitor_; }
 
   // ---- state ------------------------------------------------------------------
   const EkfSlam& filter() const { return ekf_; }
@@ -102,6 +106,7 @@ class Robot {
   void process_classic(const FrameInput& in, FrameSummary* s);
   void process_ela(const FrameInput& in, FrameSummary* s);
   void correct(int id, const RangeBearing& z, FrameSummary* s);
+  void check_consistency(FrameSummary* s);
   void handle_candidates(const FrameInput& in, FrameSummary* s);
   void confirm(int id, const RangeBearing& z, FrameSummary* s);
   void drop_unseen_candidates();
@@ -119,6 +124,7 @@ class Robot {
   EkfSlam ekf_;   // sole owner of the mean and covariance
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   ElaGate gate_;  // this frame's verdicts and gate records
+  ConsistencyMonitor monitor_;  // NIS of the corrections over a window of frames
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;

@@ -44,6 +44,8 @@ struct RobotNodeCounters {
   RefusalCounts refused;              // refused messages per reason (their sum is rejected_inputs)
   std::int64_t odometry_reanchors = 0;  // odometer origin changes taken (a confirmed jump)
   std::int64_t filter_full = 0;       // landmarks not added because every filter slot was taken
+  std::int64_t inconsistent_frames = 0;  // frames the consistency monitor found the filter inconsistent
+  std::int64_t recoveries = 0;           // of those, pose covariance widened (consistency_recover)
 };
 
 class RobotNode {
@@ -118,6 +120,7 @@ class RobotNode {
   /// the filter full), at most once per kAlertFrames frames; else "".
   std::string take_alert();
   static constexpr int kAlertFrames = 100;
+  static constexpr std::size_t kAlertBytes = 256;  // an alert line's buffer, reserved at construction
 
  private:
   friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
@@ -125,6 +128,7 @@ class RobotNode {
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);
+  void note_inconsistent(bool recovered);  // FAULT_INCONSISTENT and a rate-limited alert
   void note_filter_full(int n);  // landmarks left out this frame: FAULT_CAPACITY and a rate-limited alert
   void prepare_snapshot_chunks();
   std::string validate(const global_map_t& msg, Refusal* reason) const;
@@ -145,6 +149,8 @@ class RobotNode {
   Pose2 odo_candidate_;          // a refused odometer jump, possibly a new origin
   int odo_candidate_frame_ = -1; // its frame, -1: none
   int odo_streak_ = 0;           // consecutive refused readings continuing it
+  int inconsistent_frame_ = -1;  // last frame found inconsistent (FAULT_INCONSISTENT for kAlertFrames)
+  int inconsistent_alerted_ = -1000000;
   int full_frame_ = -1;          // last frame the filter was found full (FAULT_CAPACITY for kAlertFrames)
   int alerted_frame_ = -1000000; // last frame a capacity alert went out
   std::string alert_;

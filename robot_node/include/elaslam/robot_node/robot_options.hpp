@@ -40,6 +40,17 @@ struct RobotOptions {
   /// A candidate unseen for this many frames starts over (1: it must be seen in
   /// every frame; a sensor that reports a landmark only every few frames needs more).
   int candidate_gap_frames = 1;
+  /// The consistency monitor (consistency.hpp; the optional `consistency:` map):
+  /// the NIS of the corrections over this many frames against its quantile at
+  /// `consistency_probability` (0 frames: off). When it fails, the robot says so
+  /// (FAULT_INCONSISTENT in STATUS, an alert) and, with `consistency_recover`,
+  /// widens its pose covariance by recovery_sigma_xy / _theta so that the landmarks
+  /// in view can pull the pose back (a relocalisation in its own map).
+  int consistency_window_frames = 0;
+  double consistency_probability = 0.9999;
+  bool consistency_recover = false;
+  double recovery_sigma_xy = 0.5;             // [m]
+  double recovery_sigma_theta = 10.0 * kPi / 180.0;  // [rad]
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
   /// Whether a mapped landmark that fails its test while it is the only one in view
   /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.
