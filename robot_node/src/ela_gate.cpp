@@ -180,6 +180,14 @@ ElaGate::ElaGate(const RobotOptions& options)
   prior_.reserve(n);
   Hx_.resize(n);
   Hl_.resize(n);
+  pair_info_.resize(n * n);
+  Q_.resize(n * n);
+  v_.resize(n * n);
+  pair_mean_.resize(n * n);
+  pair_ok_.resize(n * n);
+  lm_.resize(n);
+  c_.resize(n);
+  sums_.resize(n);
   d2_.reserve(n);
   mask_.reserve(n);
   verdicts_.reserve(n);
@@ -255,20 +263,18 @@ bool ElaGate::worse(int a, int b) const {
 void ElaGate::judge_eq16(const EkfSlam& ekf) {
   const int n = view_size();
   d2_.assign(view_.size(), 0.0);
+  if (n >= 2) prepare_eq16(ekf);
   int active = n;
   while (active >= 2) {
     int worst = -1;
-    for (int i = 0; i < n; ++i) {
-      const auto ui = static_cast<std::size_t>(i);
-      if (!mask_[ui]) continue;
-      d2_[ui] = ela_multi_d2(ekf, view_.data(), n, i, mask_.data());
-    }
+    for (int i = 0; i < n; ++i)
+      if (mask_[static_cast<std::size_t>(i)]) d2_[static_cast<std::size_t>(i)] = eq16_d2(i);
     for (int i = 0; i < n; ++i)
       if (mask_[static_cast<std::size_t>(i)] && d2_[static_cast<std::size_t>(i)] > ela_threshold_ &&
           (worst < 0 || worse(i, worst)))
         worst = i;
     if (worst < 0) break;
-    mask_[static_cast<std::size_t>(worst)] = 0;
+    set_aside_eq16(worst);
     --active;
   }
   for (int i = 0; i < n; ++i) {
@@ -279,6 +285,104 @@ void ElaGate::judge_eq16(const EkfSlam& ekf) {
       decide(i, {view_[ui].id, GateKind::kMulti, d2_[ui], ela_threshold_, mask_[ui] != 0}, false);
     }
   }
+}
+
+// Everything eq 16 needs for the view, once per frame (ela_multi_d2 spells out the
+// algebra): every neighbour's prediction of every landmark, O(n^2); each landmark's
+// sums over its neighbours and v_ij, O(n^3) in all (small 2 x 2 products).
+void ElaGate::prepare_eq16(const EkfSlam& ekf) {
+  const int n = view_size();
+  const auto N = static_cast<std::size_t>(n);
+  const Pose2 pose = ekf.pose();
+  Rt_ = rotation(pose.theta).transpose();
+  var_th_ = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
+  cos_th_ = std::cos(pose.theta);
+  sin_th_ = std::sin(pose.theta);
+  for (std::size_t j = 0; j < N; ++j) {
+    lm_[j] = ekf.landmark(view_[j].id);
+    c_[j] = heading_landmark_cov(ekf, view_[j].id) * Rt_.transpose();
+  }
+  for (std::size_t i = 0; i < N; ++i)
+    for (std::size_t j = 0; j < N; ++j) {
+      Q_[i * N + j] = Rt_ * ekf.landmark_cross_cov(view_[i].id, view_[j].id) * Rt_.transpose();
+      pair_ok_[i * N + j] = 0;
+      if (i == j) continue;
+      const LocalPrediction p = predict_from_neighbour(ekf, view_[i].id, view_[j]);
+      const Eigen::LLT<Eigen::Matrix2d> llt(p.cov);
+      if (llt.info() != Eigen::Success) continue;  // a degenerate neighbour adds no information
+      pair_info_[i * N + j] = llt.solve(Eigen::Matrix2d::Identity());
+      pair_mean_[i * N + j] = p.mean;
+      pair_ok_[i * N + j] = 1;
+    }
+  for (std::size_t i = 0; i < N; ++i) {
+    Eq16Sums& sm = sums_[i];
+    sm.Lambda.setZero();
+    sm.S1.setZero();
+    sm.S2.setZero();
+    sm.T.setZero();
+    sm.eta.setZero();
+    sm.S3.setZero();
+    sm.S4.setZero();
+    for (std::size_t j = 0; j < N; ++j) {
+      if (!pair_ok_[i * N + j]) continue;
+      const Eigen::Matrix2d& a = pair_info_[i * N + j];
+      const Eigen::Vector2d d = lm_[i] - lm_[j];
+      sm.Lambda += a;
+      sm.eta += a * pair_mean_[i * N + j];
+      sm.S1 += a * view_[j].M * a;
+      sm.S2 += Q_[i * N + j] * a;
+      sm.S3 += a * Eigen::Vector2d(-sin_th_ * d.x() + cos_th_ * d.y(), -cos_th_ * d.x() - sin_th_ * d.y());
+      sm.S4 += c_[j] * a;
+      Eigen::Matrix2d v = Eigen::Matrix2d::Zero();
+      for (std::size_t k = 0; k < N; ++k)
+        if (pair_ok_[i * N + k]) v += Q_[j * N + k] * pair_info_[i * N + k];
+      v_[i * N + j] = v;
+      sm.T += a * v;
+    }
+  }
+}
+
+// Landmark m stops shaping the others' ELAs: its terms leave every other active
+// landmark's sums, O(1) each, and v_ij, O(n) each.
+void ElaGate::set_aside_eq16(int m) {
+  const auto N = static_cast<std::size_t>(view_size());
+  const auto um = static_cast<std::size_t>(m);
+  mask_[um] = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!mask_[i] || !pair_ok_[i * N + um]) continue;
+    Eq16Sums& sm = sums_[i];
+    const Eigen::Matrix2d& a = pair_info_[i * N + um];
+    const Eigen::Vector2d d = lm_[i] - lm_[um];
+    const Eigen::Matrix2d& vm = v_[i * N + um];
+    sm.Lambda -= a;
+    sm.eta -= a * pair_mean_[i * N + um];
+    sm.S1 -= a * view_[um].M * a;
+    sm.S2 -= Q_[i * N + um] * a;
+    sm.S3 -= a * Eigen::Vector2d(-sin_th_ * d.x() + cos_th_ * d.y(), -cos_th_ * d.x() - sin_th_ * d.y());
+    sm.S4 -= c_[um] * a;
+    // T = sum_jk a_j Q_jk a_k without j = m and k = m: minus row m (a_m v_im), minus
+    // column m (its transpose), plus the (m, m) term taken twice.
+    sm.T += -a * vm - vm.transpose() * a + a * Q_[um * N + um] * a;
+    for (std::size_t j = 0; j < N; ++j)
+      if (mask_[j] && pair_ok_[i * N + j]) v_[i * N + j] -= Q_[j * N + um] * a;
+  }
+}
+
+// Eq 16's d2 of landmark i from its sums (the same as ela_multi_d2 with mask_).
+double ElaGate::eq16_d2(int i) const {
+  const auto ui = static_cast<std::size_t>(i);
+  const Eq16Sums& sm = sums_[ui];
+  const Eigen::LLT<Eigen::Matrix2d> llt(sm.Lambda);
+  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  const Eigen::Matrix2d F = llt.solve(Eigen::Matrix2d::Identity());
+  const Eigen::Vector2d residual = view_[ui].m - F * sm.eta;
+  const Eigen::Matrix2d cross = sm.S2 * F.transpose();
+  Eigen::Matrix2d cov = view_[ui].M + F * sm.S1 * F.transpose() + Q_[ui * static_cast<std::size_t>(view_size()) + ui] -
+                        cross - cross.transpose() + F * sm.T * F.transpose();
+  const Eigen::Vector2d J = F * sm.S3;
+  const Eigen::Matrix2d th_cross = J * (c_[ui] - sm.S4 * F.transpose());
+  cov += var_th_ * J * J.transpose() + th_cross + th_cross.transpose();
+  return mahalanobis2(residual, 0.5 * (cov + cov.transpose()));
 }
 
 // The joint covariance of the landmarks' innovations against the prior, for the

@@ -218,6 +218,54 @@ void judge(ElaGate* gate, LMap* lmap, const EkfSlam& ekf, const Pose2& truth,
   gate->judge_view(ekf, lmap);
 }
 
+// ElaGate computes eq 16 for the whole view at once and sets landmarks aside by
+// subtracting their terms (O(n^2) each, not a new O(n^3) pass): the same d2 and
+// verdicts as ela_multi_d2 pass by pass, on views with several movers.
+TEST(ElaGateFrame, TheIncrementalEq16IsEq16PassByPass) {
+  for (int seed = 1; seed <= 6; ++seed) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+    const Pose2 pose{0.2, -0.1, 0.4};
+    auto lms = test::ring(12, 4.0);
+    EkfSlam ekf(test::filter_options());
+    ekf.reset(pose, Eigen::Vector3d(1e-4, 1e-4, 1e-3).asDiagonal());
+    for (int i = 0; i < 12; ++i) ekf.add_landmark(i, observe(pose, lms[static_cast<std::size_t>(i)]));
+    ekf.predict({0.2, 0.0, 0.02}, Eigen::Vector3d(1e-3, 1e-3, 1e-4).asDiagonal());
+    std::uniform_real_distribution<double> u(-0.6, 0.6);
+    for (int k = 0; k < seed % 4 + 1; ++k) lms[static_cast<std::size_t>(3 * k + seed % 3)] += Eigen::Vector2d(u(rng), u(rng));
+    const Pose2 truth = ekf.pose();
+    ElaGate gate(test::robot_options(Mode::kEla));
+    LMap lmap(64);
+    judge(&gate, &lmap, ekf, truth, lms, test::all_ids(12));
+    // The reference: ela_multi_d2 for every active landmark, the worst set aside.
+    std::vector<InView> view;
+    for (int k = 0; k < 12; ++k) view.push_back(gate.in_view(k));
+    std::vector<std::uint8_t> mask(12, 1);
+    std::vector<double> d2(12, 0.0);
+    int active = 12;
+    while (active >= 2) {
+      int worst = -1;
+      for (int i = 0; i < 12; ++i)
+        if (mask[static_cast<std::size_t>(i)]) d2[static_cast<std::size_t>(i)] = ela_multi_d2(ekf, view.data(), 12, i, mask.data());
+      for (int i = 0; i < 12; ++i)
+        if (mask[static_cast<std::size_t>(i)] && d2[static_cast<std::size_t>(i)] > kThreshold &&
+            (worst < 0 || d2[static_cast<std::size_t>(i)] > d2[static_cast<std::size_t>(worst)]))
+          worst = i;
+      if (worst < 0) break;
+      mask[static_cast<std::size_t>(worst)] = 0;
+      --active;
+    }
+    int outside = 0;
+    for (int k = 0; k < 12; ++k) {
+      const GateRecord& g = gate.records()[static_cast<std::size_t>(k)];
+      ASSERT_EQ(g.kind, GateKind::kMulti) << seed;
+      EXPECT_NEAR(g.d2, d2[static_cast<std::size_t>(k)], 1e-9 * std::max(1.0, d2[static_cast<std::size_t>(k)])) << seed << " " << k;
+      EXPECT_EQ(gate.verdict(k).inside, mask[static_cast<std::size_t>(k)] != 0) << seed << " " << k;
+      outside += !gate.verdict(k).inside;
+    }
+    EXPECT_GE(outside, 1) << seed;  // the movers were set aside: the passes were exercised
+  }
+}
+
 TEST(ElaGateFrame, OneVerdictAndOneRecordPerLandmarkInViewEq16) {
   const Pose2 pose{0.0, 0.0, 0.3};
   auto lms = test::ring(8, 4.0);

@@ -127,6 +127,9 @@ class ElaGate {
 
  private:
   void judge_eq16(const EkfSlam& ekf);
+  void prepare_eq16(const EkfSlam& ekf);
+  void set_aside_eq16(int m);
+  double eq16_d2(int i) const;
   void judge_consensus(const EkfSlam& ekf);
   void set_joint_prior(const EkfSlam& ekf);
   void judge_drift(LMap* lmap);
@@ -151,6 +154,23 @@ class ElaGate {
   std::vector<GateRecord> records_;  // view first, then candidates / classic observations
   std::vector<Eigen::Matrix<double, 2, 3>> Hx_;  // per landmark in view: the observation's Jacobians
   std::vector<Eigen::Matrix2d> Hl_;
+  // Eq 16 for the whole view at once (judge_eq16; the same numbers as ela_multi_d2):
+  // per pair (i, j), row-major n x n: neighbour j's prediction of i (information and
+  // mean), Q_ij = R^T P_ij R, and v_ij = sum_k Q_jk info_ik over i's neighbours; per
+  // landmark, the sums its residual's covariance is made of. Setting a landmark
+  // aside subtracts its terms: O(n^2) per set-aside instead of a new O(n^3) pass.
+  struct Eq16Sums {
+    Eigen::Matrix2d Lambda, S1, S2, T;  // sum info; info M info; Q_ij info; sum_jk info Q info
+    Eigen::Vector2d eta, S3;            // sum info mean; sum info J
+    Eigen::RowVector2d S4;              // sum c_j info
+  };
+  std::vector<Eigen::Matrix2d> pair_info_, Q_, v_;
+  std::vector<Eigen::Vector2d> pair_mean_, lm_;
+  std::vector<std::uint8_t> pair_ok_;
+  std::vector<Eigen::RowVector2d> c_;  // P_th,lj R
+  std::vector<Eq16Sums> sums_;
+  Eigen::Matrix2d Rt_ = Eigen::Matrix2d::Identity();
+  double var_th_ = 0.0, cos_th_ = 1.0, sin_th_ = 0.0;
 };
 
 }  // namespace elaslam
