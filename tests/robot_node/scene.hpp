@@ -57,6 +57,32 @@ inline EkfSlam mapped_filter(const Pose2& pose, const std::vector<Eigen::Vector2
   return ekf;
 }
 
+/// True worlds drawn from a filter's own distribution, x = mean + chol(P) n: for
+/// tests of the gates' false-alarm rates (a consistent filter's tests fire at their
+/// nominal rate on such draws). Landmarks by id 0..n-1.
+class WorldSampler {
+ public:
+  WorldSampler(const EkfSlam& ekf, int num_landmarks)
+      : ekf_(ekf), n_(num_landmarks), mean_(ekf.mean()), L_(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance()).matrixL()) {}
+  /// One draw: the true pose, the true landmarks, and the whole state x.
+  void draw(std::mt19937_64* rng, Pose2* pose, std::vector<Eigen::Vector2d>* landmarks, Eigen::VectorXd* x = nullptr) const {
+    std::normal_distribution<double> n01;
+    Eigen::VectorXd n(mean_.size());
+    for (Eigen::Index i = 0; i < n.size(); ++i) n[i] = n01(*rng);
+    const Eigen::VectorXd s = mean_ + L_ * n;
+    *pose = Pose2{s[0], s[1], s[2]};
+    landmarks->clear();
+    for (int i = 0; i < n_; ++i) landmarks->push_back(s.segment<2>(StateLayout::landmark_offset(ekf_.slot_of(i))));
+    if (x) *x = s;
+  }
+
+ private:
+  const EkfSlam& ekf_;
+  int n_;
+  Eigen::VectorXd mean_;
+  Eigen::MatrixXd L_;
+};
+
 /// One frame seen from `truth` with odometer reading `odometer`; `noise` adds
 /// Gaussian range/bearing noise (sigmas of the filter options) when given.
 inline FrameInput frame_from(int frame, const Pose2& truth, const Pose2& odometer,

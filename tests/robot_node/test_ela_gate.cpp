@@ -47,20 +47,14 @@ TEST(ElaGate, StaticLandmarksFlaggedAtAboutTheGateRate) {
   EkfSlam ekf = test::mapped_filter(pose, lms);
   // Some odometry so that the robot's own uncertainty matters too.
   ekf.predict({0.5, 0.0, 0.05}, Eigen::Vector3d(4e-4, 4e-4, 1e-4).asDiagonal());
-  const Eigen::MatrixXd P = ekf.covariance();
-  const Eigen::VectorXd mean = ekf.mean();
-  const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(P).matrixL();
+  const test::WorldSampler sampler(ekf, 6);
   std::mt19937_64 rng(5);
-  std::normal_distribution<double> n01;
   int single_flags = 0, multi_flags = 0, tests = 0;
   const int draws = 4000;
+  Pose2 truth;
+  std::vector<Eigen::Vector2d> true_lms;
   for (int d = 0; d < draws; ++d) {
-    Eigen::VectorXd n(mean.size());
-    for (Eigen::Index i = 0; i < n.size(); ++i) n[i] = n01(rng);
-    const Eigen::VectorXd x = mean + L * n;
-    const Pose2 truth{x[0], x[1], x[2]};
-    std::vector<Eigen::Vector2d> true_lms;
-    for (int i = 0; i < 6; ++i) true_lms.push_back(x.segment<2>(StateLayout::landmark_offset(ekf.slot_of(i))));
+    sampler.draw(&rng, &truth, &true_lms);
     const auto view = view_of(ekf, truth, true_lms, &rng);
     for (int i = 0; i < 6; ++i, ++tests) {
       single_flags += ekf.check(view[static_cast<std::size_t>(i)].id, view[static_cast<std::size_t>(i)].z).d2 > kThreshold;
@@ -98,18 +92,13 @@ TEST(ElaGate, StaticLandmarksFlaggedAtTheGateRateUnderHeadingUncertainty) {
   const Eigen::Matrix<double, 3, 2> Prl = ekf.pose_landmark_cov(0);
   const double corr = Prl.row(2).norm() / std::sqrt(P(2, 2) * ekf.landmark_cov(0).trace());
   EXPECT_GT(corr, 0.5);
-  const Eigen::VectorXd mean = ekf.mean();
-  const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(P).matrixL();
+  const test::WorldSampler sampler(ekf, 6);
   std::mt19937_64 rng(11);
-  std::normal_distribution<double> n01;
   int multi_flags = 0, pair_flags = 0, tests = 0, pairs = 0;
+  Pose2 truth;
+  std::vector<Eigen::Vector2d> true_lms;
   for (int d = 0; d < 6000; ++d) {
-    Eigen::VectorXd n(mean.size());
-    for (Eigen::Index i = 0; i < n.size(); ++i) n[i] = n01(rng);
-    const Eigen::VectorXd x = mean + L * n;
-    const Pose2 truth{x[0], x[1], x[2]};
-    std::vector<Eigen::Vector2d> true_lms;
-    for (int i = 0; i < 6; ++i) true_lms.push_back(x.segment<2>(StateLayout::landmark_offset(ekf.slot_of(i))));
+    sampler.draw(&rng, &truth, &true_lms);
     const auto view = view_of(ekf, truth, true_lms, &rng);
     for (int i = 0; i < 6; ++i, ++tests) multi_flags += ela_multi_d2(ekf, view.data(), 6, i) > kThreshold;
     for (int i = 0; i < 6; i += 2, ++pairs)  // disjoint pairs: independent within a draw

@@ -274,6 +274,31 @@ TEST(DriftTest, StaticLandmarksAreNotFlaggedByTheDriftTest) {
   for (int id = 0; id < 6; ++id) EXPECT_EQ(r.lmap()[id].status, LandmarkStatus::kStatic);
 }
 
+// The paper's robots (config/paper.yaml, mode ela) in a static world, seeds
+// first..last, every frame to every node; `tune` edits the config first, `each`
+// sees every node after each of its frames.
+template <class Tune, class Each>
+void static_paper_world(int first, int last, Tune tune, Each each) {
+  for (int seed = first; seed <= last; ++seed) {
+    TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+    c.robot.mode = Mode::kEla;
+    c.scenario.seed = static_cast<std::uint64_t>(seed);
+    c.scenario.dynamism_percent = 0.0;
+    tune(&c);
+    sim::World world(c.scenario);
+    std::vector<RobotNode> nodes;
+    for (int i = 0; i < world.num_robots(); ++i) nodes.emplace_back(c.robot, world.sensor_frame(i).robot_id);
+    for (int k = 0; k < c.scenario.frames; ++k) {
+      if (k > 0) world.step();
+      for (int i = 0; i < world.num_robots(); ++i) {
+        RobotNode& n = nodes[static_cast<std::size_t>(i)];
+        n.on_sensor(sim::to_message(world.sensor_frame(i), k), 0);
+        each(n, k == c.scenario.frames - 1);
+      }
+    }
+  }
+}
+
 // Issue 16: the candidate's drift test sums its whitened innovations over its
 // consistent sightings, and a candidate is refined by landmark-only (Schmidt)
 // updates, under which the innovations need not be white (they share the pose's
@@ -285,27 +310,14 @@ TEST(DriftTest, StaticLandmarksAreNotFlaggedByTheDriftTest) {
 // 1.30 %, candidate drift test 0.40 % (conservative), static tests 0.99 %.
 TEST(DriftTest, InAStaticWorldNoTestFiresAboveItsNominalRate) {
   long cand = 0, cand_fail = 0, drift_fail = 0, stat = 0, stat_fail = 0;
-  for (int seed = 101; seed <= 120; ++seed) {
-    TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-    c.robot.mode = Mode::kEla;
-    c.scenario.seed = static_cast<std::uint64_t>(seed);
-    c.scenario.dynamism_percent = 0.0;
-    sim::World world(c.scenario);
-    std::vector<RobotNode> nodes;
-    for (int i = 0; i < world.num_robots(); ++i) nodes.emplace_back(c.robot, world.sensor_frame(i).robot_id);
-    for (int k = 0; k < c.scenario.frames; ++k) {
-      if (k > 0) world.step();
-      for (int i = 0; i < world.num_robots(); ++i) {
-        nodes[static_cast<std::size_t>(i)].on_sensor(sim::to_message(world.sensor_frame(i), k), 0);
-        for (const GateRecord& g : nodes[static_cast<std::size_t>(i)].robot().gate_records()) {
-          if (g.kind == GateKind::kCandidate) ++cand, cand_fail += !g.inside;
-          if (g.kind == GateKind::kCandidateDrift) ++cand, ++drift_fail;
-          if (g.kind == GateKind::kMulti || g.kind == GateKind::kInnovation || g.kind == GateKind::kDrift)
-            ++stat, stat_fail += !g.inside;
-        }
-      }
+  static_paper_world(101, 120, [](TeamConfig*) {}, [&](const RobotNode& n, bool) {
+    for (const GateRecord& g : n.robot().gate_records()) {
+      if (g.kind == GateKind::kCandidate) ++cand, cand_fail += !g.inside;
+      if (g.kind == GateKind::kCandidateDrift) ++cand, ++drift_fail;
+      if (g.kind == GateKind::kMulti || g.kind == GateKind::kInnovation || g.kind == GateKind::kDrift)
+        ++stat, stat_fail += !g.inside;
     }
-  }
+  });
   const double nominal = 1.0 - load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml").robot.ela_gate_probability;
   const auto limit = [nominal](long n) { return nominal + 4.0 * std::sqrt(nominal * (1.0 - nominal) / static_cast<double>(n)); };
   ASSERT_GT(cand, 2000);
@@ -553,27 +565,16 @@ TEST(Consistency, TheNodeRaisesFaultInconsistentAndAlertsOnce) {
 // found; so config/paper.yaml leaves it off, docs/decisions.md.)
 TEST(Consistency, InAStaticWorldTheMonitorStaysQuiet) {
   long frames = 0, inconsistent = 0;
-  for (int seed = 101; seed <= 110; ++seed) {
-    TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-    c.robot.mode = Mode::kEla;
-    c.robot.consistency_window_frames = 50;
-    c.robot.consistency_probability = 0.9999;
-    c.scenario.seed = static_cast<std::uint64_t>(seed);
-    c.scenario.dynamism_percent = 0.0;
-    sim::World world(c.scenario);
-    std::vector<RobotNode> nodes;
-    for (int i = 0; i < world.num_robots(); ++i) nodes.emplace_back(c.robot, world.sensor_frame(i).robot_id);
-    for (int k = 0; k < c.scenario.frames; ++k) {
-      if (k > 0) world.step();
-      for (int i = 0; i < world.num_robots(); ++i)
-        nodes[static_cast<std::size_t>(i)].on_sensor(sim::to_message(world.sensor_frame(i), k), 0);
-    }
-    for (const RobotNode& n : nodes) {
-      frames += n.counters().frames;
-      inconsistent += n.counters().inconsistent_frames;
-      EXPECT_EQ(n.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
-    }
-  }
+  const auto tune = [](TeamConfig* c) {
+    c->robot.consistency_window_frames = 50;
+    c->robot.consistency_probability = 0.9999;
+  };
+  static_paper_world(101, 110, tune, [&](const RobotNode& n, bool last) {
+    if (!last) return;
+    frames += n.counters().frames;
+    inconsistent += n.counters().inconsistent_frames;
+    EXPECT_EQ(n.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  });
   EXPECT_EQ(frames, 4500);
   EXPECT_LE(inconsistent, frames / 200);
 }
