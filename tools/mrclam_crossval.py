@@ -29,6 +29,10 @@ import re
 import subprocess
 import sys
 
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import add_version, parse_args  # noqa: E402  (standard library only)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_FOLDS = "1,2,3/4,5 4,5/1,2,3 1,3,5/2,4 2,4/1,3,5"
 
@@ -98,7 +102,8 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "mrclam_crossval"))
     ap.add_argument("--folds", default=DEFAULT_FOLDS)
     ap.add_argument("--modes", default="ela")
-    a = ap.parse_args()
+    add_version(ap)
+    a = parse_args(ap)
     try:
         folds = parse_folds(a.folds)
     except ValueError as e:
