@@ -17,6 +17,8 @@
 # - --ledger: where the ledger lives (default results/fuzz_campaign/): one line per
 #   chunk in <target>.tsv: UTC time, commit, executions, exec/s, corpus, result.
 # - --status: print the totals and exit.
+# To pause it, kill it (it resumes from the ledger and the corpus); do not SIGSTOP a
+# chunk (the watchdog then reports a false timeout: mark that line's result "void:...").
 # Exit 0 when every target reached the goal clean, 1 when a chunk failed (its
 # artefact is in DIR/artifacts/; the campaign stops there, and goes on for that
 # target once the commit has changed: the fix), 2 bad arguments. Executions of
@@ -51,8 +53,11 @@ mkdir -p "$LEDGER" || die "cannot create $LEDGER"
 
 total() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' '{ s += $3 } END { print s + 0 }' "$LEDGER/$1.tsv" || echo 0; }
 # A failed chunk stops the campaign for its target until the commit changes (the fix).
-failed_before() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' -v c="$commit" '$6 != "clean" && $2 == c { f = 1 } END { exit !f }' "$LEDGER/$1.tsv"; }
-failures() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' '$6 != "clean" { n++ } END { print n + 0 }' "$LEDGER/$1.tsv" || echo 0; }
+# A result beginning with "void" marks a chunk whose failure was not the code's (a
+# chunk stopped with SIGSTOP: libFuzzer's watchdog counts wall time and reports the
+# input under way as a timeout); its executions still count.
+failed_before() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' -v c="$commit" '$6 ~ /^FAILED/ && $2 == c { f = 1 } END { exit !f }' "$LEDGER/$1.tsv"; }
+failures() { [ -f "$LEDGER/$1.tsv" ] && awk -F'\t' '$6 ~ /^FAILED/ { n++ } END { print n + 0 }' "$LEDGER/$1.tsv" || echo 0; }
 report() {
   printf '%-18s %14s %8s  %s\n' target executions chunks result
   for t in $TARGETS; do
