@@ -514,12 +514,8 @@ int evaluate_main(int argc, char** argv) {
   TeamConfig file_config;
   if (!a.config.empty()) file_config = load_team_config(a.config);
   LogData d;
-  try {
-    d.auth = open_log_auth(a.key_file, a.config, a.channel_suffix, &d.key_file);
-  } catch (const std::runtime_error& e) {
-    std::fprintf(stderr, "evaluate: %s\n", e.what());
+  if (!open_log_auth(a.key_file, a.config, a.channel_suffix, "evaluate", &d.auth, &d.key_file))
     return cli::kExitBadInput;
-  }
   std::string why;
   if (!read_log(a.log_path, a.channel_suffix, &d, &why)) {
     std::fprintf(stderr, "evaluate: %s\n", why.c_str());

@@ -8,6 +8,7 @@
 // not an LCM log (the reason on stderr).
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -33,9 +34,11 @@ int log_info_main(int argc, char** argv) {
   std::string suffix;
   app.add_option("--channel-suffix", suffix, "the team's channel suffix (which sender owns which channel)");
   if (const int rc = elaslam::cli::parse(app, argc, argv); rc >= 0) return rc;
+  std::string used_key;
+  std::unique_ptr<elaslam::LogAuth> auth;
+  if (!elaslam::open_log_auth(key_file, config, suffix, "log_info", &auth, &used_key))
+    return elaslam::cli::kExitBadInput;
   try {
-    std::string used_key;
-    const auto auth = elaslam::open_log_auth(key_file, config, suffix, &used_key);
     const elaslam::LogSummary s = elaslam::summarize_log(path, auth.get(), used_key);
     if (json)
       std::cout << elaslam::to_json(s).dump(2) << "\n";

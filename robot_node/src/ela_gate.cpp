@@ -22,6 +22,11 @@ double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C) {
   return r.dot(inv * r);
 }
 
+// d/dth of R(th)^T d = [-s c; -c -s] d (c, s: cos and sin of th).
+Eigen::Vector2d heading_jacobian(double c, double s, const Eigen::Vector2d& d) {
+  return {-s * d.x() + c * d.y(), -c * d.x() - s * d.y()};
+}
+
 // The heading's covariance with landmark `id`: row theta of P_Rl.
 Eigen::RowVector2d heading_landmark_cov(const EkfSlam& ekf, int id) {
   return ekf.pose_landmark_cov(id).row(StateLayout::kTheta);
@@ -46,8 +51,7 @@ LocalPrediction rotate_into_body(const EkfSlam& ekf, const Eigen::Vector2d& d_W,
   const double var_th = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
   const Eigen::Matrix2d Rt = rotation(pose.theta).transpose();
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
-  // d/dth of R(th)^T d = [-s c; -c -s] d
-  const Eigen::Vector2d J(-s * d_W.x() + c * d_W.y(), -c * d_W.x() - s * d_W.y());
+  const Eigen::Vector2d J = heading_jacobian(c, s, d_W);
   const Eigen::Matrix2d cross = J * (c_W * Rt.transpose());  // J Cov(th, d) R
   LocalPrediction p;
   p.mean = Rt * d_W;
@@ -151,7 +155,7 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
     const Eigen::Matrix2d& Aj = A[uj];
     cov += Wj * view[j].M * Wj.transpose();
     const Eigen::Vector2d d = ekf.landmark(view[i].id) - ekf.landmark(view[j].id);
-    J += Wj * Eigen::Vector2d(-s * d.x() + c * d.y(), -c * d.x() - s * d.y());
+    J += Wj * heading_jacobian(c, s, d);
     const Eigen::Matrix2d cross = Rt * ekf.landmark_cross_cov(view[i].id, view[j].id) * Aj.transpose();
     map_cov -= cross + cross.transpose();  // - R^T P_ij A_j^T - A_j P_ji R
     th_l -= heading_landmark_cov(ekf, view[j].id) * Aj.transpose();
@@ -326,12 +330,11 @@ void ElaGate::prepare_eq16(const EkfSlam& ekf) {
     for (std::size_t j = 0; j < N; ++j) {
       if (!pair_ok_[i * N + j]) continue;
       const Eigen::Matrix2d& a = pair_info_[i * N + j];
-      const Eigen::Vector2d d = lm_[i] - lm_[j];
       sm.Lambda += a;
       sm.eta += a * pair_mean_[i * N + j];
       sm.S1 += a * view_[j].M * a;
       sm.S2 += Q_[i * N + j] * a;
-      sm.S3 += a * Eigen::Vector2d(-sin_th_ * d.x() + cos_th_ * d.y(), -cos_th_ * d.x() - sin_th_ * d.y());
+      sm.S3 += a * heading_jacobian(cos_th_, sin_th_, lm_[i] - lm_[j]);
       sm.S4 += c_[j] * a;
       Eigen::Matrix2d v = Eigen::Matrix2d::Zero();
       for (std::size_t k = 0; k < N; ++k)
@@ -352,13 +355,12 @@ void ElaGate::set_aside_eq16(int m) {
     if (!mask_[i] || !pair_ok_[i * N + um]) continue;
     Eq16Sums& sm = sums_[i];
     const Eigen::Matrix2d& a = pair_info_[i * N + um];
-    const Eigen::Vector2d d = lm_[i] - lm_[um];
     const Eigen::Matrix2d& vm = v_[i * N + um];
     sm.Lambda -= a;
     sm.eta -= a * pair_mean_[i * N + um];
     sm.S1 -= a * view_[um].M * a;
     sm.S2 -= Q_[i * N + um] * a;
-    sm.S3 -= a * Eigen::Vector2d(-sin_th_ * d.x() + cos_th_ * d.y(), -cos_th_ * d.x() - sin_th_ * d.y());
+    sm.S3 -= a * heading_jacobian(cos_th_, sin_th_, lm_[i] - lm_[um]);
     sm.S4 -= c_[um] * a;
     // T = sum_jk a_j Q_jk a_k without j = m and k = m: minus row m (a_m v_im), minus
     // column m (its transpose), plus the (m, m) term taken twice.

@@ -1,9 +1,8 @@
 #include "elaslam/team/log_auth.hpp"
 
-#include <stdexcept>
+#include <memory>
 
 #include "elaslam/common/channels.hpp"
-#include "elaslam/common/config.hpp"
 #include "elaslam/transport/process.hpp"
 
 namespace elaslam {
@@ -37,22 +36,16 @@ nlohmann::json LogAuth::to_json(const std::string& key_file) const {
   return j;
 }
 
-std::unique_ptr<LogAuth> open_log_auth(const std::string& key_file_option, const std::string& config_path,
-                                       const std::string& suffix, std::string* key_file) {
+bool open_log_auth(const std::string& key_file_option, const std::string& config_path, const std::string& suffix,
+                   const std::string& who, std::unique_ptr<LogAuth>* auth, std::string* key_file) {
   transport::TransportArgs args;
   args.key_file = key_file_option;
   args.channel_suffix = suffix;
-  std::string origin;
-  try {
-    *key_file = transport::team_key_file(args, config_path, &origin);
-  } catch (const config::ConfigError& e) {
-    throw std::runtime_error(e.what());
-  }
-  if (key_file->empty()) return nullptr;
   transport::TeamKey key;
-  std::string why;
-  if (!transport::load_team_key(*key_file, &key, &why)) throw std::runtime_error(why + " (" + origin + ")");
-  return std::make_unique<LogAuth>(key, suffix);
+  std::string origin;
+  if (!transport::configured_team_key(args, config_path, who, &key, key_file, &origin)) return false;
+  auth->reset(key.empty() ? nullptr : new LogAuth(key, suffix));
+  return true;
 }
 
 }  // namespace elaslam

@@ -45,10 +45,11 @@ class LogAuth {
 };
 
 /// The key of --key-file, else of the config's team.key_file (`config_path`, "" for
-/// none): nullptr when none is configured; throws std::runtime_error naming the file
-/// and the reason when it cannot be used (a bad team: section, a key file others can
-/// read, ...). *key_file: the path used.
-std::unique_ptr<LogAuth> open_log_auth(const std::string& key_file_option, const std::string& config_path,
-                                       const std::string& suffix, std::string* key_file);
+/// none), found and checked as the processes do (transport::configured_team_key):
+/// *auth null when none is configured. False, after printing why to stderr as `who`
+/// (a bad team: section, a key file others can read, ...), when it cannot be used.
+/// *key_file: the path used.
+bool open_log_auth(const std::string& key_file_option, const std::string& config_path, const std::string& suffix,
+                   const std::string& who, std::unique_ptr<LogAuth>* auth, std::string* key_file);
 
 }  // namespace elaslam
