@@ -166,6 +166,15 @@ void final_line(const RobotNode& node) {
                (long long)c.filter_faults, (long long)c.events_sent, (long long)c.notices_applied,
                node.robot().filter().num_landmarks(), (long long)node.processing().quantile(0.5),
                (long long)node.processing().quantile(0.99), (long long)node.processing().max());
+  if (node.robot().options().team_map_fuse) {  // robot.team_map: what the other robots' map did
+    const TeamCounters& t = node.robot().team_counters();
+    std::fprintf(stderr,
+                 "robot_node %d: team_map chunks=%lld stale=%lld offered=%lld fused=%lld gated=%lld refused=%lld "
+                 "mean_nis=%.2f\n",
+                 node.robot_id(), (long long)c.team_map_chunks, (long long)c.team_map_stale, (long long)t.offered,
+                 (long long)t.fused, (long long)t.gated, (long long)t.refused,
+                 t.fused > 0 ? t.nis_sum / static_cast<double>(t.fused) : 0.0);
+  }
 }
 
 int run(const Args& a) {

@@ -98,6 +98,13 @@ std::vector<std::string> check_shared_config(const std::string& path) {
       if (section["limits"] && section["limits"]["team"]) parse_team(section["limits"]["team"].as<std::string>(), &mask, &why);
       return mask;
     };
+    const YAML::Node fuse = robot["team_map"] ? robot["team_map"]["fuse"] : YAML::Node();
+    const YAML::Node period = main["team_map_period_frames"];
+    if (fuse && fuse.IsScalar() && fuse.as<std::string>() == "true" &&
+        !(period && period.IsScalar() && period.as<long long>() > 0))
+      problems.push_back("robot.team_map.fuse is on but main.team_map_period_frames is " +
+                         (period && period.IsScalar() ? period.as<std::string>() : std::string("absent (0)")) +
+                         ": main_robot would never send the robots the team map");
     if (team(robot) != team(main))
       problems.push_back("robot.limits.team (" + team_text(team(robot)) + ") and main.limits.team (" + team_text(team(main)) +
                          ") differ: one side would refuse the other's robots");

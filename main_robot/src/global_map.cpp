@@ -23,6 +23,7 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   int seq_jump = static_cast<int>(o->max_seq_jump);
   r.read_optional("max_seq_jump", &seq_jump, 1, 1 << 30);
   o->max_seq_jump = seq_jump;
+  r.read_optional("team_map_period_frames", &o->team_map_period_frames, 0, 100000);
   parse(r, &o->limits);
 }
 
@@ -103,26 +104,50 @@ int GlobalMap::count(GlobalStatus s) const {
 // are not quite (robots that share a map share its errors), so covariance
 // intersection is the conservative option. Its weights follow the fast
 // trace-based rule w_r ~ 1/tr(C_r) (Niehsen 2002) rather than an optimisation.
-void GlobalMap::fuse(GlobalEntry& g) const {
+namespace {
+
+// Information fusion of the valid estimates but robot `skip`'s (0: none), or their
+// covariance intersection with weights by trace. False when none is usable.
+bool fuse_estimates(const std::array<RobotEstimate, kMaxTeamRobots>& by_robot, Fusion fusion, int skip,
+                    Eigen::Vector2d* position, Eigen::Matrix2d* cov) {
   Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
   Eigen::Vector2d eta = Eigen::Vector2d::Zero();
   double wsum = 0.0;
-  for (const auto& e : g.by_robot)
-    if (e.valid) wsum += 1.0 / std::max(e.cov.trace(), 1e-12);
-  for (const auto& e : g.by_robot) {
-    if (!e.valid) continue;
+  for (std::size_t r = 0; r < by_robot.size(); ++r)
+    if (by_robot[r].valid && static_cast<int>(r) + 1 != skip) wsum += 1.0 / std::max(by_robot[r].cov.trace(), 1e-12);
+  for (std::size_t r = 0; r < by_robot.size(); ++r) {
+    const RobotEstimate& e = by_robot[r];
+    if (!e.valid || static_cast<int>(r) + 1 == skip) continue;
     const Eigen::LLT<Eigen::Matrix2d> llt(e.cov);
     if (llt.info() != Eigen::Success) continue;
     double w = 1.0;
-    if (options_.fusion == Fusion::kCovarianceIntersection) w = (1.0 / std::max(e.cov.trace(), 1e-12)) / wsum;
+    if (fusion == Fusion::kCovarianceIntersection) w = (1.0 / std::max(e.cov.trace(), 1e-12)) / wsum;
     const Eigen::Matrix2d Ci = w * llt.solve(Eigen::Matrix2d::Identity());
     info += Ci;
     eta += Ci * e.position;
   }
   const Eigen::LLT<Eigen::Matrix2d> llt(info);
-  if (llt.info() != Eigen::Success) return;  // no usable estimate: keep the last fused one
-  g.fused_cov = llt.solve(Eigen::Matrix2d::Identity());
-  g.fused = g.fused_cov * eta;
+  if (llt.info() != Eigen::Success) return false;
+  *cov = llt.solve(Eigen::Matrix2d::Identity());
+  *position = *cov * eta;
+  return true;
+}
+
+}  // namespace
+
+void GlobalMap::fuse(GlobalEntry& g) const {
+  // No usable estimate: keep the last fused one.
+  fuse_estimates(g.by_robot, options_.fusion, 0, &g.fused, &g.fused_cov);
+}
+
+bool GlobalMap::fused_without(int id, int robot_id, Eigen::Vector2d* position, Eigen::Matrix2d* cov) const {
+  if (id < 0 || id >= max_landmark_id()) return false;
+  Eigen::Vector2d p;
+  Eigen::Matrix2d C;
+  if (!fuse_estimates(entries_[static_cast<std::size_t>(id)].by_robot, options_.fusion, robot_id, &p, &C)) return false;
+  *position = p;
+  *cov = C;
+  return true;
 }
 
 void GlobalMap::remove_as_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed) {

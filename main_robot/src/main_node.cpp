@@ -340,12 +340,33 @@ int MainNode::finished_frame(int robot_id, int frame) {
 }
 
 int MainNode::make_global_map(std::int64_t now_utime, int frame) {
+  const int n = make_map_chunks(now_utime, frame, 0);
+  ++counters_.maps_published;
+  return n;
+}
+
+int MainNode::make_team_map(int robot_id, std::int64_t now_utime, int frame) {
+  if (robot_id < 1 || robot_id > kMaxTeamRobots) return 0;
+  const int n = make_map_chunks(now_utime, frame, robot_id);
+  ++counters_.team_maps_published;
+  return n;
+}
+
+// GLOBAL_MAP (exclude_robot 0): the fused map and the moving set. TEAM_MAP_<r>
+// (exclude_robot r): per STATIC landmark, the fusion of the other robots' estimates
+// (those r alone holds are left out), and no moving set (GLOBAL_MAP carries it).
+int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot) {
   static_ids_.clear();
   moving_ids_.clear();
+  const int own_bit = exclude_robot > 0 ? 1 << (exclude_robot - 1) : 0;
+  Eigen::Vector2d p;
+  Eigen::Matrix2d C;
   for (int id = 0; id < map_.max_landmark_id(); ++id) {
-    const GlobalStatus st = map_.entry(id).status;
-    if (st == GlobalStatus::kStatic) static_ids_.push_back(id);
-    else if (st == GlobalStatus::kMoving) moving_ids_.push_back(id);
+    const GlobalEntry& g = map_.entry(id);
+    // A team map holds only what another robot's usable estimate gives.
+    if (g.status == GlobalStatus::kStatic && (exclude_robot == 0 || map_.fused_without(id, exclude_robot, &p, &C)))
+      static_ids_.push_back(id);
+    else if (g.status == GlobalStatus::kMoving && exclude_robot == 0) moving_ids_.push_back(id);
   }
   cut_chunks(static_ids_.data(), static_cast<int>(static_ids_.size()), moving_ids_.data(),
              static_cast<int>(moving_ids_.size()), chunk_sizes_, map_.max_landmark_id(), &spans_);
@@ -370,13 +391,16 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
     for (int i = 0; i < sp.count_a; ++i) {
       const int id = static_ids_[static_cast<std::size_t>(sp.first_a + i)];
       const GlobalEntry& g = map_.entry(id);
+      p = g.fused;
+      C = g.fused_cov;
+      if (exclude_robot > 0) map_.fused_without(id, exclude_robot, &p, &C);  // true: it was selected so
       global_landmark_t& l = c.landmarks[static_cast<std::size_t>(i)];
       l.id = id;
-      l.x = g.fused.x();
-      l.y = g.fused.y();
+      l.x = p.x();
+      l.y = p.y();
       for (int r = 0; r < 2; ++r)
-        for (int q = 0; q < 2; ++q) l.cov[r][q] = g.fused_cov(r, q);
-      l.contributors = static_cast<std::int16_t>(g.contributors());
+        for (int q = 0; q < 2; ++q) l.cov[r][q] = C(r, q);
+      l.contributors = static_cast<std::int16_t>(g.contributors() & ~own_bit);
       l.status = global_landmark_t::STATIC;
       l.status_frame = g.status_frame;
     }
@@ -390,8 +414,14 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
       c.moving_by[j] = static_cast<std::int16_t>(g.moving_unconfirmed ? 0 : g.moving_by);
     }
   }
-  ++counters_.maps_published;
   return n;
+}
+
+bool MainNode::team_map_due(int frame) {
+  const int period = map_.options().team_map_period_frames;
+  if (period <= 0 || frame < 0 || frame % period != 0 || frame <= team_map_frame_) return false;
+  team_map_frame_ = frame;
+  return true;
 }
 
 node_status_t MainNode::status_msg(std::int64_t now_utime) const {

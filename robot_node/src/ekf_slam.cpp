@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include "ekf_kernels.hpp"
@@ -269,6 +270,73 @@ UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   P_.block<kL, kL>(off, off) = P_ll;
   x_.segment<kL>(off) = x_l;
   upper_stale_ = true;
+  return report;
+}
+
+// A linear measurement of the landmark's position: H = [0 .. I .. 0], so P H^T is
+// the landmark's two columns and Z = P_ll + R. position_innovation checks the input
+// and fills the report (innovation, whitened, d2) and the factor L of Z = L L^T.
+// update_position then puts the gain factors where update() puts them
+// (compute_gain): Joseph K = P H^T Z^-1 and B = P H^T - K Z / 2, standard
+// M = P H^T L^-T; the same health check and covariance step follow.
+bool EkfSlam::position_innovation(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R, int* slot,
+                                  Eigen::Matrix2d* L, UpdateReport* report) const {
+  const bool r_ok = R.allFinite() && std::fabs(R(0, 1) - R(1, 0)) <= 1e-9 * R.cwiseAbs().maxCoeff() &&
+                    R(0, 0) > 0.0 && R(1, 1) > 0.0 && R.determinant() > 0.0;
+  if (!valid_id(id) || !z.allFinite() || !r_ok) {
+    report->status = EkfStatus::kBadInput;
+    return false;
+  }
+  *slot = slot_of(id);
+  if (*slot < 0) {
+    report->status = EkfStatus::kUnknownLandmark;
+    return false;
+  }
+  const Index off = Layout::landmark_offset(*slot);
+  const Eigen::Matrix2d Z = Eigen::Matrix2d(P_.block<kL, kL>(off, off).selfadjointView<Eigen::Lower>()) + R;
+  const Eigen::LLT<Eigen::Matrix2d> llt(Z);
+  if (llt.info() != Eigen::Success) {
+    report->status = EkfStatus::kSingular;
+    return false;
+  }
+  *L = llt.matrixL();
+  report->innovation = z - x_.segment<kL>(off);
+  report->whitened = L->triangularView<Eigen::Lower>().solve(report->innovation);
+  report->d2 = report->whitened.squaredNorm();
+  return true;
+}
+
+UpdateReport EkfSlam::check_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) const {
+  UpdateReport report;
+  int slot = -1;
+  Eigen::Matrix2d L;
+  position_innovation(id, z, R, &slot, &L, &report);
+  return report;
+}
+
+UpdateReport EkfSlam::update_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) {
+  UpdateReport report;
+  int slot = -1;
+  Eigen::Matrix2d L;
+  if (!position_innovation(id, z, R, &slot, &L, &report)) return report;
+  const Index off = Layout::landmark_offset(slot);
+  const Index n = state_dim();
+  load_landmark_columns(off);  // P H^T
+  if (options_.joseph) {
+    const Eigen::Matrix2d Z = L * L.transpose();
+    const Eigen::Matrix2d Zinv = Z.inverse();
+    K_.topRows(n).noalias() = lm_cols_.topRows(n) * Zinv;
+    PHt_.topRows(n) = lm_cols_.topRows(n);
+    PHt_.topRows(n).noalias() -= 0.5 * K_.topRows(n) * Z;
+  } else {
+    const Eigen::Matrix2d Linv_T = L.inverse().transpose();
+    K_.topRows(n).noalias() = lm_cols_.topRows(n) * Linv_T;
+  }
+  if (!correction_healthy(report.innovation, report.whitened)) {
+    report.status = EkfStatus::kCovarianceFault;
+    return report;
+  }
+  apply_correction(report.innovation, report.whitened);
   return report;
 }
 

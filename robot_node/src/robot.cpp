@@ -1,7 +1,10 @@
 #include "elaslam/robot_node/robot.hpp"
 
+#include "elaslam/common/stats.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace elaslam {
 namespace {
@@ -28,9 +31,13 @@ Robot::Robot(const RobotOptions& options, int robot_id)
     : options_(options),
       robot_id_(robot_id),
       ekf_(options.ekf),
+      team_(options.team_map_fuse ? options.ekf.max_landmark_id : 0, options.team_map_min_gain),
       lmap_(options.ekf.max_landmark_id, lifecycle_rules(options)),
       gate_(options),
       monitor_(options.consistency_window_frames, options.consistency_probability) {
+  if (options.team_map_fuse) aided_.emplace(options.ekf);
+  team_gate_threshold_ = options.team_map_gate_probability < 1.0 ? chi2_quantile(options.team_map_gate_probability, 2)
+                                                                  : std::numeric_limits<double>::infinity();
   updated_.reserve(kMaxObservations);
   events_.reserve(event_capacity(options));
 }
@@ -42,6 +49,7 @@ void Robot::reset() {
   events_.clear();
   gate_.clear();
   monitor_.restart();
+  team_.clear();
 }
 
 FrameSummary Robot::process(const FrameInput& in) {
@@ -84,7 +92,7 @@ void Robot::check_consistency(FrameSummary* s) {
   if (!s->inconsistent || !options_.consistency_recover) return;
   const double xy = options_.recovery_sigma_xy * options_.recovery_sigma_xy;
   const double th = options_.recovery_sigma_theta * options_.recovery_sigma_theta;
-  if (ekf_.predict(Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal()) != EkfStatus::kOk) ++s->filter_faults;
+  mirror_predict(Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), s);
   monitor_.restart();
   s->recovered = true;
 }
@@ -103,6 +111,8 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     if (in.frame > 0)
       P0 = dead_reckoning_cov(P0, in.frame, options_.late_start_step_m, options_.late_start_turn, in.noise);
     ekf_.reset(in.odometer, P0);
+    if (aided_) aided_->reset(in.odometer, P0);
+    team_.clear();
     initialised_ = true;
   } else if (in.reanchor) {
     // A new odometer origin: no increment, and the frames since the last one driven
@@ -110,10 +120,10 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     const double k = std::max(1, in.frame - last_frame_);
     const double step = options_.max_step_m * k, turn = std::min(kPi, options_.max_turn * k);
     const Eigen::Matrix3d U = Eigen::Vector3d(step * step, step * step, turn * turn).asDiagonal();
-    if (ekf_.predict(Pose2{}, U) != EkfStatus::kOk) ++s->filter_faults;
+    mirror_predict(Pose2{}, U, s);
   } else {
     const Pose2 increment = between(last_odometer_, in.odometer);
-    if (ekf_.predict(increment, odometry_covariance(increment, in.noise)) != EkfStatus::kOk) ++s->filter_faults;
+    mirror_predict(increment, odometry_covariance(increment, in.noise), s);
   }
   last_odometer_ = in.odometer;
 }
@@ -125,7 +135,7 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
     if (!ekf_.has_landmark(o.landmark_id)) continue;
-    const UpdateReport r = ekf_.update(o.landmark_id, o.z, gate);
+    const UpdateReport r = mirror_update(o.landmark_id, o.z, gate, s);
     if (r.status == EkfStatus::kOk) monitor_.add(r.d2);
     gate_.record({o.landmark_id, gate ? GateKind::kInnovation : GateKind::kNone, r.d2, r.threshold,
                   r.status != EkfStatus::kGated});
@@ -142,7 +152,7 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
     if (ekf_.has_landmark(o.landmark_id)) continue;
     ++s->num_candidates;
-    if (!added(ekf_.add_landmark(o.landmark_id, o.z), s)) continue;
+    if (!added(mirror_add(o.landmark_id, o.z, s), s)) continue;
     lmap_.map_at_once(o.landmark_id, in.frame);
     emit(EventKind::kAdd, o.landmark_id);
     ++s->num_added;
@@ -183,7 +193,7 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
 }
 
 void Robot::correct(int id, const RangeBearing& z, FrameSummary* s) {
-  const UpdateReport r = ekf_.update(id, z, false);
+  const UpdateReport r = mirror_update(id, z, false, s);
   if (r.status == EkfStatus::kOk) {
     monitor_.add(r.d2);
     ++s->num_accepted;
@@ -212,12 +222,13 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
       if (gate_.judge_candidate(id, ekf_.check(id, o.z), &lmap_)) {
         if (lmap_.candidate_consistent(id)) {
           confirm(id, o.z, s);
-        } else if (options_.candidate_updates && ekf_.update_landmark_only(id, o.z).status != EkfStatus::kOk) {
-          ++s->filter_faults;
+        } else if (options_.candidate_updates) {
+          if (ekf_.update_landmark_only(id, o.z).status != EkfStatus::kOk) ++s->filter_faults;
+          if (aided_ && aided_->update_landmark_only(id, o.z).status != EkfStatus::kOk) ++s->filter_faults;
         }
         continue;
       }
-      ekf_.remove_landmark(id);
+      mirror_remove(id);
       if (lmap_.candidate_inconsistent(id)) {
         emit_at(EventKind::kMoving, id, e.position, e.cov);
         ++s->num_moving;
@@ -225,7 +236,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     }
     // New, seen again after moving or after a gap, or inconsistent: (re)anchor here.
     lmap_.anchor_candidate(id, in.frame);
-    added(ekf_.add_landmark(id, o.z), s);  // kFull: candidate outside the filter
+    added(mirror_add(id, o.z, s), s);  // kFull: candidate outside the filter
   }
 }
 
@@ -233,7 +244,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
 // from now on, starting with this frame's sighting.
 void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   const bool returned = lmap_.confirm(id, last_frame_);
-  if (ekf_.update(id, z, false).status == EkfStatus::kOk) {
+  if (mirror_update(id, z, false, s).status == EkfStatus::kOk) {
     ++s->num_accepted;
   } else {
     ++s->filter_faults;
@@ -250,7 +261,7 @@ void Robot::drop_unseen_candidates() {
     const int id = ekf_.id_at(slot);
     const LMapEntry& e = lmap_[id];
     if (e.status == LandmarkStatus::kStatic || last_frame_ - e.last_seen_frame < options_.candidate_gap_frames) continue;
-    ekf_.remove_landmark(id);
+    mirror_remove(id);
     lmap_.drop_candidate(id);
   }
 }
@@ -288,14 +299,14 @@ bool Robot::expected_in_view(int id, const Pose2& pose) const {
 void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   const Eigen::Vector2d last = ekf_.landmark(id);
   const Eigen::Matrix2d last_cov = ekf_.landmark_cov(id);
-  if (ekf_.remove_landmark(id) != EkfStatus::kOk) {
+  if (mirror_remove(id) != EkfStatus::kOk) {
     ++s->filter_faults;
     return;
   }
   lmap_.found_moving(id, last_frame_, seen != nullptr);
   if (seen) {
     record_sighting(id, *seen);
-    added(ekf_.add_landmark(id, *seen), s);
+    added(mirror_add(id, *seen, s), s);
   }
   emit_at(EventKind::kMoving, id, last, last_cov);
   ++s->num_moving;
@@ -312,12 +323,13 @@ void Robot::record_sighting(int id, const RangeBearing& z) {
 
 double Robot::map_mean_diag() const {
   // Block accessors only: covariance() would complete the whole matrix.
-  double sum = ekf_.pose_cov().trace();
+  const EkfSlam& f = estimate();
+  double sum = f.pose_cov().trace();
   int n = StateLayout::kPoseDim;
-  for (int slot = 0; slot < ekf_.num_landmarks(); ++slot) {
-    const int id = ekf_.id_at(slot);
+  for (int slot = 0; slot < f.num_landmarks(); ++slot) {
+    const int id = f.id_at(slot);
     if (lmap_[id].status != LandmarkStatus::kStatic) continue;
-    sum += ekf_.landmark_cov(id).trace();
+    sum += f.landmark_cov(id).trace();
     n += StateLayout::kLandmarkDim;
   }
   return sum / n;
@@ -328,9 +340,70 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   if (!lmap_.valid_id(landmark_id)) return false;
   const bool in_filter = ekf_.has_landmark(landmark_id);
   const bool held = in_filter && lmap_[landmark_id].status == LandmarkStatus::kStatic;
-  const bool removed = in_filter && ekf_.remove_landmark(landmark_id) == EkfStatus::kOk;
+  const bool removed = in_filter && mirror_remove(landmark_id) == EkfStatus::kOk;
   lmap_.told_moving(landmark_id, frame, removed);
   return removed && held;
+}
+
+// ---- the own and the aided filter (team_aid.hpp) ------------------------------------
+
+EkfStatus Robot::mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s) {
+  const EkfStatus st = ekf_.predict(increment, U);
+  if (st != EkfStatus::kOk) ++s->filter_faults;
+  if (aided_ && aided_->predict(increment, U) != EkfStatus::kOk) ++s->filter_faults;
+  return st;
+}
+
+// An observation the gate accepted corrects both filters (never gated again in the
+// aided one: the decision was taken).
+UpdateReport Robot::mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s) {
+  const UpdateReport r = ekf_.update(id, z, gate);
+  if (aided_ && r.status == EkfStatus::kOk && aided_->update(id, z, false).status != EkfStatus::kOk) ++s->filter_faults;
+  return r;
+}
+
+EkfStatus Robot::mirror_add(int id, const RangeBearing& z, FrameSummary* s) {
+  const EkfStatus st = ekf_.add_landmark(id, z);
+  if (aided_ && st == EkfStatus::kOk) {
+    team_.forget(id);
+    if (aided_->add_landmark(id, z) != EkfStatus::kOk) ++s->filter_faults;
+  }
+  return st;
+}
+
+EkfStatus Robot::mirror_remove(int id) {
+  const EkfStatus st = ekf_.remove_landmark(id);
+  if (aided_) {
+    aided_->remove_landmark(id);  // kUnknownLandmark when its add had failed: nothing to remove
+    team_.forget(id);
+  }
+  return st;
+}
+
+bool Robot::apply_team_estimate(int landmark_id, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov) {
+  if (!aided_ || !lmap_.valid_id(landmark_id) || lmap_[landmark_id].status != LandmarkStatus::kStatic ||
+      !aided_->has_landmark(landmark_id))
+    return false;
+  ++team_counters_.offered;
+  TeamIncrement inc;
+  if (!team_.offer(landmark_id, position, cov, aided_->landmark(landmark_id), aided_->landmark_cov(landmark_id), &inc))
+    return false;
+  // A team estimate that contradicts the robot's own (its chi-square test at
+  // team_map_gate_probability) is not fused: one robot's divergence must not pull
+  // the others; nothing is counted as fused, the next team map tries again.
+  if (aided_->check_position(landmark_id, position, cov).d2 > team_gate_threshold_) {
+    ++team_counters_.gated;
+    return false;
+  }
+  const UpdateReport r = aided_->update_position(landmark_id, inc.z, inc.R);
+  if (r.status != EkfStatus::kOk) {
+    ++team_counters_.refused;
+    return false;
+  }
+  team_.commit(landmark_id, inc);
+  ++team_counters_.fused;
+  team_counters_.nis_sum += r.d2;
+  return true;
 }
 
 bool Robot::added(EkfStatus st, FrameSummary* s) {

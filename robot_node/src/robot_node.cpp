@@ -42,6 +42,12 @@ void set_cov2(double (&dst)[2][2], const Eigen::Matrix2d& C) {
     for (int c = 0; c < 2; ++c) dst[r][c] = C(r, c);
 }
 
+Eigen::Matrix2d get_cov2(const double (&src)[2][2]) {
+  Eigen::Matrix2d C;
+  C << src[0][0], src[0][1], src[1][0], src[1][1];
+  return C;
+}
+
 }  // namespace
 
 RobotNode::RobotNode(const RobotOptions& options, int robot_id)
@@ -50,6 +56,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
   held_.reserve(kMaxHeldNotices);
+  if (options.team_map_fuse) team_pending_.resize(static_cast<std::size_t>(options.ekf.max_landmark_id));
   alert_.reserve(kAlertBytes);
   prepare_snapshot_chunks();
 }
@@ -210,12 +217,13 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     }
   }
   held_.resize(kept);
+  apply_team_estimates();
   return Verdict::kProcessed;
 }
 
 void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s,
                           std::int64_t us) {
-  const EkfSlam& f = robot_.filter();
+  const EkfSlam& f = robot_.estimate();  // with the team map: the aided filter
   const Pose2 p = f.pose();
   const Eigen::Matrix3d C = f.pose_cov();
   pose_.utime = now_utime;
@@ -400,6 +408,60 @@ bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {
     on_notice(n, nullptr);
   }
   return true;
+}
+
+bool RobotNode::on_team_map(const global_map_t& msg, std::string* why) {
+  if (!options_.team_map_fuse) return refused(Refusal::kMalformed, "a team map, but robot.team_map.fuse is off", why);
+  Refusal reason = Refusal::kMalformed;
+  if (const std::string problem = validate(msg, &reason); !problem.empty()) return refused(reason, problem, why);
+  if (msg.frame > std::max(last_frame_, 0) + options_.max_frame_gap)
+    return refused(Refusal::kFrameWindow,
+                   "frame " + std::to_string(msg.frame) + " more than node.max_frame_gap ahead of this robot's " +
+                       std::to_string(last_frame_),
+                   why);
+  const int own_bit = 1 << (robot_id_ - 1);
+  for (int k = 0; k < msg.num_landmarks; ++k)
+    if (msg.landmarks[static_cast<std::size_t>(k)].id >= options_.ekf.max_landmark_id)
+      return refused(Refusal::kMalformed,
+                     contract::got("landmark id outside [0, filter.max_landmark_id)",
+                                   msg.landmarks[static_cast<std::size_t>(k)].id),
+                     why);
+  for (int k = 0; k < msg.num_landmarks; ++k)
+    if (msg.landmarks[static_cast<std::size_t>(k)].contributors & own_bit)
+      return refused(Refusal::kMalformed,
+                     "landmark " + std::to_string(msg.landmarks[static_cast<std::size_t>(k)].id) +
+                         " lists this robot as a contributor: not a map without it",
+                     why);
+  if (msg.incarnation == team_map_incarnation_ && msg.version < team_map_version_) {
+    ++counters_.team_map_stale;
+    return true;
+  }
+  team_map_incarnation_ = msg.incarnation;
+  team_map_version_ = msg.version;
+  // Held until this robot has processed frame msg.frame + 1 (then applied after that
+  // frame's outputs), so the live team does what the in-process run does: main
+  // sends the team map of frame k once every robot finished k, which in a lockstep
+  // team may reach a robot before or after its SENSOR of frame k + 1.
+  for (int k = 0; k < msg.num_landmarks; ++k) {
+    const global_landmark_t& l = msg.landmarks[static_cast<std::size_t>(k)];
+    TeamPending& p = team_pending_[static_cast<std::size_t>(l.id)];
+    if (!p.valid) ++team_pending_count_;
+    p = {true, msg.frame, Eigen::Vector2d(l.x, l.y), get_cov2(l.cov)};
+  }
+  ++counters_.team_map_chunks;
+  apply_team_estimates();
+  return true;
+}
+
+void RobotNode::apply_team_estimates() {
+  if (team_pending_count_ == 0) return;
+  for (std::size_t id = 0; id < team_pending_.size(); ++id) {
+    TeamPending& p = team_pending_[id];
+    if (!p.valid || p.frame >= last_frame_) continue;
+    robot_.apply_team_estimate(static_cast<int>(id), p.position, p.cov);
+    p.valid = false;
+    --team_pending_count_;
+  }
 }
 
 bool RobotNode::on_resync(const resync_request_t& msg, std::int64_t now_utime) {

@@ -93,6 +93,14 @@ void parse(config::Reader& r, RobotOptions* o) {
         o->recovery_sigma_theta = deg2rad(deg);
       },
       /*optional=*/true);
+  r.section(
+      "team_map",
+      [&](config::Reader& t) {
+        t.read("fuse", &o->team_map_fuse);
+        t.read_optional("min_gain", &o->team_map_min_gain, 0.0, 100.0);
+        t.read_optional("gate_probability", &o->team_map_gate_probability, 0.5, 1.0);
+      },
+      /*optional=*/true);
   parse(r, &o->limits);
   if (o->ekf.capacity > o->ekf.max_landmark_id)
     r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");

@@ -342,6 +342,10 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
     fail("filter.cov_lower", "the covariance is not positive semi-definite (smallest LDLT pivot " +
                                  num(ldlt.vectorD().minCoeff()) + ")");
   if (r->ekf_.restore(x, P, slot_ids) != EkfStatus::kOk) fail("filter.slot_ids", "a landmark id appears twice");
+  // The aided filter (team_aid.hpp) is not saved: it restarts as the own filter,
+  // the team's information to be fused again from the next team map.
+  if (r->aided_) r->aided_->restore(x, P, slot_ids);
+  r->team_.clear();
 }
 
 void RobotStateAccess::load_lmap(const json& s, Robot* r) {

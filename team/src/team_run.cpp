@@ -232,7 +232,10 @@ NodeShell::Handler<pose_estimate_t> InProcessTeam::on_pose() {
     for (std::size_t i = 0; i < robots_.size(); ++i) {
       if (robots_[i].robot_id() != p.robot_id) continue;
       set_pose(i, p, &f_);
-      out_.estimated[i].push_back({time_s_, {p.x, p.y, p.theta}});
+      Eigen::Matrix3d C;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) C(r, c) = p.cov[r][c];
+      out_.estimated[i].push_back({time_s_, {p.x, p.y, p.theta}, C});
       if (i < f_.true_poses.size()) out_.truth[i].push_back({time_s_, f_.true_poses[i]});
     }
   };

@@ -278,6 +278,15 @@ TEST(MainLimits, ConfigMismatchesBetweenSectionsAreFoundAtStartUp) {
   problems = check_shared_config(path);
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find("limits.team"), std::string::npos) << problems[0];
+  // The robots fuse a team map that main never sends.
+  write("robot:\n  team_map: {fuse: true}\nmain:\n  max_landmark_id: 64\n");
+  problems = check_shared_config(path);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("team_map_period_frames is absent"), std::string::npos) << problems[0];
+  write("robot:\n  team_map: {fuse: true}\nmain:\n  team_map_period_frames: 0\n");
+  ASSERT_EQ(check_shared_config(path).size(), 1u);
+  write("robot:\n  team_map: {fuse: true}\nmain:\n  team_map_period_frames: 10\n");
+  EXPECT_TRUE(check_shared_config(path).empty());
   write("robot:\n  filter: {max_landmark_id: 64}\nmain:\n  max_landmark_id: 64\n");
   EXPECT_TRUE(check_shared_config(path).empty());
   std::remove(path.c_str());

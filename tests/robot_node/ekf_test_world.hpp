@@ -87,6 +87,23 @@ class DenseEkf {
     const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
     P_ = (IKH * P_ * IKH.transpose() + K * W_ * K.transpose()).eval();
   }
+  // A direct measurement z = l + v, v ~ N(0, R), of landmark `id`'s position:
+  // H selects the landmark; textbook gain, Joseph or standard form.
+  void update_position(int id, const Vec2& z, const Eigen::Matrix2d& R) {
+    const Eigen::Index n = X_.size(), off = offset(id);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
+    H.middleCols<2>(off).setIdentity();
+    const Eigen::Matrix2d Z = H * P_ * H.transpose() + R;
+    const Eigen::MatrixXd K = P_ * H.transpose() * Z.inverse();
+    X_ += K * (z - X_.segment<2>(off));
+    X_(2) = wrap_angle(X_(2));
+    if (joseph_) {
+      const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
+      P_ = (IKH * P_ * IKH.transpose() + K * R * K.transpose()).eval();
+    } else {
+      P_ = (P_ - K * Z * K.transpose()).eval();
+    }
+  }
   void add(int id, const RangeBearing& y) {
     const Eigen::Index n = X_.size();
     Eigen::Matrix<double, 2, 3> G_x;

@@ -60,6 +60,12 @@ void run_frames(EkfSlam& ekf, std::mt19937_64& rng, int frames, Tally* tally) {
       tally->add(ekf.check(id, y).status);
       tally->add(ekf.update(id, y, k % 2 == 0).status);
       if (k == 5) tally->add(ekf.update(id, {y.range + 50.0, y.bearing}, true).status);  // kGated
+      if (k == 7) {  // the team map's position measurement (update_position), and a refused one
+        const Eigen::Matrix2d R = 0.04 * Eigen::Matrix2d::Identity();
+        tally->add(ekf.check_position(id, ekf.landmark(id), R).status);
+        tally->add(ekf.update_position(id, ekf.landmark(id) + Eigen::Vector2d(0.01, -0.01), R).status);
+        tally->add(ekf.update_position(id, ekf.landmark(id), -R).status);
+      }
     }
     // Failing calls must not allocate either (no error strings, no exceptions).
     tally->add(ekf.update(0, {nan, 0.0}).status);

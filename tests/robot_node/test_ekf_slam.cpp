@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -67,45 +68,104 @@ INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfKnownAnswer, ::testing::Bool(),
                            return i.param ? std::string("Joseph") : std::string("Standard");
                          });
 
+// A filter and its dense reference, both covariance forms, after each of 300 random
+// operations that leave at least two landmarks: `check(w, ekf, ref, k)` applies
+// the update under test to both and compares them. Returns how many were checked.
+int after_random_operations(std::uint64_t seed,
+                            const std::function<void(RandomWorld&, EkfSlam&, DenseEkf&, int)>& check) {
+  int checked = 0;
+  for (const bool joseph : {true, false}) {
+    const EkfOptions o = small_options(joseph);
+    EkfSlam ekf(o);
+    DenseEkf ref(o);
+    RandomWorld w(seed + (joseph ? 1 : 0));
+    const Eigen::Matrix3d P0 = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+    ekf.reset(w.truth, P0);
+    ref.reset(w.truth, P0);
+    for (int k = 0; k < 300; ++k) {
+      random_operation(w, ekf, &ref, o.capacity);
+      if (ekf.num_landmarks() < 2) continue;
+      check(w, ekf, ref, k);
+      ++checked;
+    }
+  }
+  return checked;
+}
+
 // The landmark-only (consider) update used for candidates: it must equal the dense
 // Schmidt-Kalman update, leave the robot's mean and covariance and every other
 // landmark's marginal exactly as they were, and shrink the landmark's covariance.
 TEST(EkfSlam, LandmarkOnlyUpdateMatchesTheDenseSchmidtUpdate) {
-  for (const bool joseph : {true, false}) {
-    // GIVEN a filter and its dense reference after random operations
-    const EkfOptions o = small_options(joseph);
-    EkfSlam ekf(o);
-    DenseEkf ref(o);
-    RandomWorld w(0x5C4D1D7 + (joseph ? 1 : 0));
-    const Eigen::Matrix3d P0 = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
-    ekf.reset(w.truth, P0);
-    ref.reset(w.truth, P0);
-    int checked = 0;
-    for (int k = 0; k < 300; ++k) {
-      random_operation(w, ekf, &ref, o.capacity);
-      if (ekf.num_landmarks() < 2) continue;
-      // WHEN one landmark is corrected alone
-      const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
-      const int other = ekf.id_at((ekf.slot_of(id) + 1) % ekf.num_landmarks());
-      const RangeBearing z = w.sense(id, o);
-      const Eigen::Vector3d x_before = ekf.mean().head<3>();
-      const Eigen::Matrix3d pose_cov = ekf.pose_cov();
-      const Vec2 other_mean = ekf.landmark(other);
-      const Eigen::Matrix2d other_cov = ekf.landmark_cov(other);
-      const Eigen::Matrix2d lm_cov = ekf.landmark_cov(id);
-      ASSERT_EQ(ekf.update_landmark_only(id, z).status, EkfStatus::kOk);
-      ref.update_landmark_only(id, z);
-      // THEN it matches the dense reference, and only the landmark has changed
-      ASSERT_LT(max_difference(ekf, ref), 1e-9) << "operation " << k;
-      EXPECT_EQ(ekf.mean().head<3>(), x_before);
-      EXPECT_EQ(ekf.pose_cov(), pose_cov);
-      EXPECT_EQ(ekf.landmark(other), other_mean);
-      EXPECT_EQ(ekf.landmark_cov(other), other_cov);
-      EXPECT_LT(ekf.landmark_cov(id).trace(), lm_cov.trace());
-      ++checked;
-    }
-    EXPECT_GE(checked, 100);
-  }
+  const int checked = after_random_operations(0x5C4D1D7, [](RandomWorld& w, EkfSlam& ekf, DenseEkf& ref, int k) {
+    // WHEN one landmark is corrected alone
+    const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
+    const int other = ekf.id_at((ekf.slot_of(id) + 1) % ekf.num_landmarks());
+    const RangeBearing z = w.sense(id, ekf.options());
+    const Eigen::Vector3d x_before = ekf.mean().head<3>();
+    const Eigen::Matrix3d pose_cov = ekf.pose_cov();
+    const Vec2 other_mean = ekf.landmark(other);
+    const Eigen::Matrix2d other_cov = ekf.landmark_cov(other);
+    const Eigen::Matrix2d lm_cov = ekf.landmark_cov(id);
+    ASSERT_EQ(ekf.update_landmark_only(id, z).status, EkfStatus::kOk);
+    ref.update_landmark_only(id, z);
+    // THEN it matches the dense reference, and only the landmark has changed
+    ASSERT_LT(max_difference(ekf, ref), 1e-9) << "operation " << k;
+    EXPECT_EQ(ekf.mean().head<3>(), x_before);
+    EXPECT_EQ(ekf.pose_cov(), pose_cov);
+    EXPECT_EQ(ekf.landmark(other), other_mean);
+    EXPECT_EQ(ekf.landmark_cov(other), other_cov);
+    EXPECT_LT(ekf.landmark_cov(id).trace(), lm_cov.trace());
+  });
+  EXPECT_GE(checked, 200);
+}
+
+// The team map's measurement of a landmark's position (update_position): the dense
+// textbook update with H = [0 .. I .. 0], both covariance forms; check_position
+// gives the same d2 without changing anything.
+TEST(EkfSlam, PositionUpdateMatchesTheDenseUpdate) {
+  const int checked = after_random_operations(0x7EA3, [](RandomWorld& w, EkfSlam& ekf, DenseEkf& ref, int k) {
+    const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
+    Eigen::Matrix2d R;
+    R << 0.02, 0.005, 0.005, 0.01;
+    const Vec2 z = ekf.landmark(id) + Vec2(0.05, -0.03);
+    const Eigen::VectorXd x_before = ekf.mean();
+    const double trace_before = ekf.landmark_cov(id).trace();
+    const UpdateReport check = ekf.check_position(id, z, R);
+    ASSERT_EQ(check.status, EkfStatus::kOk);
+    EXPECT_EQ(ekf.mean(), x_before);
+    const UpdateReport r = ekf.update_position(id, z, R);
+    ASSERT_EQ(r.status, EkfStatus::kOk);
+    EXPECT_DOUBLE_EQ(r.d2, check.d2);
+    ref.update_position(id, z, R);
+    ASSERT_LT(max_difference(ekf, ref), 1e-9) << "operation " << k;
+    EXPECT_LT(ekf.landmark_cov(id).trace(), trace_before);
+  });
+  EXPECT_GE(checked, 200);
+}
+
+TEST(EkfSlam, PositionUpdateRefusesUnknownAndBadInput) {
+  const EkfOptions o = small_options(true);
+  EkfSlam ekf(o);
+  ekf.reset({0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+  ASSERT_EQ(ekf.add_landmark(3, {2.0, 0.1}), EkfStatus::kOk);
+  const Eigen::VectorXd x = ekf.mean();
+  const Eigen::Matrix2d R = 0.01 * Eigen::Matrix2d::Identity();
+  const Vec2 z(2.0, 0.2);
+  EXPECT_EQ(ekf.update_position(4, z, R).status, EkfStatus::kUnknownLandmark);
+  EXPECT_EQ(ekf.update_position(3, Vec2(std::nan(""), 0.0), R).status, EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.update_position(3, z, -R).status, EkfStatus::kBadInput);
+  Eigen::Matrix2d asym = R;
+  asym(0, 1) = 0.005;
+  EXPECT_EQ(ekf.update_position(3, z, asym).status, EkfStatus::kBadInput);
+  Eigen::Matrix2d indefinite;
+  indefinite << 0.01, 0.02, 0.02, 0.01;
+  EXPECT_EQ(ekf.update_position(3, z, indefinite).status, EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.update_position(-1, z, R).status, EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.mean(), x);
+  // d2 against the textbook (P_ll + R)^-1.
+  const Vec2 nu = z - ekf.landmark(3);
+  const double d2 = nu.dot((ekf.landmark_cov(3) + R).inverse() * nu);
+  EXPECT_NEAR(ekf.check_position(3, z, R).d2, d2, 1e-9 * d2);
 }
 
 TEST(EkfSlam, LandmarkOnlyUpdateRefusesUnknownAndBadInput) {

@@ -17,7 +17,7 @@ namespace elaslam {
 namespace {
 
 struct Tally {
-  long frames = 0, events[5] = {0, 0, 0, 0, 0}, notices = 0, snapshots = 0;
+  long frames = 0, events[5] = {0, 0, 0, 0, 0}, notices = 0, snapshots = 0, team_chunks = 0;
 };
 
 TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
@@ -31,6 +31,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     // The consistency monitor and its recovery on (they fire at 50 % dynamism).
     c.robot.consistency_window_frames = 20;
     c.robot.consistency_recover = true;
+    // The team map fused into a second filter (robot.team_map), every 5 frames.
+    c.robot.team_map_fuse = true;
+    c.main.team_map_period_frames = 5;
     // Every sensor frame of the run, made before the region (the simulator is not
     // part of a robot's frame path).
     sim::World world(c.scenario);
@@ -61,6 +64,11 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
         const int chunks = main.make_global_map(0);
         for (int c = 0; c < chunks; ++c)
           for (auto& r : robots) r.on_global_map(main.map_chunk(c));
+        if (main.team_map_due(static_cast<int>(f / static_cast<std::size_t>(R))))
+          for (auto& r : robots) {
+            const int n = main.make_team_map(r.robot_id(), 0);
+            for (int c = 0; c < n; ++c) r.on_team_map(main.map_chunk(c)), ++t.team_chunks;
+          }
         node.status_msg(0);
       }
     }
@@ -70,6 +78,10 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     EXPECT_GT(t.events[landmark_event_t::ADD], 50);
     EXPECT_GT(t.events[landmark_event_t::UPDATE], 300);  // rate-limited: node.update_period_frames
     EXPECT_GT(t.snapshots, 30);
+    EXPECT_GT(t.team_chunks, 50);
+    long fused = 0;
+    for (const auto& r : robots) fused += r.robot().team_counters().fused;
+    EXPECT_GT(fused, 30);
     if (mode == Mode::kEla || mode == Mode::kConsensus) {
       EXPECT_GT(t.events[landmark_event_t::MOVING], 10);
       EXPECT_GT(t.events[landmark_event_t::RETURN], 0);

@@ -135,6 +135,109 @@ TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {
   EXPECT_EQ(node_.counters().rejected_inputs, 2);
 }
 
+// TEAM_MAP_<r> (robot.team_map): the other robots' estimates go into the aided
+// filter only; the own filter (what the robot reports) never changes. A chunk that
+// lists this robot as a contributor, an older version and an estimate that
+// contradicts the robot's are not fused.
+TEST(RobotNodeTeamMap, TeamEstimatesGoIntoTheAidedFilterOnly) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.team_map_fuse = true;
+  RobotNode node(o, 2);
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  for (int k = 0; k < 6; ++k) {
+    const Pose2 p{0.01 * k, 0.0, 0.0};
+    ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(k, p, p, lms, test::all_ids(6)), 2), 0),
+              RobotNode::Verdict::kProcessed);
+  }
+  const Robot& robot = node.robot();
+  ASSERT_TRUE(robot.filter().has_landmark(1));
+  const Eigen::VectorXd own_mean = robot.filter().mean();
+  EXPECT_EQ(robot.estimate().mean(), own_mean);  // nothing fused yet: the two filters agree
+  global_map_t g{};
+  g.incarnation = 7;
+  g.version = 10;
+  g.num_chunks = 1;
+  g.id_end = 1000;
+  contract::set_count(&g.landmarks, &g.num_landmarks, 2);
+  for (int k = 0; k < 2; ++k) {
+    global_landmark_t& l = g.landmarks[static_cast<std::size_t>(k)];
+    l.id = k + 1;
+    l.x = lms[static_cast<std::size_t>(k + 1)].x();
+    l.y = lms[static_cast<std::size_t>(k + 1)].y();
+    l.cov[0][0] = l.cov[1][1] = 1e-4;
+    l.contributors = 0b101;  // robots 1 and 3
+    l.status = global_landmark_t::STATIC;
+  }
+  ASSERT_TRUE(node.on_team_map(g));
+  EXPECT_EQ(robot.team_counters().fused, 2);
+  EXPECT_EQ(robot.filter().mean(), own_mean);
+  EXPECT_LT(robot.estimate().landmark_cov(1).trace(), robot.filter().landmark_cov(1).trace());
+  EXPECT_LT(robot.estimate().pose_cov().trace(), robot.filter().pose_cov().trace());
+  // The same map again: nothing new.
+  ASSERT_TRUE(node.on_team_map(g));
+  EXPECT_EQ(robot.team_counters().fused, 2);
+  // An older version: ignored.
+  g.version = 9;
+  g.landmarks[0].cov[0][0] = g.landmarks[0].cov[1][1] = 1e-5;
+  ASSERT_TRUE(node.on_team_map(g));
+  EXPECT_EQ(node.counters().team_map_stale, 1);
+  EXPECT_EQ(robot.team_counters().fused, 2);
+  // This robot's own information in it: refused.
+  g.version = 11;
+  g.landmarks[1].contributors = 0b010;
+  std::string why;
+  const Eigen::VectorXd aided = robot.estimate().mean();
+  EXPECT_FALSE(node.on_team_map(g, &why));
+  EXPECT_NE(why.find("contributor"), std::string::npos);
+  EXPECT_EQ(robot.estimate().mean(), aided);
+  // An estimate 2 m from the robot's, with a 1 cm sigma: contradicts it, not fused.
+  g.landmarks[1].contributors = 0b001;
+  g.landmarks[0].x += 2.0;
+  g.landmarks[1].cov[0][0] = g.landmarks[1].cov[1][1] = 2e-5;
+  ASSERT_TRUE(node.on_team_map(g));
+  EXPECT_EQ(robot.team_counters().gated, 1);
+  EXPECT_EQ(robot.team_counters().fused, 3);
+  // Invalid (a NaN covariance): refused by the message checks, counted.
+  g.landmarks[0].cov[0][0] = std::nan("");
+  const std::int64_t rejected = node.counters().rejected_inputs;
+  EXPECT_FALSE(node.on_team_map(g));
+  EXPECT_EQ(node.counters().rejected_inputs, rejected + 1);
+  g.landmarks[0].cov[0][0] = 1e-4;
+  // An id beyond filter.max_landmark_id, a frame far ahead: refused.
+  const int id0 = g.landmarks[0].id;
+  g.landmarks[1].id = o.ekf.max_landmark_id;
+  EXPECT_FALSE(node.on_team_map(g, &why));
+  EXPECT_NE(why.find("max_landmark_id"), std::string::npos);
+  g.landmarks[1].id = 2;
+  g.frame = 5 + o.max_frame_gap + 1;
+  EXPECT_FALSE(node.on_team_map(g, &why));
+  EXPECT_NE(why.find("max_frame_gap"), std::string::npos);
+  EXPECT_EQ(robot.filter().mean(), own_mean);
+  // A map of frame 5 (this robot's last) waits for frame 6: in a lockstep team it
+  // may arrive before or after SENSOR 6, and takes effect after frame 6 either way.
+  g.frame = 5;
+  g.version = 12;
+  g.landmarks[0].x = lms[static_cast<std::size_t>(id0)].x();
+  g.landmarks[0].cov[0][0] = g.landmarks[0].cov[1][1] = 1e-6;
+  const std::int64_t fused = robot.team_counters().fused;
+  ASSERT_TRUE(node.on_team_map(g));
+  EXPECT_EQ(robot.team_counters().fused, fused);
+  const Pose2 p6{0.06, 0.0, 0.0};
+  ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(6, p6, p6, lms, test::all_ids(6)), 2), 0),
+            RobotNode::Verdict::kProcessed);
+  EXPECT_GT(robot.team_counters().fused, fused);
+}
+
+TEST(RobotNodeTeamMap, RefusedWhenTheOptionIsOff) {
+  RobotNode node(test::robot_options(Mode::kEla), 2);
+  global_map_t g{};
+  g.num_chunks = 1;
+  std::string why;
+  EXPECT_FALSE(node.on_team_map(g, &why));
+  EXPECT_NE(why.find("team_map.fuse is off"), std::string::npos);
+  EXPECT_EQ(node.counters().rejected_inputs, 1);
+}
+
 // A notice about frame f that arrives before this robot's own SENSOR frame f (the
 // detecting robot and main_robot were faster) takes effect after frame f, exactly
 // as in the in-process run: the landmark still corrects frame f here.

@@ -6,16 +6,27 @@
 # With --hosts (test system_hosts): run_team.sh --hosts, one network namespace per
 # process (simulator, main_robot, each robot, lcm-logger) joined by a bridge, LCM with
 # TTL 1 across it, as separate onboard computers would be.
-#   tests/system/team_live.sh BUILD_DIR [--hosts]
+# With --team-map (test system_team_map): config/paper.yaml with the team map on
+# (robot.team_map.fuse, main.team_map_period_frames 10): TEAM_MAP_<r> over LCM, held
+# by each robot until its next frame, gives the in-process run's poses too.
+#   tests/system/team_live.sh BUILD_DIR [--hosts | --team-map]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BUILD="$(cd "${1:?usage: team_live.sh BUILD_DIR [--hosts]}" && pwd)"
+BUILD="$(cd "${1:?usage: team_live.sh BUILD_DIR [--hosts | --team-map]}" && pwd)"
 HOSTS="${2:-}"
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
 [ "$(id -u)" -eq 0 ] || { echo "team_live: skipped (needs root for network namespaces)"; exit 77; }
 ip netns list >/dev/null 2>&1 || { echo "team_live: skipped (no ip netns)"; exit 77; }
-ARGS=(--dynamism 50 --speed 0.5 --seed 3)
+CONFIG="$ROOT/config/paper.yaml"
+if [ "$HOSTS" = --team-map ]; then
+  CONFIG="$OUT/team_map.yaml"
+  sed -e 's/^    fuse: false$/    fuse: true/' -e 's/^  team_map_period_frames: 0$/  team_map_period_frames: 10/' \
+    "$ROOT/config/paper.yaml" > "$CONFIG"
+  grep -q '^    fuse: true$' "$CONFIG" && grep -q '^  team_map_period_frames: 10$' "$CONFIG" ||
+    { echo "team_live: could not turn the team map on in config/paper.yaml"; exit 1; }
+fi
+ARGS=(--config "$CONFIG" --dynamism 50 --speed 0.5 --seed 3)
 # The default rate (10 Hz, 15 s): the rate is part of the scenario (motion per frame).
 if [ "$HOSTS" = --hosts ]; then
   # --inside: no set-up or build (the test's build dir is used as it is); --hosts
@@ -27,7 +38,13 @@ else
   "$ROOT/tools/netns_run.sh" --port 7693 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT/live" \
     "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
 fi
-"$BUILD/bin/run_scenario" --config "$ROOT/config/paper.yaml" --out "$OUT/inproc" "${ARGS[@]}" > /dev/null
+"$BUILD/bin/run_scenario" --out "$OUT/inproc" "${ARGS[@]}" > /dev/null
+if [ "$HOSTS" = --team-map ]; then  # the robots fused the team map (their final line)
+  for r in 1 2 3; do
+    grep -rhE "robot_node $r: team_map chunks=[1-9][0-9]* .* fused=[1-9]" "$OUT/live" ||
+      { echo "robot $r: no team map fused"; grep -rh "team_map" "$OUT/live" || true; exit 1; }
+  done
+fi
 python3 - "$OUT/live" "$OUT/inproc" <<'PY'
 import csv, json, math, sys
 live_dir, ref_dir = sys.argv[1:3]

@@ -94,6 +94,7 @@ TEST(Channels, TeamChannelsAreRecognisedWithTheirSuffixOnly) {
     EXPECT_TRUE(channels::is_team_channel(channels::status_robot(8, sfx), sfx));
     EXPECT_TRUE(channels::is_team_channel(channels::global_map(sfx), sfx));
     EXPECT_TRUE(channels::is_team_channel(channels::run_info(sfx), sfx));
+    EXPECT_TRUE(channels::is_team_channel(channels::team_map(2, sfx), sfx));
     EXPECT_FALSE(channels::is_team_channel("LCM_SELF_TEST", sfx));
     EXPECT_FALSE(channels::is_team_channel("POSE_x" + sfx, sfx));
     EXPECT_FALSE(channels::is_team_channel(channels::global_map(sfx) + "X", sfx));

@@ -14,13 +14,17 @@ inline constexpr std::string_view kSensorPrefix = "SENSOR_", kPosePrefix = "POSE
                                   kLmapEvent = "LMAP_EVENT", kLmapSnapshot = "LMAP_SNAPSHOT",
                                   kLmapResync = "LMAP_RESYNC", kGlobalMap = "GLOBAL_MAP",
                                   kDynamicNotice = "DYNAMIC_NOTICE", kStatusMain = "STATUS_MAIN",
-                                  kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO";
+                                  kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO", kTeamMapPrefix = "TEAM_MAP_";
 
 inline std::string sensor(int robot_id, const std::string& suffix = "") {
   return std::string(kSensorPrefix) + std::to_string(robot_id) + suffix;
 }
 inline std::string pose(int robot_id, const std::string& suffix = "") {
   return std::string(kPosePrefix) + std::to_string(robot_id) + suffix;
+}
+/// The team's map without robot r's own information, for robot r (robot.team_map).
+inline std::string team_map(int robot_id, const std::string& suffix = "") {
+  return std::string(kTeamMapPrefix) + std::to_string(robot_id) + suffix;
 }
 inline std::string status_robot(int robot_id, const std::string& suffix = "") {
   return std::string(kStatusRobotPrefix) + std::to_string(robot_id) + suffix;
@@ -58,7 +62,7 @@ inline std::string run_info(const std::string& suffix = "") { return std::string
 
 /// Is `channel` one of the team's channels with `suffix` (DESIGN.md section 3)?
 inline bool is_team_channel(std::string_view channel, std::string_view suffix = "") {
-  for (std::string_view p : {kSensorPrefix, kPosePrefix, kStatusRobotPrefix})
+  for (std::string_view p : {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix})
     if (robot_of(channel, p, suffix) > 0) return true;
   if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
   const std::string_view base = channel.substr(0, channel.size() - suffix.size());

@@ -43,6 +43,9 @@ struct GlobalMapOptions {
   /// The same for event and snapshot seq numbers (a robot resumed from its state
   /// file skips 2^24: its first message is held, the next confirms the jump).
   std::int64_t max_seq_jump = 100000;
+  /// Every this many frames, each robot gets the map without its own information
+  /// (TEAM_MAP_<r>, for robot.team_map.fuse; docs/decisions.md). 0: never.
+  int team_map_period_frames = 0;
 };
 void parse(config::Reader& r, GlobalMapOptions* o);
 
@@ -164,6 +167,11 @@ class GlobalMap {
   IncarnationVerdict observe_incarnation(int robot_id, std::int64_t incarnation, int frame);
   /// True while a second live sender with robot r's id is flagged.
   bool duplicate_sender(int robot_id) const;
+
+  /// Landmark `id`'s fusion without robot r's estimate (the other robots' own
+  /// information, for r's team map). False, outputs unchanged, when no other robot
+  /// holds a usable estimate.
+  bool fused_without(int id, int robot_id, Eigen::Vector2d* position, Eigen::Matrix2d* cov) const;
 
   const GlobalEntry& entry(int id) const { return entries_[static_cast<std::size_t>(id)]; }
   int max_landmark_id() const { return static_cast<int>(entries_.size()); }

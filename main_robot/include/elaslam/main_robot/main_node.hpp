@@ -31,6 +31,7 @@ struct MainCounters {
   std::int64_t decode_errors = 0;    // counted by the I/O shell
   std::int64_t notices_sent = 0;
   std::int64_t maps_published = 0;
+  std::int64_t team_maps_published = 0;  // TEAM_MAP_<r> publications (all chunks of one count once)
   std::int64_t resyncs_requested = 0;    // LMAP_RESYNC requests sent
   std::int64_t restarts = 0;             // robots seen with a new incarnation
   std::int64_t stale_incarnation = 0;    // messages of an older incarnation refused (replay, second sender)
@@ -68,6 +69,17 @@ class MainNode {
   /// with `frame` (default: the newest frame every robot has finished, or before any
   /// POSE was seen, the newest frame of any event). Returns the chunk count.
   int make_global_map(std::int64_t now_utime, int frame = -1);
+  /// Robot r's team map (TEAM_MAP_<r>, main.team_map_period_frames): the global map
+  /// without r's own information (GlobalMap::fused_without), in the same chunk pool
+  /// (map_chunk; the last make_* call fills it). Returns the chunk count.
+  int make_team_map(int robot_id, std::int64_t now_utime, int frame = -1);
+  /// True (once) when the team maps of `frame` are due: every
+  /// main.team_map_period_frames frames, never for an older frame than the last.
+  bool team_map_due(int frame);
+  /// Whether robot r has been heard from (a POSE): who gets a team map.
+  bool robot_seen(int robot_id) const {
+    return robot_id >= 1 && robot_id <= kMaxTeamRobots && robot_frame_[static_cast<std::size_t>(robot_id - 1)] >= 0;
+  }
   const global_map_t& map_chunk(int i) const { return chunks_[static_cast<std::size_t>(i)]; }
   node_status_t status_msg(std::int64_t now_utime) const;
 
@@ -101,7 +113,9 @@ class MainNode {
   int finished_frame(int robot_id, int frame);
   /// A refused message: counted per reason, `why` (when given) says why; returns false.
   bool refused(Refusal reason, const std::string& problem, std::string* why);
+  int make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot);
   GlobalMap map_;
+  int team_map_frame_ = -1;  // frame of the last team maps
   MainCounters counters_;
   std::vector<Notice> pending_;
   std::vector<dynamic_notice_t> notices_;
@@ -149,7 +163,9 @@ class MainPorts {
         map_(channels::global_map(shell.suffix())),
         notice_(channels::dynamic_notice(shell.suffix())),
         status_(channels::status_main(shell.suffix())),
-        resync_(channels::lmap_resync(shell.suffix())) {}
+        resync_(channels::lmap_resync(shell.suffix())) {
+    for (int r = 1; r <= kMaxTeamRobots; ++r) team_map_[static_cast<std::size_t>(r - 1)] = channels::team_map(r, shell.suffix());
+  }
 
   /// Subscribe the inputs; false when the transport refused.
   bool open(const MainQueues& queues = {}) {
@@ -166,9 +182,17 @@ class MainPorts {
   }
 
   /// GLOBAL_MAP now, stamped `frame` (default: the newest frame every robot has finished).
+  /// With main.team_map_period_frames, every robot heard from also gets its team
+  /// map (TEAM_MAP_<r>) when one is due for `frame`.
   void publish_map(int frame = -1) {
     const int n = node_.make_global_map(shell_.now_utime(), frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
+    if (!node_.team_map_due(frame)) return;
+    for (int r = 1; r <= kMaxTeamRobots; ++r) {
+      if (!node_.robot_seen(r)) continue;
+      const int m = node_.make_team_map(r, shell_.now_utime(), frame);
+      for (int i = 0; i < m; ++i) shell_.publish(team_map_[static_cast<std::size_t>(r - 1)], node_.map_chunk(i));
+    }
   }
   void publish_status() {
     node_status_t m = node_.status_msg(shell_.now_utime());
@@ -204,6 +228,7 @@ class MainPorts {
   Shell& shell_;
   MainNode& node_;
   const std::string map_, notice_, status_, resync_;  // channel names, built once
+  std::array<std::string, kMaxTeamRobots> team_map_;  // TEAM_MAP_<r>
 };
 
 }  // namespace elaslam

@@ -97,6 +97,14 @@ class EkfSlam {
   /// robot. O(n).
   UpdateReport update_landmark_only(int id, const RangeBearing& z);
 
+  /// Correction with a direct measurement of landmark `id`'s position: z = l + v,
+  /// v ~ N(0, R) (H selects the landmark; the team map's information, team_aid.hpp).
+  /// R must be symmetric positive definite. d2 = (z - l)^T (P_ll + R)^-1 (z - l).
+  /// Same gain, health check and Joseph / standard covariance step as update(). O(n^2).
+  UpdateReport update_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
+  /// The same measurement's innovation and d2 without changing the filter.
+  UpdateReport check_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) const;
+
   /// Add landmark `id` by inverse observation (eq 15) with Jacobian augmentation.
   EkfStatus add_landmark(int id, const RangeBearing& z);
 
@@ -148,6 +156,10 @@ class EkfSlam {
 
  private:
   bool valid_id(int id) const { return id >= 0 && id < options_.max_landmark_id; }
+  /// check_position / update_position: input checks, the innovation and d2 into
+  /// `report`, the Cholesky factor of Z = P_ll + R into L; false (status set) on failure.
+  bool position_innovation(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R, int* slot,
+                           Eigen::Matrix2d* L, UpdateReport* report) const;
   /// Input checks shared by check() and update(): kBadInput / kUnknownLandmark.
   EkfStatus locate(int id, const RangeBearing& z, int* slot) const;
   /// The two columns of P of the landmark at offset `off`, into lm_cols_ (O(n)).

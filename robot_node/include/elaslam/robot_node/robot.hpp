@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "elaslam/common/contract.hpp"
@@ -18,6 +19,7 @@
 #include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/lmap.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
+#include "elaslam/robot_node/team_aid.hpp"
 
 namespace elaslam {
 
@@ -68,6 +70,15 @@ struct FrameSummary {
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
 };
 
+/// The team map's effect on this robot (RobotNode reports them).
+struct TeamCounters {
+  std::int64_t offered = 0;  // team estimates received for landmarks the aided filter holds as STATIC
+  std::int64_t fused = 0;    // increments fused
+  std::int64_t gated = 0;    // team estimates that failed the consistency test (team_map_gate_probability)
+  std::int64_t refused = 0;  // increments the aided filter refused (its health checks)
+  double nis_sum = 0.0;      // sum of the fused increments' d2 (2 dof each: about 2 per increment when consistent)
+};
+
 class Robot {
  public:
   Robot(const RobotOptions& options, int robot_id);
@@ -82,13 +93,24 @@ class Robot {
   /// Returns true when the robot held it in its filter. Emits no event.
   bool apply_notice(int landmark_id, int frame);
 
+  /// One landmark of the team's map without this robot (TEAM_MAP_<r>; team_aid.hpp):
+  /// with options.team_map_fuse, what it adds to what was fused before goes into the
+  /// aided filter, for a STATIC landmark the robot holds. Returns true when fused.
+  bool apply_team_estimate(int landmark_id, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov);
+
   // ---- outputs of the last frame ----------------------------------------------
   const std::vector<MapEvent>& events() const { return events_; }
   const std::vector<GateRecord>& gate_records() const { return gate_.records(); }
   const ConsistencyMonitor& consistency() const { return monitor_; }
 
   // ---- state ------------------------------------------------------------------
+  /// The own filter: the robot's own observations only; its map is what the robot
+  /// reports (events, snapshots).
   const EkfSlam& filter() const { return ekf_; }
+  /// The robot's best estimate: the aided filter with options.team_map_fuse, else
+  /// the own one. Its pose is the robot's pose (POSE).
+  const EkfSlam& estimate() const { return aided_ ? *aided_ : ekf_; }
+  const TeamCounters& team_counters() const { return team_counters_; }
   const LMap& lmap() const { return lmap_; }
   const RobotOptions& options() const { return options_; }
   int robot_id() const { return robot_id_; }
@@ -115,13 +137,25 @@ class Robot {
   void mark_moving(int id, const RangeBearing* seen, FrameSummary* s);
   void record_sighting(int id, const RangeBearing& z);
   void emit(EventKind kind, int id);
+  // The operations that change which landmarks are held, or that every filter must
+  // see, on the own filter and then the aided one; the own filter's status is returned.
+  EkfStatus mirror_add(int id, const RangeBearing& z, FrameSummary* s);
+  EkfStatus mirror_remove(int id);
+  UpdateReport mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s);
+  EkfStatus mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s);
   /// An add_landmark's status: false (counted) unless kOk.
   bool added(EkfStatus st, FrameSummary* s);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
 
   RobotOptions options_;
   int robot_id_;
-  EkfSlam ekf_;   // sole owner of the mean and covariance
+  EkfSlam ekf_;   // the own filter: sole owner of the mean and covariance the robot reports
+  // With team_map_fuse: the aided filter, the same operations on the same landmarks
+  // as ekf_ plus the team's increments (the mirror_* helpers keep them together).
+  std::optional<EkfSlam> aided_;
+  TeamChannel team_;
+  TeamCounters team_counters_;
+  double team_gate_threshold_ = 0.0;  // chi2 quantile, 2 dof, of team_map_gate_probability
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   ElaGate gate_;  // this frame's verdicts and gate records
   ConsistencyMonitor monitor_;  // NIS of the corrections over a window of frames

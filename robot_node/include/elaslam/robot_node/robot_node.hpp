@@ -46,6 +46,8 @@ struct RobotNodeCounters {
   std::int64_t filter_full = 0;       // landmarks not added because every filter slot was taken
   std::int64_t inconsistent_frames = 0;  // frames the consistency monitor found the filter inconsistent
   std::int64_t recoveries = 0;           // of those, pose covariance widened (consistency_recover)
+  std::int64_t team_map_chunks = 0;      // TEAM_MAP_<r> chunks applied (robot.team_map.fuse)
+  std::int64_t team_map_stale = 0;       // ... ignored: older than one applied
 };
 
 class RobotNode {
@@ -71,6 +73,16 @@ class RobotNode {
   /// taken as that notice (held like one), unless this robot has changed its own
   /// view of the landmark since. Returns false when the chunk was invalid.
   bool on_global_map(const global_map_t& msg, std::string* why = nullptr);
+
+  /// One chunk of the team's map without this robot (TEAM_MAP_<r>, robot.team_map):
+  /// each landmark goes to Robot::apply_team_estimate. Refused (false, counted) when
+  /// invalid or when a landmark in it lists this robot as a contributor (this
+  /// robot's own information would come back: a GLOBAL_MAP on the wrong channel).
+  /// A chunk older than one applied (a lower version of the same main incarnation)
+  /// is ignored. A chunk of frame k takes effect after this robot's frame k + 1 (held
+  /// until then, like a notice): the live team and the in-process run agree. Without
+  /// robot.team_map.fuse the robot does not subscribe (and refuses it here).
+  bool on_team_map(const global_map_t& msg, std::string* why = nullptr);
 
   /// main_robot asks for a snapshot. True when this robot answers: a snapshot is
   /// ready (snapshot_chunk()), at most one per processed frame.
@@ -128,6 +140,8 @@ class RobotNode {
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);
+  /// The held team estimates whose map's frame this robot has passed go to the Robot.
+  void apply_team_estimates();
   void note_inconsistent(bool recovered);  // FAULT_INCONSISTENT and a rate-limited alert
   void note_filter_full(int n);  // landmarks left out this frame: FAULT_CAPACITY and a rate-limited alert
   void prepare_snapshot_chunks();
@@ -167,6 +181,15 @@ class RobotNode {
   bool snapshot_ready_ = false;
   int last_resync_frame_ = -1;
   int duplicate_until_frame_ = -1;            // STATUS shows FAULT_DUPLICATE_SENDER until then
+  std::int64_t team_map_incarnation_ = 0, team_map_version_ = -1;  // newest TEAM_MAP_<r> applied
+  struct TeamPending {  // a team estimate waiting for this robot's frame after its map's frame
+    bool valid = false;
+    int frame = 0;
+    Eigen::Vector2d position = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  };
+  std::vector<TeamPending> team_pending_;  // per landmark id (robot.team_map.fuse only)
+  int team_pending_count_ = 0;
   std::vector<int> notice_frame_;             // per landmark id: frame of the newest notice had, -1: none
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
   std::vector<dynamic_notice_t> held_;  // notices for frames not processed yet (fixed capacity)
@@ -181,10 +204,12 @@ struct RobotQueues {
   int global_map = 1000;  // chunks: several per publication
   int resync = 100;
   int own_pose = 100;     // this robot's own POSE channel: a second sender with this id
+  int team_map = 1000;    // TEAM_MAP_<r> chunks (robot.team_map.fuse)
 };
 
 /// A RobotNode on the message layer (transport/node_shell.hpp): receives SENSOR_<r>,
-/// DYNAMIC_NOTICE, GLOBAL_MAP (the moving set: lost notices repaired), LMAP_RESYNC
+/// DYNAMIC_NOTICE, GLOBAL_MAP (the moving set: lost notices repaired), TEAM_MAP_<r>
+/// (with robot.team_map.fuse: the other robots' map), LMAP_RESYNC
 /// (main_robot asks for a snapshot) and its own POSE_<r> (a second sender with this
 /// id); for every processed frame publishes its LMAP_EVENTs, its LMAP_SNAPSHOT
 /// chunks when one is due, then POSE_<r> (the end of the robot's frame for
@@ -220,7 +245,12 @@ class RobotPorts {
         queues.resync);
     const int own = shell_.template subscribe<pose_estimate_t>(
         pose_, [this](const pose_estimate_t& m, const std::string&) { on_own_pose(m); }, queues.own_pose);
-    return sensor > 0 && notice > 0 && map > 0 && resync > 0 && own > 0;
+    int team = 1;
+    if (node_.robot().options().team_map_fuse)
+      team = shell_.template subscribe<global_map_t>(
+          channels::team_map(node_.robot_id(), shell_.suffix()),
+          [this](const global_map_t& m, const std::string&) { on_team_map(m); }, queues.team_map);
+    return sensor > 0 && notice > 0 && map > 0 && resync > 0 && own > 0 && team > 0;
   }
 
   void publish_status() {
@@ -259,6 +289,11 @@ class RobotPorts {
   void on_map(const global_map_t& msg) {
     std::string why;
     if (!node_.on_global_map(msg, &why)) shell_.refuse("global map refused: " + why);
+  }
+
+  void on_team_map(const global_map_t& msg) {
+    std::string why;
+    if (!node_.on_team_map(msg, &why)) shell_.refuse("team map refused: " + why);
   }
 
   void on_resync(const resync_request_t& msg) {

@@ -51,6 +51,19 @@ struct RobotOptions {
   bool consistency_recover = false;
   double recovery_sigma_xy = 0.5;             // [m]
   double recovery_sigma_theta = 10.0 * kPi / 180.0;  // [rad]
+  /// The team's map back to the robot (team_aid.hpp; the optional `team_map:` map).
+  /// With `fuse`, the robot runs a second ("aided") filter: the same observations,
+  /// plus the other robots' map from main_robot's TEAM_MAP_<r>, fused without double
+  /// counting. The aided filter gives the robot's pose (POSE); the own filter, which
+  /// holds the robot's own data only, gives its events and snapshots, and the ELA
+  /// gate and the lifecycle judge against it (so that what the robot reports never
+  /// depends on what the team sent: docs/decisions.md).
+  bool team_map_fuse = false;
+  double team_map_min_gain = 0.05;  // TeamChannel: fuse an increment when tr(P_ll dY) >= this
+  /// A team estimate is fused only when it agrees with the aided filter's estimate
+  /// of the landmark: (g - l)^T (P_ll + G)^-1 (g - l) within the chi-square
+  /// quantile of this probability (2 dof). 1: no test.
+  double team_map_gate_probability = 0.9999;
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
   /// Whether a mapped landmark that fails its test while it is the only one in view
   /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.

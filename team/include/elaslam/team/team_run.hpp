@@ -36,6 +36,7 @@ TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o);
 struct TrajectoryPoint {
   double time_s = 0.0;
   Pose2 pose;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // the estimate's covariance (POSE; zero for truth)
 };
 
 struct RunResult {

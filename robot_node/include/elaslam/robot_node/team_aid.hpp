@@ -1,0 +1,63 @@
+// The team's map back to a robot without double counting (issue 16; the argument is
+// in docs/decisions.md, "The team helps its members").
+//
+// main_robot sends each robot r the map of the other robots: per landmark, the
+// information fusion of every robot's own estimate but r's (TEAM_MAP_<r>). Those
+// estimates are independent of r's data, since a robot reports only what its own
+// filter learned (Robot keeps that filter apart from the one that fuses the team
+// map: the "own" and the "aided" filter, as DDF-SAM keeps a robot's condensed map
+// apart from its neighbourhood map). But consecutive team maps share what the others
+// learned before: fusing each one whole would count it again and again. This is the
+// channel filter of decentralised data fusion, per landmark: it remembers the
+// information it has fused (Y_f, y_f in information form) and offers only what a new
+// team estimate adds, Y_new - Y_f and y_new - y_f. When the others learned more, that
+// is exactly the likelihood of their new data; the robot fuses it as a direct
+// measurement of the landmark, z = l + v with v ~ N(0, (Y_new - Y_f)^-1).
+//
+// Directions in which the team's information fell (a robot's estimate dropped, a
+// covariance that grew) are not fused; a rule that never double counts. Fixed
+// memory; no allocation after construction.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace elaslam {
+
+struct TeamIncrement {
+  Eigen::Vector2d z = Eigen::Vector2d::Zero();  // [m] the measurement of the landmark's position
+  Eigen::Matrix2d R = Eigen::Matrix2d::Zero();  // [m^2] its covariance (positive definite)
+  Eigen::Matrix2d Y = Eigen::Matrix2d::Zero();  // R^-1: the information it carries
+};
+
+class TeamChannel {
+ public:
+  /// `min_gain`: an increment is offered only when it would shrink the landmark's
+  /// variance noticeably, tr(P_ll (Y_new - Y_f)) >= min_gain (0.05: five percent);
+  /// smaller ones wait until they add up (it bounds the filter work per team map).
+  TeamChannel(int max_landmark_id, double min_gain);
+
+  /// A team estimate (g, G) of landmark `id`, whose current estimate in the aided
+  /// filter has covariance P_ll and mean l. True with the increment to fuse in
+  /// `out`; false when there is nothing worth fusing (or G is not a covariance).
+  bool offer(int id, const Eigen::Vector2d& g, const Eigen::Matrix2d& G, const Eigen::Vector2d& l,
+             const Eigen::Matrix2d& P_ll, TeamIncrement* out) const;
+  /// The increment `inc` of landmark `id` was fused: count it.
+  void commit(int id, const TeamIncrement& inc);
+
+  /// The landmark left the aided filter: the information fused went with it.
+  void forget(int id);
+  void clear();
+
+  /// The information fused so far for `id` (zero when none).
+  const Eigen::Matrix2d& fused_information(int id) const { return Y_[static_cast<std::size_t>(id)]; }
+  int max_landmark_id() const { return static_cast<int>(Y_.size()); }
+
+ private:
+  double min_gain_;
+  std::vector<Eigen::Matrix2d> Y_;  // per id: information fused
+  std::vector<Eigen::Vector2d> y_;  // per id: information vector fused
+};
+
+}  // namespace elaslam

@@ -1,0 +1,73 @@
+#include "elaslam/robot_node/team_aid.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+namespace elaslam {
+
+TeamChannel::TeamChannel(int max_landmark_id, double min_gain)
+    : min_gain_(min_gain),
+      Y_(static_cast<std::size_t>(std::max(max_landmark_id, 0)), Eigen::Matrix2d::Zero()),
+      y_(static_cast<std::size_t>(std::max(max_landmark_id, 0)), Eigen::Vector2d::Zero()) {}
+
+void TeamChannel::forget(int id) {
+  if (id < 0 || id >= max_landmark_id()) return;
+  Y_[static_cast<std::size_t>(id)].setZero();
+  y_[static_cast<std::size_t>(id)].setZero();
+}
+
+void TeamChannel::clear() {
+  std::fill(Y_.begin(), Y_.end(), Eigen::Matrix2d::Zero());
+  std::fill(y_.begin(), y_.end(), Eigen::Vector2d::Zero());
+}
+
+// dY = Y_new - Y_f = V diag(lambda) V^T. Directions with lambda > 0 carry the
+// others' new information: there the measurement is v^T dy / lambda with variance
+// 1 / lambda. Directions with none (lambda <= 0) get a variance a billion times the
+// largest one and the current estimate as their value: no innovation, and an
+// information of 1e-9 of the increment's, which the channel counts as fused.
+bool TeamChannel::offer(int id, const Eigen::Vector2d& g, const Eigen::Matrix2d& G, const Eigen::Vector2d& l,
+                        const Eigen::Matrix2d& P_ll, TeamIncrement* out) const {
+  if (id < 0 || id >= max_landmark_id() || !g.allFinite() || !G.allFinite() || !l.allFinite() || !P_ll.allFinite())
+    return false;
+  const Eigen::LLT<Eigen::Matrix2d> llt(0.5 * (G + G.transpose()));
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::Matrix2d Y_new = llt.solve(Eigen::Matrix2d::Identity());
+  const Eigen::Vector2d y_new = Y_new * g;
+  const auto i = static_cast<std::size_t>(id);
+  const Eigen::Matrix2d dY = 0.5 * ((Y_new - Y_[i]) + (Y_new - Y_[i]).transpose());
+  const Eigen::Vector2d dy = y_new - y_[i];
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
+  eig.computeDirect(dY);
+  const Eigen::Vector2d lambda = eig.eigenvalues();  // ascending
+  const Eigen::Matrix2d V = eig.eigenvectors();
+  if (!(lambda(1) > 0.0) || !std::isfinite(lambda(1))) return false;
+  const Eigen::Matrix2d dY_plus = V * lambda.cwiseMax(0.0).asDiagonal() * V.transpose();
+  if (!((P_ll * dY_plus).trace() >= min_gain_)) return false;
+  Eigen::Vector2d info = lambda, value;
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector2d v = V.col(k);
+    if (lambda(k) > 1e-9 * lambda(1)) {
+      value(k) = v.dot(dy) / lambda(k);
+    } else {
+      info(k) = 1e-9 * lambda(1);
+      value(k) = v.dot(l);
+    }
+  }
+  out->Y = V * info.asDiagonal() * V.transpose();
+  out->z = V * value;
+  out->R = V * info.cwiseInverse().asDiagonal() * V.transpose();
+  out->R = 0.5 * (out->R + out->R.transpose()).eval();
+  return true;
+}
+
+void TeamChannel::commit(int id, const TeamIncrement& inc) {
+  if (id < 0 || id >= max_landmark_id()) return;
+  Y_[static_cast<std::size_t>(id)] += inc.Y;
+  y_[static_cast<std::size_t>(id)] += inc.Y * inc.z;
+}
+
+}  // namespace elaslam
