@@ -50,6 +50,7 @@ void Robot::reset() {
   gate_.clear();
   monitor_.restart();
   team_.clear();
+  trouble_frame_ = -1;
 }
 
 FrameSummary Robot::process(const FrameInput& in) {
@@ -80,6 +81,11 @@ FrameSummary Robot::process(const FrameInput& in) {
   s.events_dropped = events_dropped_;
   events_dropped_ = 0;
   check_consistency(&s);
+  // Trouble the robot sees itself: every mapped landmark it judged, at least
+  // kTeamMinTested, failed (a robot lost in heading finds them all outside their
+  // ELA; movers rarely make a whole view), or the consistency monitor's verdict.
+  // With a team map that mostly disagrees, it means lost.
+  if ((s.num_rejected >= kTeamMinTested && s.num_accepted == 0) || s.inconsistent) trouble_frame_ = in.frame;
   return s;
 }
 
@@ -380,27 +386,48 @@ EkfStatus Robot::mirror_remove(int id) {
   return st;
 }
 
-bool Robot::apply_team_estimate(int landmark_id, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov) {
-  if (!aided_ || !lmap_.valid_id(landmark_id) || lmap_[landmark_id].status != LandmarkStatus::kStatic ||
-      !aided_->has_landmark(landmark_id))
-    return false;
-  ++team_counters_.offered;
-  TeamIncrement inc;
-  if (!team_.offer(landmark_id, position, cov, aided_->landmark(landmark_id), aided_->landmark_cov(landmark_id), &inc))
-    return false;
-  // A team estimate that contradicts the robot's own (its chi-square test at
-  // team_map_gate_probability) is not fused: one robot's divergence must not pull
-  // the others; nothing is counted as fused, the next team map tries again.
-  if (aided_->check_position(landmark_id, position, cov).d2 > team_gate_threshold_) {
+bool Robot::team_eligible(int id) const {
+  return aided_ && lmap_.valid_id(id) && lmap_[id].status == LandmarkStatus::kStatic && aided_->has_landmark(id);
+}
+
+bool Robot::apply_team_map(const TeamEstimate* estimates, int n) {
+  if (!aided_) return false;
+  int tested = 0, disagree = 0;
+  for (int k = 0; k < n; ++k) {
+    const TeamEstimate& e = estimates[k];
+    if (!team_eligible(e.landmark_id)) continue;
+    ++tested;
+    if (aided_->check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) ++disagree;
+  }
+  team_counters_.offered += tested;
+  // Most of it disagrees, and the robot saw trouble itself lately: the robot, not
+  // the team, is wrong.
+  const bool trouble = trouble_frame_ >= 0 && last_frame_ - trouble_frame_ <= kTroubleMemoryFrames;
+  const bool lost = tested >= kTeamMinTested && 2 * disagree > tested && trouble;
+  for (int k = 0; k < n; ++k)
+    if (team_eligible(estimates[k].landmark_id)) fuse_team_estimate(estimates[k], /*test=*/!lost);
+  if (lost) ++team_counters_.lost;
+  return lost;
+}
+
+// A team estimate that contradicts the robot's own (its chi-square test at
+// team_map_gate_probability) is not fused unless the robot was found lost; nothing
+// is counted as fused then, and the next team map tries again.
+bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
+  if (test && aided_->check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) {
     ++team_counters_.gated;
     return false;
   }
-  const UpdateReport r = aided_->update_position(landmark_id, inc.z, inc.R);
+  TeamIncrement inc;
+  if (!team_.offer(e.landmark_id, e.position, e.cov, aided_->landmark(e.landmark_id), aided_->landmark_cov(e.landmark_id),
+                   &inc))
+    return false;
+  const UpdateReport r = aided_->update_position(e.landmark_id, inc.z, inc.R);
   if (r.status != EkfStatus::kOk) {
     ++team_counters_.refused;
     return false;
   }
-  team_.commit(landmark_id, inc);
+  team_.commit(e.landmark_id, inc);
   ++team_counters_.fused;
   team_counters_.nis_sum += r.d2;
   return true;

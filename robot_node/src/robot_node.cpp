@@ -56,7 +56,10 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
   held_.reserve(kMaxHeldNotices);
-  if (options.team_map_fuse) team_pending_.resize(static_cast<std::size_t>(options.ekf.max_landmark_id));
+  if (options.team_map_fuse) {
+    team_pending_.resize(static_cast<std::size_t>(options.ekf.max_landmark_id));
+    team_due_.reserve(static_cast<std::size_t>(options.ekf.max_landmark_id));
+  }
   alert_.reserve(kAlertBytes);
   prepare_snapshot_chunks();
 }
@@ -455,13 +458,19 @@ bool RobotNode::on_team_map(const global_map_t& msg, std::string* why) {
 
 void RobotNode::apply_team_estimates() {
   if (team_pending_count_ == 0) return;
+  team_due_.clear();  // reserved at construction: one per landmark id
   for (std::size_t id = 0; id < team_pending_.size(); ++id) {
     TeamPending& p = team_pending_[id];
     if (!p.valid || p.frame >= last_frame_) continue;
-    robot_.apply_team_estimate(static_cast<int>(id), p.position, p.cov);
+    team_due_.push_back({static_cast<int>(id), p.position, p.cov});
     p.valid = false;
     --team_pending_count_;
   }
+  if (team_due_.empty()) return;
+  // Lost: most of the team's map disagrees with this robot. Flagged like the
+  // consistency monitor's verdict (FAULT_INCONSISTENT, a rate-limited alert).
+  if (robot_.apply_team_map(team_due_.data(), static_cast<int>(team_due_.size())))
+    note_inconsistent(/*recovered=*/true);
 }
 
 bool RobotNode::on_resync(const resync_request_t& msg, std::int64_t now_utime) {

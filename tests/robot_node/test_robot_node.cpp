@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <functional>
+#include <memory>
+
+#include <Eigen/Geometry>
 
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/common/contract.hpp"
@@ -226,6 +229,73 @@ TEST(RobotNodeTeamMap, TeamEstimatesGoIntoTheAidedFilterOnly) {
   ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(6, p6, p6, lms, test::all_ids(6)), 2), 0),
             RobotNode::Verdict::kProcessed);
   EXPECT_GT(robot.team_counters().fused, fused);
+}
+
+// Most of a team map disagrees with the robot, which has just seen every landmark in
+// view fail its test (its heading was kicked by 0.3 rad): the robot is the one that
+// is wrong. It says so (FAULT_INCONSISTENT) and fuses the map untested. A robot with
+// no such trouble of its own refuses the same map; one disagreeing landmark of six
+// is refused alone.
+TEST(RobotNodeTeamMap, ARobotInTroubleThatMostOfItsTeamMapDisagreesWithIsLost) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.team_map_fuse = true;
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  const Pose2 zero{0.0, 0.0, 0.0}, kicked{0.0, 0.0, -0.3};
+  const auto make = [&](bool trouble) {
+    auto node = std::make_unique<RobotNode>(o, 2);
+    for (int k = 0; k < 8; ++k) {
+      // The last frame sees the kick (its landmarks fail the ELA, not yet MOVING).
+      const Pose2& truth = trouble && k == 7 ? kicked : zero;  // the odometer still says zero
+      EXPECT_EQ(node->on_sensor(to_msg(test::frame_from(k, truth, zero, lms, test::all_ids(6)), 2), 0),
+                RobotNode::Verdict::kProcessed);
+    }
+    return node;
+  };
+  // The team's map: every landmark rotated by 0.3 rad about the origin, certain.
+  global_map_t g{};
+  g.version = 1;
+  g.num_chunks = 1;
+  g.id_end = 1000;
+  contract::set_count(&g.landmarks, &g.num_landmarks, 6);
+  const Eigen::Rotation2Dd rot(0.3);
+  for (int k = 0; k < 6; ++k) {
+    global_landmark_t& l = g.landmarks[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d p = rot * lms[static_cast<std::size_t>(k)];
+    l.id = k;
+    l.x = p.x();
+    l.y = p.y();
+    l.cov[0][0] = l.cov[1][1] = 1e-4;
+    l.contributors = 0b1;
+  }
+  const auto lost = make(true);
+  ASSERT_GE(lost->robot().team_counters().offered, 0);
+  const int held = static_cast<int>(lost->robot().estimate().num_landmarks());
+  ASSERT_TRUE(lost->on_team_map(g));
+  EXPECT_EQ(lost->robot().team_counters().lost, 1);
+  EXPECT_EQ(lost->robot().team_counters().gated, 0);
+  EXPECT_GE(lost->robot().team_counters().fused, 3);
+  EXPECT_GE(held, 3);
+  EXPECT_NE(lost->status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  EXPECT_NE(lost->take_alert().find("inconsistent"), std::string::npos);
+
+  const auto fine = make(false);
+  ASSERT_TRUE(fine->on_team_map(g));
+  EXPECT_EQ(fine->robot().team_counters().lost, 0);
+  EXPECT_EQ(fine->robot().team_counters().gated, 6);
+  EXPECT_EQ(fine->robot().team_counters().fused, 0);
+  EXPECT_EQ(fine->status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  EXPECT_NEAR(fine->robot().estimate().pose().theta, fine->robot().filter().pose().theta, 1e-12);
+
+  const auto one_off = make(true);
+  for (int k = 1; k < 6; ++k) {
+    global_landmark_t& l = g.landmarks[static_cast<std::size_t>(k)];
+    l.x = one_off->robot().estimate().landmark(k).x();
+    l.y = one_off->robot().estimate().landmark(k).y();
+  }
+  g.landmarks[0].contributors = 0b1;
+  ASSERT_TRUE(one_off->on_team_map(g));
+  EXPECT_EQ(one_off->robot().team_counters().lost, 0);
+  EXPECT_EQ(one_off->robot().team_counters().gated, 1);
 }
 
 TEST(RobotNodeTeamMap, RefusedWhenTheOptionIsOff) {

@@ -70,6 +70,13 @@ struct FrameSummary {
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
 };
 
+/// One landmark of a team map (TEAM_MAP_<r>).
+struct TeamEstimate {
+  int landmark_id = -1;
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+};
+
 /// The team map's effect on this robot (RobotNode reports them).
 struct TeamCounters {
   std::int64_t offered = 0;  // team estimates received for landmarks the aided filter holds as STATIC
@@ -77,6 +84,7 @@ struct TeamCounters {
   std::int64_t gated = 0;    // team estimates that failed the consistency test (team_map_gate_probability)
   std::int64_t refused = 0;  // increments the aided filter refused (its health checks)
   double nis_sum = 0.0;      // sum of the fused increments' d2 (2 dof each: about 2 per increment when consistent)
+  std::int64_t lost = 0;     // team maps most of whose estimates disagreed with the robot's: the robot was lost
 };
 
 class Robot {
@@ -93,10 +101,23 @@ class Robot {
   /// Returns true when the robot held it in its filter. Emits no event.
   bool apply_notice(int landmark_id, int frame);
 
-  /// One landmark of the team's map without this robot (TEAM_MAP_<r>; team_aid.hpp):
-  /// with options.team_map_fuse, what it adds to what was fused before goes into the
-  /// aided filter, for a STATIC landmark the robot holds. Returns true when fused.
-  bool apply_team_estimate(int landmark_id, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov);
+  /// The estimates of one team map that are due (TEAM_MAP_<r>, the map without this
+  /// robot; team_aid.hpp), with options.team_map_fuse: for each STATIC landmark the
+  /// robot holds, what it adds to what was fused before goes into the aided filter.
+  /// Each is tested against the aided filter's estimate (team_map_gate_probability):
+  /// - when at least kTeamMinTested were tested, more than half disagree, and the
+  ///   robot saw trouble itself in the last kTroubleMemoryFrames frames (a frame in
+  ///   which every mapped landmark it judged, at least kTeamMinTested, failed, or
+  ///   the consistency monitor's verdict),
+  ///   the robot, not the team, is wrong (lost): every one is fused, untested (the
+  ///   aided filter relocalises against the team's map); returns true;
+  /// - otherwise those that disagree are not fused (one robot's divergence must not
+  ///   pull the others). Returns false.
+  /// The own filter is left alone (it holds the robot's own data only).
+  bool apply_team_map(const TeamEstimate* estimates, int n);
+  static constexpr int kTeamMinTested = 3;
+  /// "Lately" for the robot's own trouble: the frames a FAULT stays flagged in STATUS.
+  static constexpr int kTroubleMemoryFrames = 100;
 
   // ---- outputs of the last frame ----------------------------------------------
   const std::vector<MapEvent>& events() const { return events_; }
@@ -142,6 +163,10 @@ class Robot {
   EkfStatus mirror_add(int id, const RangeBearing& z, FrameSummary* s);
   EkfStatus mirror_remove(int id);
   UpdateReport mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s);
+  /// A team estimate of a landmark the aided filter holds as STATIC (else false).
+  bool team_eligible(int id) const;
+  /// Fuse what the team estimate adds (TeamChannel); `test`: only when it agrees.
+  bool fuse_team_estimate(const TeamEstimate& e, bool test);
   EkfStatus mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s);
   /// An add_landmark's status: false (counted) unless kOk.
   bool added(EkfStatus st, FrameSummary* s);
@@ -156,6 +181,7 @@ class Robot {
   TeamChannel team_;
   TeamCounters team_counters_;
   double team_gate_threshold_ = 0.0;  // chi2 quantile, 2 dof, of team_map_gate_probability
+  int trouble_frame_ = -1;  // last frame all of whose judged landmarks failed, or found inconsistent
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   ElaGate gate_;  // this frame's verdicts and gate records
   ConsistencyMonitor monitor_;  // NIS of the corrections over a window of frames

@@ -75,7 +75,7 @@ class RobotNode {
   bool on_global_map(const global_map_t& msg, std::string* why = nullptr);
 
   /// One chunk of the team's map without this robot (TEAM_MAP_<r>, robot.team_map):
-  /// each landmark goes to Robot::apply_team_estimate. Refused (false, counted) when
+  /// its landmarks go to Robot::apply_team_map. Refused (false, counted) when
   /// invalid or when a landmark in it lists this robot as a contributor (this
   /// robot's own information would come back: a GLOBAL_MAP on the wrong channel).
   /// A chunk older than one applied (a lower version of the same main incarnation)
@@ -189,6 +189,7 @@ class RobotNode {
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
   };
   std::vector<TeamPending> team_pending_;  // per landmark id (robot.team_map.fuse only)
+  std::vector<TeamEstimate> team_due_;     // scratch: those due now
   int team_pending_count_ = 0;
   std::vector<int> notice_frame_;             // per landmark id: frame of the newest notice had, -1: none
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
