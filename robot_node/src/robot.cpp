@@ -229,8 +229,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
         if (lmap_.candidate_consistent(id)) {
           confirm(id, o.z, s);
         } else if (options_.candidate_updates) {
-          if (ekf_.update_landmark_only(id, o.z).status != EkfStatus::kOk) ++s->filter_faults;
-          if (aided_ && aided_->update_landmark_only(id, o.z).status != EkfStatus::kOk) ++s->filter_faults;
+          mirror_update_landmark_only(id, o.z, s);
         }
         continue;
       }
@@ -366,6 +365,11 @@ UpdateReport Robot::mirror_update(int id, const RangeBearing& z, bool gate, Fram
   const UpdateReport r = ekf_.update(id, z, gate);
   if (aided_ && r.status == EkfStatus::kOk && aided_->update(id, z, false).status != EkfStatus::kOk) ++s->filter_faults;
   return r;
+}
+
+void Robot::mirror_update_landmark_only(int id, const RangeBearing& z, FrameSummary* s) {
+  if (ekf_.update_landmark_only(id, z).status != EkfStatus::kOk) ++s->filter_faults;
+  if (aided_ && aided_->update_landmark_only(id, z).status != EkfStatus::kOk) ++s->filter_faults;
 }
 
 EkfStatus Robot::mirror_add(int id, const RangeBearing& z, FrameSummary* s) {

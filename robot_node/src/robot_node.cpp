@@ -423,18 +423,15 @@ bool RobotNode::on_team_map(const global_map_t& msg, std::string* why) {
                        std::to_string(last_frame_),
                    why);
   const int own_bit = 1 << (robot_id_ - 1);
-  for (int k = 0; k < msg.num_landmarks; ++k)
-    if (msg.landmarks[static_cast<std::size_t>(k)].id >= options_.ekf.max_landmark_id)
+  for (int k = 0; k < msg.num_landmarks; ++k) {
+    const global_landmark_t& l = msg.landmarks[static_cast<std::size_t>(k)];
+    if (l.id >= options_.ekf.max_landmark_id)
+      return refused(Refusal::kMalformed, contract::got("landmark id outside [0, filter.max_landmark_id)", l.id), why);
+    if (l.contributors & own_bit)
       return refused(Refusal::kMalformed,
-                     contract::got("landmark id outside [0, filter.max_landmark_id)",
-                                   msg.landmarks[static_cast<std::size_t>(k)].id),
+                     "landmark " + std::to_string(l.id) + " lists this robot as a contributor: not a map without it",
                      why);
-  for (int k = 0; k < msg.num_landmarks; ++k)
-    if (msg.landmarks[static_cast<std::size_t>(k)].contributors & own_bit)
-      return refused(Refusal::kMalformed,
-                     "landmark " + std::to_string(msg.landmarks[static_cast<std::size_t>(k)].id) +
-                         " lists this robot as a contributor: not a map without it",
-                     why);
+  }
   if (msg.incarnation == team_map_incarnation_ && msg.version < team_map_version_) {
     ++counters_.team_map_stale;
     return true;

@@ -89,31 +89,15 @@ TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
   return c;
 }
 
-namespace {
-
-// The simulator as a frame source: the world steps once per frame.
-class SimulatorFrames : public FrameProvider {
- public:
-  explicit SimulatorFrames(const sim::ScenarioOptions& o) : options_(o), world_(o) {}
-  int num_frames() const override { return options_.frames; }
-  int num_robots() const override { return world_.num_robots(); }
-  int robot_id(int i) const override { return options_.robots[static_cast<std::size_t>(i)].id; }
-  void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    if (k > 0) world_.step();
-    const std::int64_t t0 = 1'000'000'000'000'000;  // a fixed epoch: runs are reproducible
-    const std::int64_t utime = t0 + static_cast<std::int64_t>(std::llround(k * options_.dt_s() * 1e6));
-    *gt = sim::to_message(world_, utime);
-    sensors->resize(static_cast<std::size_t>(world_.num_robots()));
-    for (int i = 0; i < world_.num_robots(); ++i)
-      sim::to_message(world_.sensor_frame(i), utime, &(*sensors)[static_cast<std::size_t>(i)]);
-  }
-
- private:
-  sim::ScenarioOptions options_;
-  sim::World world_;
-};
-
-}  // namespace
+void SimulatorFrames::frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) {
+  if (k > 0) world_.step();
+  const std::int64_t t0 = 1'000'000'000'000'000;  // a fixed epoch: runs are reproducible
+  const std::int64_t utime = t0 + static_cast<std::int64_t>(std::llround(k * options_.dt_s() * 1e6));
+  *gt = sim::to_message(world_, utime);
+  sensors->resize(static_cast<std::size_t>(world_.num_robots()));
+  for (int i = 0; i < world_.num_robots(); ++i)
+    sim::to_message(world_.sensor_frame(i), utime, &(*sensors)[static_cast<std::size_t>(i)]);
+}
 
 RunResult run_team(const TeamConfig& config) {
   SimulatorFrames frames(config.scenario);

@@ -58,20 +58,11 @@ class DenseEkf {
     *Z = *H * P_ * H->transpose() + W_;
   }
   void update(int id, const RangeBearing& y) {
-    const Eigen::Index n = X_.size();
     Eigen::MatrixXd H;
     Vec2 nu;
     Eigen::Matrix2d Z;
     linearise(id, y, &H, &nu, &Z);
-    const Eigen::MatrixXd K = P_ * H.transpose() * Z.inverse();
-    X_ += K * nu;
-    X_(2) = wrap_angle(X_(2));
-    if (joseph_) {
-      const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
-      P_ = (IKH * P_ * IKH.transpose() + K * W_ * K.transpose()).eval();
-    } else {
-      P_ = (P_ - K * Z * K.transpose()).eval();
-    }
+    correct(H, nu, Z, W_);
   }
   // Schmidt ("consider") update of landmark `id` alone: the textbook gain with
   // every row but the landmark's zeroed, and the Joseph form (valid for any gain).
@@ -90,19 +81,10 @@ class DenseEkf {
   // A direct measurement z = l + v, v ~ N(0, R), of landmark `id`'s position:
   // H selects the landmark; textbook gain, Joseph or standard form.
   void update_position(int id, const Vec2& z, const Eigen::Matrix2d& R) {
-    const Eigen::Index n = X_.size(), off = offset(id);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, n);
+    const Eigen::Index off = offset(id);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, X_.size());
     H.middleCols<2>(off).setIdentity();
-    const Eigen::Matrix2d Z = H * P_ * H.transpose() + R;
-    const Eigen::MatrixXd K = P_ * H.transpose() * Z.inverse();
-    X_ += K * (z - X_.segment<2>(off));
-    X_(2) = wrap_angle(X_(2));
-    if (joseph_) {
-      const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
-      P_ = (IKH * P_ * IKH.transpose() + K * R * K.transpose()).eval();
-    } else {
-      P_ = (P_ - K * Z * K.transpose()).eval();
-    }
+    correct(H, z - X_.segment<2>(off), H * P_ * H.transpose() + R, R);
   }
   void add(int id, const RangeBearing& y) {
     const Eigen::Index n = X_.size();
@@ -142,6 +124,20 @@ class DenseEkf {
   const std::vector<int>& ids() const { return ids_; }
 
  private:
+  // The textbook correction (eqs 10-12) with the dense H, innovation nu, its
+  // covariance Z = H P H^T + R and the measurement noise R: Joseph or standard form.
+  void correct(const Eigen::MatrixXd& H, const Vec2& nu, const Eigen::Matrix2d& Z, const Eigen::Matrix2d& R) {
+    const Eigen::Index n = X_.size();
+    const Eigen::MatrixXd K = P_ * H.transpose() * Z.inverse();
+    X_ += K * nu;
+    X_(2) = wrap_angle(X_(2));
+    if (joseph_) {
+      const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(n, n) - K * H;
+      P_ = (IKH * P_ * IKH.transpose() + K * R * K.transpose()).eval();
+    } else {
+      P_ = (P_ - K * Z * K.transpose()).eval();
+    }
+  }
   Eigen::Index offset(int id) const {
     for (std::size_t k = 0; k < ids_.size(); ++k)
       if (ids_[k] == id) return Layout::landmark_offset(static_cast<int>(k));

@@ -143,11 +143,17 @@ TEST(EkfSlam, PositionUpdateMatchesTheDenseUpdate) {
   EXPECT_GE(checked, 200);
 }
 
-TEST(EkfSlam, PositionUpdateRefusesUnknownAndBadInput) {
-  const EkfOptions o = small_options(true);
-  EkfSlam ekf(o);
+// A filter at the origin holding landmark 3 only: for the refusal tests.
+EkfSlam filter_with_landmark_3() {
+  EkfSlam ekf(small_options(true));
   ekf.reset({0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
-  ASSERT_EQ(ekf.add_landmark(3, {2.0, 0.1}), EkfStatus::kOk);
+  EXPECT_EQ(ekf.add_landmark(3, {2.0, 0.1}), EkfStatus::kOk);
+  return ekf;
+}
+
+TEST(EkfSlam, PositionUpdateRefusesUnknownAndBadInput) {
+  EkfSlam ekf = filter_with_landmark_3();
+  ASSERT_TRUE(ekf.has_landmark(3));
   const Eigen::VectorXd x = ekf.mean();
   const Eigen::Matrix2d R = 0.01 * Eigen::Matrix2d::Identity();
   const Vec2 z(2.0, 0.2);
@@ -169,10 +175,8 @@ TEST(EkfSlam, PositionUpdateRefusesUnknownAndBadInput) {
 }
 
 TEST(EkfSlam, LandmarkOnlyUpdateRefusesUnknownAndBadInput) {
-  const EkfOptions o = small_options(true);
-  EkfSlam ekf(o);
-  ekf.reset({0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
-  ASSERT_EQ(ekf.add_landmark(3, {2.0, 0.1}), EkfStatus::kOk);
+  EkfSlam ekf = filter_with_landmark_3();
+  ASSERT_TRUE(ekf.has_landmark(3));
   const Eigen::VectorXd x = ekf.mean();
   EXPECT_EQ(ekf.update_landmark_only(4, {2.0, 0.1}).status, EkfStatus::kUnknownLandmark);
   EXPECT_EQ(ekf.update_landmark_only(3, {-1.0, 0.1}).status, EkfStatus::kBadInput);

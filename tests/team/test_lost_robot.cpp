@@ -6,29 +6,22 @@
 #include <cstdio>
 
 #include "elaslam/common/geometry.hpp"
-#include "elaslam/simulator/messages.hpp"
-#include "elaslam/simulator/world.hpp"
 #include "elaslam/team/team_run.hpp"
 
 namespace elaslam {
 namespace {
 
-// The simulator as a frame source, robot index `kicked`'s odometer turned by `kick`
-// rad from frame `at` on (its odometry says it turned that much more than it did).
+// The simulator's frames (SimulatorFrames), robot index `kicked`'s odometer turned by
+// `kick` rad from frame `at` on (its odometry says it turned that much more than it did).
 class KickedFrames : public FrameProvider {
  public:
   KickedFrames(const sim::ScenarioOptions& o, int kicked, int at, double kick)
-      : options_(o), world_(o), kicked_(kicked), at_(at), kick_(kick) {}
-  int num_frames() const override { return options_.frames; }
-  int num_robots() const override { return world_.num_robots(); }
-  int robot_id(int i) const override { return options_.robots[static_cast<std::size_t>(i)].id; }
+      : frames_(o), kicked_(kicked), at_(at), kick_(kick) {}
+  int num_frames() const override { return frames_.num_frames(); }
+  int num_robots() const override { return frames_.num_robots(); }
+  int robot_id(int i) const override { return frames_.robot_id(i); }
   void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    if (k > 0) world_.step();
-    const std::int64_t utime = 1'000'000'000'000'000 + static_cast<std::int64_t>(std::llround(k * options_.dt_s() * 1e6));
-    *gt = sim::to_message(world_, utime);
-    sensors->resize(static_cast<std::size_t>(world_.num_robots()));
-    for (int i = 0; i < world_.num_robots(); ++i)
-      sim::to_message(world_.sensor_frame(i), utime, &(*sensors)[static_cast<std::size_t>(i)]);
+    frames_.frame(k, gt, sensors);
     sensor_frame_t& s = (*sensors)[static_cast<std::size_t>(kicked_)];
     const Pose2 odo{s.odom_x, s.odom_y, s.odom_theta};
     if (k == at_) at_odo_ = odo;
@@ -41,8 +34,7 @@ class KickedFrames : public FrameProvider {
   }
 
  private:
-  sim::ScenarioOptions options_;
-  sim::World world_;
+  SimulatorFrames frames_;
   int kicked_, at_;
   double kick_;
   Pose2 at_odo_;

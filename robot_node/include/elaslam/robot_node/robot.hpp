@@ -163,6 +163,7 @@ class Robot {
   EkfStatus mirror_add(int id, const RangeBearing& z, FrameSummary* s);
   EkfStatus mirror_remove(int id);
   UpdateReport mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s);
+  void mirror_update_landmark_only(int id, const RangeBearing& z, FrameSummary* s);
   /// A team estimate of a landmark the aided filter holds as STATIC (else false).
   bool team_eligible(int id) const;
   /// Fuse what the team estimate adds (TeamChannel); `test`: only when it agrees.

@@ -13,6 +13,7 @@
 
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/simulator/world.hpp"
 #include "elaslam/team/metrics.hpp"
 #include "elaslam/team/team_config.hpp"
 
@@ -70,6 +71,21 @@ class FrameProvider {
   virtual int num_robots() const = 0;
   virtual int robot_id(int i) const = 0;
   virtual void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) = 0;
+};
+
+/// The simulator as a frame source: the world steps once per frame; message times
+/// from a fixed epoch (runs are reproducible).
+class SimulatorFrames : public FrameProvider {
+ public:
+  explicit SimulatorFrames(const sim::ScenarioOptions& o) : options_(o), world_(o) {}
+  int num_frames() const override { return options_.frames; }
+  int num_robots() const override { return world_.num_robots(); }
+  int robot_id(int i) const override { return options_.robots[static_cast<std::size_t>(i)].id; }
+  void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override;
+
+ private:
+  sim::ScenarioOptions options_;
+  sim::World world_;
 };
 
 /// Run the configured scenario (the simulator) end to end.
