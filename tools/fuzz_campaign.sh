@@ -14,8 +14,11 @@
 # - --max-len: bound on a mutated input (default 4096, libFuzzer's own default:
 #   several times faster than fuzz.sh's 131072; the seeds, real recordings up to
 #   130 KB, are read whole).
-# - --ledger: where the ledger lives (default results/fuzz_campaign/): one line per
-#   chunk in <target>.tsv: UTC time, commit, executions, exec/s, corpus, result.
+# - --ledger: where the ledger lives (default fuzz/ledger/, in the repository: a campaign
+#   outlives the machine it ran on, and each session's chunks are committed with its
+#   work): one line per chunk in <target>.tsv: UTC time, commit, executions, exec/s,
+#   corpus, result. A line whose commit is "summary" stands for chunks whose own lines
+#   were lost (its result says where the figure was recorded).
 # - --status: print the totals and exit.
 # To pause it, kill it (it resumes from the ledger and the corpus); do not SIGSTOP a
 # chunk (the watchdog then reports a false timeout: mark that line's result "void:...").
@@ -30,7 +33,7 @@ CHUNK=600
 TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam"
 MAX_LEN=4096
 BUILD_DIR="$ROOT/build/fuzz"
-LEDGER="$ROOT/results/fuzz_campaign"
+LEDGER="$ROOT/fuzz/ledger"
 STATUS=0
 die() { echo "fuzz_campaign.sh: $*" >&2; exit 2; }
 posint() { [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "$1 must be a positive integer, got '$2'"; }
@@ -69,7 +72,8 @@ report() {
   done
 }
 commit=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-git -C "$ROOT" diff --quiet HEAD -- 2>/dev/null || commit="$commit+dirty"
+# The ledger itself is not the code under test: appending to it does not make the tree dirty.
+git -C "$ROOT" diff --quiet HEAD -- . ':(exclude)fuzz/ledger' 2>/dev/null || commit="$commit+dirty"
 if [ "$STATUS" -eq 1 ]; then report; exit 0; fi
 while :; do
   next=""; least=""
