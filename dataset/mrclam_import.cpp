@@ -176,6 +176,11 @@ int import_main(int argc, char** argv) {
   try {
     const mrclam::Dataset d = mrclam::Dataset::load(a.dataset_dir, o.robots);
     const mrclam::FrameSource src(d, o);
+    // Its directory is made when missing (runs/ on a fresh clone), as run_dataset does.
+    if (const auto dir = std::filesystem::path(a.out_path).parent_path(); !dir.empty()) {
+      std::error_code ec;
+      std::filesystem::create_directories(dir, ec);
+    }
     lcm::LogFile log(a.out_path, "w");
     if (!log.good()) {
       std::fprintf(stderr, "mrclam_import: cannot open %s for writing\n", a.out_path.c_str());

@@ -8,7 +8,8 @@ and state files.
 
 Writes OUT/fuzz_robot_node/ (robot 1's inputs: SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MAP,
 LMAP_RESYNC, POSE_1), OUT/fuzz_main_robot/ (LMAP_EVENT, LMAP_SNAPSHOT, POSE_1, POSE_2,
-POSE_3, POSE_7), each a few windows of consecutive frames from the first frame on;
+POSE_3, POSE_7), OUT/fuzz_viewer/ (RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE,
+STATUS_ROBOT_1, CANDIDATES_1, GROUND_TRUTH), each a few windows of consecutive frames from the first frame on;
 OUT/fuzz_state/ (the state files with fuzz_state's selector byte: raw and sealed
 robot state, main state); OUT/fuzz_mrclam/ (tests/dataset/data/tiny, robot 1). The
 config corpus is config/*.yaml (copied). Needs the PyPI lcm (the project's .venv).
@@ -25,6 +26,8 @@ from elaslam_tool import add_version, need, parse_args, run_in_venv  # noqa: E40
 
 ROBOT = ["SENSOR_1", "DYNAMIC_NOTICE", "GLOBAL_MAP", "LMAP_RESYNC", "POSE_1"]
 MAIN = ["LMAP_EVENT", "LMAP_SNAPSHOT", "POSE_1", "POSE_2", "POSE_3", "POSE_7"]
+VIEWER = ["RUN_INFO", "POSE_1", "POSE_2", "POSE_3", "GLOBAL_MAP", "DYNAMIC_NOTICE", "STATUS_ROBOT_1", "CANDIDATES_1",
+          "GROUND_TRUTH"]
 MRCLAM = ["Barcodes.dat", "Landmark_Groundtruth.dat", "Robot1_Odometry.dat", "Robot1_Groundtruth.dat",
           "Robot1_Measurement.dat"]
 # Windows of SENSOR_1 / POSE frames: [first, last) counted in robot 1's frames.
@@ -77,6 +80,7 @@ def main():
     events = [(ev.channel, bytes(ev.data)) for ev in lcm.EventLog(args.log, "r")]
     write(args.out, "fuzz_robot_node", windows(events, ROBOT, "SENSOR_1"))
     write(args.out, "fuzz_main_robot", windows(events, MAIN, "POSE_1"))
+    write(args.out, "fuzz_viewer", windows(events, VIEWER, "POSE_1"))
     states = []
     if args.robot_state:
         text = open(args.robot_state, "rb").read()

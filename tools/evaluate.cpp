@@ -449,12 +449,20 @@ void print_report(const LogData& d, const Assembled& x, const RunInfo& info, con
                   const std::vector<RobotFrameAccount>& accounts) {
   print_summary(std::cout, info, x.r);
   const Quantiles lq = quantiles(x.all_latency), mq = quantiles(x.map_latency), pq = quantiles(x.all_publish_latency);
-  std::cout << "  latency_us (sensor -> pose): p50 " << lq.p50 << " p99 " << lq.p99 << " max " << lq.max << " ("
-            << lq.count << " poses)\n"
-            << "  pose publish latency_us (sensor publish -> pose publish): p50 " << pq.p50 << " p99 " << pq.p99
-            << " max " << pq.max << "\n"
-            << "  global map latency_us (sensor -> map including the frame): p50 " << mq.p50 << " p99 " << mq.p99
-            << " max " << mq.max << "\n";
+  // A replayed recording (tools/replay_team.sh, lcm-logplayer) keeps its SENSOR
+  // frames' original stamps: a "latency" of minutes or years measures nothing.
+  constexpr double kReplayedUs = 60e6;
+  if (lq.count > 0 && lq.p50 > kReplayedUs) {
+    std::cout << "  latency: not measured (the SENSOR frames' stamps are " << static_cast<long long>(lq.p50 / 1e6)
+              << " s before their poses: a replayed recording)\n";
+  } else {
+    std::cout << "  latency_us (sensor -> pose): p50 " << lq.p50 << " p99 " << lq.p99 << " max " << lq.max << " ("
+              << lq.count << " poses)\n"
+              << "  pose publish latency_us (sensor publish -> pose publish): p50 " << pq.p50 << " p99 " << pq.p99
+              << " max " << pq.max << "\n"
+              << "  global map latency_us (sensor -> map including the frame): p50 " << mq.p50 << " p99 " << mq.p99
+              << " max " << mq.max << "\n";
+  }
   print_frames(accounts, j["frames_dropped"].get<long>(), j["poses_missing_from_log"].get<long>());
   for (const auto& [ch, n] : d.decode_errors) std::cout << "  undecodable events on " << ch << ": " << n << "\n";
   for (const auto& [ch, reasons] : d.invalid)

@@ -8,7 +8,7 @@
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
 #                     [--loss P [--loss-scope radio|all]]
 #                     [--kill-robot R --kill-at-frame F [--restart-after S]]
-#                     [--robot-state] [--key-file FILE | --auth]
+#                     [--robot-state] [--key-file FILE | --auth] [--view [PORT]]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
 #   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
@@ -66,6 +66,10 @@
 #   (simulator, main_robot, each robot_node, the progress line) the team key FILE;
 #   --auth makes a new key in DIR/team.key (tools/make_team_key.sh) and uses it.
 #   Without either, the config's team.key_file decides (the repo's configs have none).
+# - --view [PORT] (default 8765; 0: any free port): the live viewer (docs/tools.md) with the team; its
+#   URL, http://127.0.0.1:PORT/, is printed at the start. It listens on the host's
+#   loopback even when the team runs in a private namespace (viewer --http-netns).
+#   On a terminal the viewer stays up after the summary until Enter is pressed.
 # Exit status: 0 done, 1 the run failed, 2 bad arguments, 130 interrupted.
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
@@ -89,6 +93,8 @@ RESTART_AFTER=1.0
 ROBOT_STATE=0
 KEY_FILE=""      # --key-file, or DIR/team.key with --auth
 AUTH=0
+VIEW_PORT=""     # --view [PORT]
+VIEW_NS=""       # internal: the network namespace the viewer's HTTP socket goes in
 FRAMES_ARG=""    # --frames, when given (to check --kill-at-frame against)
 SIM_ARGS=()      # overrides for the simulator (and run_scenario)
 EVAL_ARGS=()     # the same facts, for the record when a log lacks RUN_INFO
@@ -133,6 +139,9 @@ while [ $# -gt 0 ]; do
     --realtime) REALTIME=1; shift ;;
     --no-progress) PROGRESS=0; shift ;;
     --no-baseline) BASELINE=0; shift ;;
+    --view) VIEW_PORT=8765; shift
+            if [ $# -gt 0 ] && [[ "$1" =~ ^[0-9]+$ ]]; then number --view "$1" 0 65535 int; VIEW_PORT="$1"; shift; fi ;;
+    --view-ns) [ $# -ge 2 ] || die "$1 needs a value"; VIEW_NS="$2"; shift 2 ;;  # internal (nested run)
     --inside) INSIDE=1; shift ;;  # internal: already inside the namespace, set-up done
     -h|--help) usage 0 ;;
     *) echo "run_team.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
@@ -150,6 +159,7 @@ CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
 [ -z "$KILL_FRAME" ] || [ -z "$FRAMES_ARG" ] || [ "$KILL_FRAME" -lt "$FRAMES_ARG" ] ||
   die "--kill-at-frame must be below --frames ($FRAMES_ARG), got $KILL_FRAME"
 [ -n "$KILL_ROBOT" ] || [ "$RESTART_AFTER" = 1.0 ] || die "--restart-after needs --kill-robot"
+[ -z "$VIEW_PORT" ] || [ "$IN_PROCESS" -eq 0 ] || die "--view needs the live team (not --in-process: nothing is on the bus)"
 if [ "$IN_PROCESS" -eq 1 ] && { [ -n "$KILL_ROBOT" ] || [ "$ROBOT_STATE" -eq 1 ]; }; then
   die "--in-process has no processes to kill, no network to lose packets on and no robot state files"
 fi
@@ -170,6 +180,9 @@ if [ "$AUTH" -eq 1 ]; then  # a new key for this run (the nested run inside the 
   KEY_FILE="$OUT/team.key"
 fi
 KEY_ARGS=(${KEY_FILE:+--key-file "$KEY_FILE"})
+# --view holds the page after the run only for someone at a terminal (the outermost
+# run's stdin; a nested run's is /dev/null).
+[ "$INSIDE" -eq 1 ] || { [ -t 0 ] && export ELASLAM_VIEW_HOLD=1; } || export ELASLAM_VIEW_HOLD=0
 
 # Whoever is outermost says that the run was interrupted (once).
 NESTED_PID=""
@@ -182,6 +195,7 @@ interrupted() {
 trap interrupted INT TERM
 
 TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor)
+[ -z "$VIEW_PORT" ] || TARGETS+=(viewer)
 if [ "$INSIDE" -eq 0 ]; then
   first=0
   if [ ! -f "$BUILD_DIR/build.ninja" ] || [ ! -x "$ROOT/.venv/bin/python" ]; then
@@ -231,19 +245,20 @@ PIDS=()
 NAMES=()
 NETNS=()
 MONITOR_PID=""
+VIEWER_PID=""    # --view
 WATCH_PID=""     # --kill-robot: waits for robot R's pose of frame F
 declare -A HOST_NS HOST_IP CMDS
 
 cleanup() {
   local pid
   trap '' INT TERM  # a second Ctrl-C (or TERM) must not leave namespaces behind
-  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID; do wait "$pid" 2>/dev/null || true; done
+  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID $VIEWER_PID; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID $VIEWER_PID; do wait "$pid" 2>/dev/null || true; done
   for ns in "${NETNS[@]}"; do
     [ -z "$LOSS" ] || ip netns exec "$ns" nft delete table inet elaslam_loss 2>/dev/null || true
     ip netns del "$ns" 2>/dev/null || true
   done
-  PIDS=(); NETNS=(); MONITOR_PID=""; WATCH_PID=""
+  PIDS=(); NETNS=(); MONITOR_PID=""; WATCH_PID=""; VIEWER_PID=""
 }
 trap cleanup EXIT
 
@@ -340,6 +355,23 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     $($where log) "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-frame "POSE_$KILL_ROBOT" \
       "$KILL_FRAME" --timeout 86400 >"$OUT/logs/kill_watch.log" 2>&1 &
     WATCH_PID=$!
+  fi
+  if [ -n "$VIEW_PORT" ]; then  # from the logger's host: it hears every channel; not supervised
+    $($where log) "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} \
+      "${KEY_ARGS[@]}" >"$OUT/logs/viewer.log" 2>&1 &
+    VIEWER_PID=$!
+    local url=""
+    for _ in $(seq 50); do
+      url=$(sed -n 's/^viewer: \(http[^ ]*\)$/\1/p' "$OUT/logs/viewer.log" 2>/dev/null)
+      [ -n "$url" ] || ! kill -0 "$VIEWER_PID" 2>/dev/null || { sleep 0.1; continue; }
+      break
+    done
+    if [ -n "$url" ]; then
+      echo "run_team.sh: the viewer: $url" >&2
+    else
+      echo "run_team.sh: the viewer did not start (log: $OUT/logs/viewer.log): $(tail -n 1 "$OUT/logs/viewer.log")" >&2
+      VIEWER_PID=""
+    fi
   fi
   if [ "$PROGRESS" -eq 1 ]; then  # to the terminal; not supervised (a failure costs only the line)
     $($where main) "$BIN/monitor" --config "$CONFIG" "${KEY_ARGS[@]}" &
@@ -449,7 +481,8 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
     --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} $([ "$REALTIME" -eq 1 ] && echo --realtime) \
     $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" \
     ${KILL_ROBOT:+--kill-robot "$KILL_ROBOT" --kill-at-frame "$KILL_FRAME" --restart-after "$RESTART_AFTER"} \
-    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) "${KEY_ARGS[@]}" &
+    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) "${KEY_ARGS[@]}" \
+    ${VIEW_PORT:+--view "$VIEW_PORT" --view-ns "/proc/$$/ns/net"} &
   NESTED_PID=$!
   wait "$NESTED_PID" || rc=$?
   NESTED_PID=""
@@ -458,6 +491,7 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
 fi
 
 if [ "$HOSTS" -eq 1 ]; then
+  [ -z "$VIEW_PORT" ] || VIEW_NS="/proc/$$/ns/net"  # the viewer's page on this (the host's) side
   HUB="elaslam_${$}_hub"
   ip netns add "$HUB"; NETNS+=("$HUB")
   ip -n "$HUB" link add br0 type bridge
@@ -502,3 +536,10 @@ echo "run_team.sh: recorded $OUT/run.lcmlog"
 "$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --config "$CONFIG" "${BASE_ARGS[@]}" ${MODE_NAME:+--mode "$MODE_NAME"} \
   ${KEY_FILE:+--key-file "$KEY_FILE"} "${EVAL_ARGS[@]}"
 echo "run_team.sh: results in $OUT (metrics.json, frames.csv, map.csv, trajectories/, logs/)"
+# --view on a terminal: the page keeps the run's last state until Enter.
+if [ -n "$VIEWER_PID" ] && [ "${ELASLAM_VIEW_HOLD:-0}" = 1 ] && kill -0 "$VIEWER_PID" 2>/dev/null &&
+   { exec 3</dev/tty; } 2>/dev/null; then
+  echo "run_team.sh: the viewer still shows the run at $(sed -n 's/^viewer: //p' "$OUT/logs/viewer.log"); press Enter to stop it" >&2
+  read -r -u 3 _ || true
+  exec 3<&-
+fi

@@ -62,6 +62,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   }
   alert_.reserve(kAlertBytes);
   prepare_snapshot_chunks();
+  candidates_.candidates.resize(kMaxCandidates);  // num_candidates says how many count
 }
 
 // Snapshot chunks, sized from the generated code, a pool for the largest map.
@@ -158,6 +159,7 @@ std::string RobotNode::check_progress(const sensor_frame_t& msg, Refusal* reason
 
 RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t now_utime, std::string* why) {
   snapshot_ready_ = false;
+  candidates_ready_ = false;
   events_.clear();
   Refusal reason = Refusal::kMalformed;
   std::string problem = validate(msg, &reason);
@@ -206,6 +208,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     make_snapshot(now_utime);
     snapshot_ready_ = true;
   }
+  fill_candidates(now_utime);
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count();
   processing_.add(us);
   fill_pose(msg, now_utime, s, us);
@@ -264,6 +267,39 @@ void RobotNode::fill_events(std::int64_t now_utime) {
     events_.push_back(m);
   }
   counters_.events_sent += static_cast<std::int64_t>(events_.size());
+}
+
+// CANDIDATES_<r>: the candidates in the filter (they are there from their first
+// sighting), every candidates_period_frames while there are some and once more when
+// the last one has gone, so that a viewer clears them.
+void RobotNode::fill_candidates(std::int64_t now_utime) {
+  const int period = options_.candidates_period_frames;
+  if (period <= 0 || last_frame_ % period != 0) return;
+  const EkfSlam& f = robot_.filter();
+  const LMap& lm = robot_.lmap();
+  int n = 0, omitted = 0;
+  for (int slot = 0; slot < f.num_landmarks(); ++slot) {
+    const int id = f.id_at(slot);
+    if (lm[id].status != LandmarkStatus::kCandidate) continue;
+    if (n == kMaxCandidates) {
+      ++omitted;
+      continue;
+    }
+    landmark_estimate_t& l = candidates_.candidates[static_cast<std::size_t>(n++)];
+    l.id = id;
+    const Eigen::Vector2d p = f.landmark(id);
+    l.x = p.x();
+    l.y = p.y();
+    set_cov2(l.cov, f.landmark_cov(id));
+  }
+  if (n + omitted == 0 && candidates_.num_candidates + candidates_.num_omitted == 0) return;
+  candidates_.utime = now_utime;
+  candidates_.frame = last_frame_;
+  candidates_.robot_id = static_cast<std::int16_t>(robot_id_);
+  candidates_.incarnation = incarnation_;
+  candidates_.num_candidates = static_cast<std::int16_t>(n);
+  candidates_.num_omitted = static_cast<std::int16_t>(omitted);
+  candidates_ready_ = true;
 }
 
 int RobotNode::make_snapshot(std::int64_t now_utime) {

@@ -115,6 +115,7 @@ ChannelClass classify(const std::string& ch) {
   if (int r = channels::robot_of(ch, "POSE_"); r > 0) return {Kind::kPose, r, "pose_estimate_t"};
   if (int r = channels::robot_of(ch, "STATUS_ROBOT_"); r > 0) return {Kind::kStatusRobot, r, "node_status_t"};
   if (int r = channels::robot_of(ch, channels::kTeamMapPrefix); r > 0) return {Kind::kOther, r, "global_map_t"};
+  if (int r = channels::robot_of(ch, channels::kCandidatesPrefix); r > 0) return {Kind::kOther, r, "candidate_list_t"};
   if (ch == channels::status_main() || ch == channels::status_sim()) return {Kind::kStatus, -1, "node_status_t"};
   if (ch == channels::ground_truth()) return {Kind::kGroundTruth, -1, "ground_truth_t"};
   if (ch == channels::lmap_event()) return {Kind::kLmapEvent, -1, "landmark_event_t"};

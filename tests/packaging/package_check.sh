@@ -30,10 +30,10 @@ note() { echo "-- $*"; }
 
 # ---- the expected layout (docs/deployment.md), per package --------------------------
 # Optional parts follow what this build has: programs whose targets exist
-# (log_info, monitor), tools/spy.sh, the lcm-spy jar (needs a JDK).
+# (log_info, monitor, viewer), tools/spy.sh, the lcm-spy jar (needs a JDK).
 tool_programs() {
   local t
-  for t in run_scenario evaluate sweep run_dataset mrclam_import mrclam_stats log_info monitor; do
+  for t in run_scenario evaluate sweep run_dataset mrclam_import mrclam_stats log_info monitor viewer; do
     [ -x "$BUILD/bin/$t" ] && echo "$t"
   done
   return 0

@@ -118,6 +118,40 @@ TEST_F(RobotNodeInput, OutputsCarrySeqPoseAndPeriodicSnapshots) {
   EXPECT_EQ(node_.snapshot_chunk(0).id_end, node_.robot().lmap().size());  // max_landmark_id
 }
 
+// CANDIDATES_<r>: the landmarks seen but not trusted yet, while there are some, and
+// one empty list when the last one was confirmed.
+TEST_F(RobotNodeInput, CandidatesAreSentWhileThereAreSomeThenOnceEmpty) {
+  run(0, 1);
+  ASSERT_TRUE(node_.candidates_ready());
+  const candidate_list_t& c = node_.candidates_msg();
+  EXPECT_EQ(c.robot_id, 2);
+  EXPECT_EQ(c.frame, 0);
+  ASSERT_EQ(c.num_candidates, 6);
+  EXPECT_EQ(c.num_omitted, 0);
+  for (int k = 0; k < c.num_candidates; ++k) {
+    const landmark_estimate_t& l = c.candidates[static_cast<std::size_t>(k)];
+    ASSERT_GE(l.id, 0);
+    ASSERT_LT(l.id, 6);
+    EXPECT_NEAR(l.x, lms_[static_cast<std::size_t>(l.id)].x(), 0.2);
+    EXPECT_NEAR(l.y, lms_[static_cast<std::size_t>(l.id)].y(), 0.2);
+    EXPECT_GT(l.cov[0][0], 0.0);
+  }
+  run(1, 2);
+  ASSERT_TRUE(node_.candidates_ready());
+  EXPECT_EQ(node_.candidates_msg().num_candidates, 6);
+  run(2, 3);  // confirmed (ADD x6): the empty list clears a viewer's candidates
+  ASSERT_TRUE(node_.candidates_ready());
+  EXPECT_EQ(node_.candidates_msg().num_candidates, 0);
+  run(3, 4);
+  EXPECT_FALSE(node_.candidates_ready());
+
+  RobotOptions off = test::robot_options(Mode::kEla);
+  off.candidates_period_frames = 0;
+  RobotNode quiet(off, 2);
+  ASSERT_EQ(quiet.on_sensor(frame(0), 0), RobotNode::Verdict::kProcessed);
+  EXPECT_FALSE(quiet.candidates_ready());
+}
+
 TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {
   run(0, 4);
   dynamic_notice_t n{};

@@ -131,6 +131,7 @@ for v in nan inf -inf NaN; do
   opt mrclam_import --start "$v" "not a finite number" "${M[@]}" --check --out "$T/x.lcmlog"
   opt mrclam_stats --detect-range "$v" "not a finite number" "${M[@]}" --check
   opt monitor --interval "$v" "not a finite number"
+  opt viewer --rate "$v" "not a finite number" "${P[@]}"
   opt sweep --speed "0.5,$v" "not a finite number" "${P[@]}" --check --out "$T/sweep"
 done
 opt simulator --speed -5 "out of range" "${P[@]}" --check
@@ -151,6 +152,11 @@ opt run_dataset --start -1 "out of range" "${M[@]}" --check --out "$T/ds"
 opt mrclam_import --rate 0 "out of range" "${M[@]}" --check --out "$T/x.lcmlog"
 opt mrclam_stats --rate 1e9 "out of range" "${M[@]}" --check
 opt monitor --interval -1 "out of range"
+opt viewer --port 70000 "out of range" "${P[@]}"
+opt viewer --rate 0 "out of range" "${P[@]}"
+opt viewer --max-clients 0 "out of range" "${P[@]}"
+expect "viewer bad namespace" "viewer: cannot open the network namespace" -- "$BIN/viewer" "${P[@]}" --port 0 \
+  --http-netns "$T/no_such_netns"
 
 echo "bad_inputs: $checks checks, $failures failed"
 [ "$failures" -eq 0 ]

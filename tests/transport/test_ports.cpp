@@ -204,7 +204,7 @@ TEST(Ports, TheChannelSuffixIsInEveryName) {
   EXPECT_TRUE(plain.seen.empty());
   ASSERT_FALSE(suffixed.seen.empty());
   EXPECT_EQ(suffixed.seen.back(), "GLOBAL_MAP_T 0");  // after POSE_1_T 0
-  EXPECT_EQ(bus.dropped(), 3) << "SENSOR_1 and both STATUS had no subscriber here";
+  EXPECT_EQ(bus.dropped(), 4) << "SENSOR_1, CANDIDATES_1_T (the viewer's) and both STATUS had no subscriber here";
 }
 
 TEST(Lockstep, WaitsForEveryRobotsPoseAndRefusesAnotherRobots) {

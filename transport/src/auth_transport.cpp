@@ -73,6 +73,7 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
     return id == kSenderSimulator;
   if (const int r = robot_of(base, kPosePrefix); r > 0) return id == r;
   if (const int r = robot_of(base, kStatusRobotPrefix); r > 0) return id == r;
+  if (const int r = robot_of(base, kCandidatesPrefix); r > 0) return id == r;
   return true;  // another channel (a tool's, a test's): any sender of the team
 }
 

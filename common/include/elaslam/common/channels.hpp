@@ -14,7 +14,8 @@ inline constexpr std::string_view kSensorPrefix = "SENSOR_", kPosePrefix = "POSE
                                   kLmapEvent = "LMAP_EVENT", kLmapSnapshot = "LMAP_SNAPSHOT",
                                   kLmapResync = "LMAP_RESYNC", kGlobalMap = "GLOBAL_MAP",
                                   kDynamicNotice = "DYNAMIC_NOTICE", kStatusMain = "STATUS_MAIN",
-                                  kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO", kTeamMapPrefix = "TEAM_MAP_";
+                                  kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO", kTeamMapPrefix = "TEAM_MAP_",
+                                  kCandidatesPrefix = "CANDIDATES_";
 
 inline std::string sensor(int robot_id, const std::string& suffix = "") {
   return std::string(kSensorPrefix) + std::to_string(robot_id) + suffix;
@@ -26,6 +27,10 @@ inline std::string pose(int robot_id, const std::string& suffix = "") {
 inline std::string team_map(int robot_id, const std::string& suffix = "") {
   return std::string(kTeamMapPrefix) + std::to_string(robot_id) + suffix;
 }
+/// Robot r's candidates (candidate_list_t), for the viewer.
+inline std::string candidates(int robot_id, const std::string& suffix = "") {
+  return std::string(kCandidatesPrefix) + std::to_string(robot_id) + suffix;
+}
 inline std::string status_robot(int robot_id, const std::string& suffix = "") {
   return std::string(kStatusRobotPrefix) + std::to_string(robot_id) + suffix;
 }
@@ -34,6 +39,7 @@ inline std::string status_robot(int robot_id, const std::string& suffix = "") {
 inline std::string any_sensor(const std::string& suffix = "") { return "SENSOR_[0-9]+" + suffix; }
 inline std::string any_pose(const std::string& suffix = "") { return "POSE_[0-9]+" + suffix; }
 inline std::string any_status_robot(const std::string& suffix = "") { return "STATUS_ROBOT_[0-9]+" + suffix; }
+inline std::string any_candidates(const std::string& suffix = "") { return "CANDIDATES_[0-9]+" + suffix; }
 
 /// The robot id of a per-robot channel "<prefix><id><suffix>" (SENSOR_, POSE_,
 /// STATUS_ROBOT_; id a positive decimal of at most 6 digits), -1 when `channel` is
@@ -62,7 +68,7 @@ inline std::string run_info(const std::string& suffix = "") { return std::string
 
 /// Is `channel` one of the team's channels with `suffix` (DESIGN.md section 3)?
 inline bool is_team_channel(std::string_view channel, std::string_view suffix = "") {
-  for (std::string_view p : {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix})
+  for (std::string_view p : {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix, kCandidatesPrefix})
     if (robot_of(channel, p, suffix) > 0) return true;
   if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
   const std::string_view base = channel.substr(0, channel.size() - suffix.size());

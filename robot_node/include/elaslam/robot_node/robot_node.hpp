@@ -13,6 +13,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/chunks.hpp"
 #include "elaslam/common/histogram.hpp"
+#include "elaslam/candidate_list_t.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
@@ -106,6 +107,11 @@ class RobotNode {
   const lmap_snapshot_t& snapshot_chunk(int i) const { return chunks_[static_cast<std::size_t>(i)]; }
   /// Fill a snapshot now (e.g. on start-up or on request); returns its chunk count.
   int make_snapshot(std::int64_t now_utime);
+  /// True when this frame also produced a CANDIDATES_<r> message (robot.node.
+  /// candidates_period_frames): the robot's candidates, at most kMaxCandidates.
+  bool candidates_ready() const { return candidates_ready_; }
+  const candidate_list_t& candidates_msg() const { return candidates_; }
+  static constexpr int kMaxCandidates = 20;  // 52 bytes each: one datagram
 
   /// The incarnation every outgoing message carries (landmark_event_t): the start-up
   /// wall clock [us] of a fresh start, kept from the state file on a resume
@@ -177,8 +183,11 @@ class RobotNode {
   std::vector<int> static_ids_, moving_ids_;  // scratch: the map's ids, ascending
   std::vector<ChunkSpan> spans_;
   std::vector<lmap_snapshot_t> chunks_;
+  void fill_candidates(std::int64_t now_utime);
   int num_chunks_ = 0;
   bool snapshot_ready_ = false;
+  bool candidates_ready_ = false;
+  candidate_list_t candidates_{};  // reserved for kMaxCandidates at construction
   int last_resync_frame_ = -1;
   int duplicate_until_frame_ = -1;            // STATUS shows FAULT_DUPLICATE_SENDER until then
   std::int64_t team_map_incarnation_ = 0, team_map_version_ = -1;  // newest TEAM_MAP_<r> applied
@@ -227,7 +236,8 @@ class RobotPorts {
         event_(channels::lmap_event(shell.suffix())),
         snapshot_(channels::lmap_snapshot(shell.suffix())),
         pose_(channels::pose(node.robot_id(), shell.suffix())),
-        status_(channels::status_robot(node.robot_id(), shell.suffix())) {}
+        status_(channels::status_robot(node.robot_id(), shell.suffix())),
+        candidates_(channels::candidates(node.robot_id(), shell.suffix())) {}
 
   /// Subscribe the inputs; false when the transport refused.
   bool open(const RobotQueues& queues = {}) {
@@ -278,6 +288,7 @@ class RobotPorts {
       shell_.publish(event_, ev);
     }
     if (node_.snapshot_ready()) publish_snapshot();
+    if (node_.candidates_ready()) shell_.publish(candidates_, node_.candidates_msg());
     pose_estimate_t pose = node_.pose_msg();
     pose.utime = shell_.now_utime();
     shell_.publish(pose_, pose);
@@ -317,7 +328,7 @@ class RobotPorts {
 
   Shell& shell_;
   RobotNode& node_;
-  const std::string event_, snapshot_, pose_, status_;  // channel names, built once
+  const std::string event_, snapshot_, pose_, status_, candidates_;  // channel names, built once
   typename Shell::SequenceGaps notice_seq_;            // DYNAMIC_NOTICE's seq: lost notices
   std::function<void(const RobotNode&)> after_frame_;
 };

@@ -80,6 +80,9 @@ struct RobotOptions {
   // Node behaviour.
   int snapshot_period_frames = 10;      // LMAP_SNAPSHOT every N frames
   int update_period_frames = 1;         // at most one UPDATE event per landmark per N frames
+  /// CANDIDATES_<r> (for the viewer) every N frames while the robot has candidates,
+  /// and once when the last one left; 0: never.
+  int candidates_period_frames = 1;
   int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
   /// A robot whose first frame is not frame 0 (started late, or restarted without
   /// a state file) takes the odometer's dead reckoning over that many frames of

@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""The viewer's /state.json against the log it was shown (system_viewer): the last
+POSE_<r> of each robot, the GLOBAL_MAP assembled from its chunks (each chunk stands
+for its id range) and the highest frame, all as the viewer must have drawn them.
+
+    viewer_check.py --build-dir DIR LOG STATE_JSON
+Exit 0 when they agree, 1 (saying what differs) when not.
+"""
+import json
+import os
+import re
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "tools"))
+import decode_log  # noqa: E402  (its load_types finds the generated message types)
+import lcm  # noqa: E402
+
+
+def main():
+    args = sys.argv[1:]
+    build = args[args.index("--build-dir") + 1]
+    log_path, state_path = [a for i, a in enumerate(args) if a != "--build-dir" and (i == 0 or args[i - 1] != "--build-dir")]
+    T = decode_log.load_types(build)
+    poses, lms, moving, frame = {}, {}, set(), -1
+    for ev in lcm.EventLog(log_path, "r"):
+        if re.fullmatch(r"POSE_\d+", ev.channel):
+            p = T.pose_estimate_t.decode(ev.data)
+            poses[p.robot_id] = p
+            frame = max(frame, p.frame)
+        elif ev.channel == "GLOBAL_MAP":
+            m = T.global_map_t.decode(ev.data)
+            for i in range(m.id_begin, m.id_end):
+                lms.pop(i, None)
+                moving.discard(i)
+            for l in m.landmarks:
+                lms[l.id] = l
+                if l.status == T.global_landmark_t.MOVING:
+                    moving.add(l.id)
+            moving.update(m.moving_ids)
+            frame = max(frame, m.frame)
+        elif ev.channel == "GROUND_TRUTH":
+            frame = max(frame, T.ground_truth_t.decode(ev.data).frame)
+    state = json.load(open(state_path))
+    bad = []
+    if state["frame"] != frame:
+        bad.append(f"frame {state['frame']} against the log's {frame}")
+    robots = {r["id"]: r for r in state["robots"] if r.get("x") is not None}
+    if set(robots) != set(poses):
+        bad.append(f"robots {sorted(robots)} against the log's {sorted(poses)}")
+    for rid, p in poses.items():
+        r = robots.get(rid)
+        if r and max(abs(r["x"] - p.x), abs(r["y"] - p.y), abs(r["theta"] - p.theta)) > 1e-9:
+            bad.append(f"robot {rid}: ({r['x']}, {r['y']}, {r['theta']}) against ({p.x}, {p.y}, {p.theta})")
+    drawn = {l["id"]: l for l in state["landmarks"]}
+    static_ids = {i for i in lms if i not in moving}
+    drawn_static = {i for i, l in drawn.items() if l["status"] == "static"}
+    if drawn_static != static_ids:
+        bad.append(f"static landmarks {sorted(drawn_static ^ static_ids)} differ")
+    drawn_moving = {i for i, l in drawn.items() if l["status"] == "moving"}
+    if not drawn_moving <= moving:
+        bad.append(f"landmarks drawn moving that the map does not say move: {sorted(drawn_moving - moving)}")
+    for i in static_ids & set(drawn):
+        if max(abs(drawn[i]["x"] - lms[i].x), abs(drawn[i]["y"] - lms[i].y)) > 1e-9:
+            bad.append(f"landmark {i} at ({drawn[i]['x']}, {drawn[i]['y']}) against ({lms[i].x}, {lms[i].y})")
+    print(f"viewer_check: frame {frame}, {len(poses)} robots, {len(static_ids)} static and {len(drawn_moving)} "
+          f"moving landmarks drawn ({len(moving)} moving in the map)")
+    for b in bad:
+        print("viewer_check: MISMATCH " + b)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,240 @@
+// ViewState: what the viewer draws, from the bus's messages; bad ones change nothing.
+#include <cmath>
+#include <limits>
+#include <map>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "elaslam/viewer/view_state.hpp"
+
+namespace elaslam::viewer {
+namespace {
+
+pose_estimate_t pose(int robot, int frame, double x, double y) {
+  pose_estimate_t p{};
+  p.robot_id = static_cast<std::int16_t>(robot);
+  p.frame = frame;
+  p.x = x, p.y = y, p.theta = 0.5;
+  p.cov[0][0] = p.cov[1][1] = 0.01;
+  return p;
+}
+
+global_landmark_t landmark(int id, double x, double y, std::int8_t status = global_landmark_t::STATIC) {
+  global_landmark_t l{};
+  l.id = id, l.x = x, l.y = y;
+  l.cov[0][0] = l.cov[1][1] = 0.001;
+  l.contributors = 0b101;
+  l.status = status;
+  return l;
+}
+
+global_map_t chunk(int id_begin, int id_end, std::vector<global_landmark_t> lms, std::vector<int> moving = {}) {
+  global_map_t m{};
+  m.frame = 10, m.version = 1, m.chunk = 0, m.num_chunks = 2;
+  m.id_begin = id_begin, m.id_end = id_end;
+  m.landmarks = std::move(lms);
+  m.num_landmarks = static_cast<std::int16_t>(m.landmarks.size());
+  for (int id : moving) {
+    m.moving_ids.push_back(id);
+    m.moving_frames.push_back(9);
+    m.moving_by.push_back(1);
+  }
+  m.num_moving = static_cast<std::int16_t>(moving.size());
+  return m;
+}
+
+nlohmann::json state(const ViewState& v) { return nlohmann::json::parse(v.to_json(0.0)); }
+// What is drawn, without the viewer's own counters.
+nlohmann::json drawn(const ViewState& v) {
+  nlohmann::json j = state(v);
+  j.erase("viewer");
+  return j;
+}
+
+TEST(ViewState, PosesMakeRobotsWithTrails) {
+  ViewState v;
+  ASSERT_TRUE(v.on_pose(pose(2, 0, 1.0, 2.0)));
+  ASSERT_TRUE(v.on_pose(pose(2, 1, 1.5, 2.5)));
+  ASSERT_TRUE(v.on_pose(pose(1, 1, -1.0, 0.0)));
+  const auto j = state(v);
+  EXPECT_EQ(j["frame"], 1);
+  ASSERT_EQ(j["robots"].size(), 2u);
+  EXPECT_EQ(j["robots"][0]["id"], 1);
+  EXPECT_EQ(j["robots"][1]["id"], 2);
+  EXPECT_DOUBLE_EQ(j["robots"][1]["x"], 1.5);
+  EXPECT_EQ(j["robots"][1]["trail"].size(), 2u);
+  EXPECT_TRUE(j["robots"][1]["health"].is_null());
+  EXPECT_TRUE(j["robots"][1]["truth"].is_null());
+}
+
+TEST(ViewState, TrailsAreBoundedAndStartOverWhenARobotRestarts) {
+  ViewLimits lim;
+  lim.trail_points = 5;
+  ViewState v(lim);
+  for (int f = 0; f < 20; ++f) ASSERT_TRUE(v.on_pose(pose(1, f, f * 0.1, 0.0)));
+  EXPECT_EQ(state(v)["robots"][0]["trail"].size(), 5u);
+  EXPECT_DOUBLE_EQ(state(v)["robots"][0]["trail"][4][0], 1.9);
+  ASSERT_TRUE(v.on_pose(pose(1, 0, 0.0, 0.0)));  // restarted at frame 0
+  EXPECT_EQ(state(v)["robots"][0]["trail"].size(), 1u);
+}
+
+TEST(ViewState, EachMapChunkReplacesItsIdRangeOnly) {
+  ViewState v;
+  ASSERT_TRUE(v.on_global_map(chunk(0, 10, {landmark(3, 1, 1), landmark(7, 2, 2)})));
+  ASSERT_TRUE(v.on_global_map(chunk(10, 20, {landmark(12, 3, 3)})));
+  EXPECT_EQ(state(v)["landmarks"].size(), 3u);
+  // The next chunk of [0, 10) no longer has 7 and says 3 moves: 7 is gone, 3 drawn
+  // moving where it was last mapped, 12 untouched.
+  ASSERT_TRUE(v.on_global_map(chunk(0, 10, {}, {3})));
+  const auto j = state(v);
+  ASSERT_EQ(j["landmarks"].size(), 2u);
+  EXPECT_EQ(j["landmarks"][0]["id"], 3);
+  EXPECT_EQ(j["landmarks"][0]["status"], "moving");
+  EXPECT_DOUBLE_EQ(j["landmarks"][0]["x"], 1.0);
+  EXPECT_EQ(j["landmarks"][1]["id"], 12);
+  EXPECT_EQ(j["landmarks"][1]["status"], "static");
+  EXPECT_EQ(j["landmarks"][1]["contributors"], nlohmann::json({1, 3}));
+}
+
+TEST(ViewState, BadMessagesAreCountedAndChangeNothing) {
+  ViewState v;
+  ASSERT_TRUE(v.on_pose(pose(1, 3, 1.0, 1.0)));
+  ASSERT_TRUE(v.on_global_map(chunk(0, 10, {landmark(3, 1, 1)})));
+  const nlohmann::json before = drawn(v);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(v.on_pose(pose(1, 4, nan, 1.0)));
+  EXPECT_FALSE(v.on_pose(pose(0, 4, 1.0, 1.0)));          // no robot 0
+  EXPECT_FALSE(v.on_pose(pose(1, 4, 1.0e9, 1.0)));        // beyond the world bound
+  EXPECT_FALSE(v.on_global_map(chunk(0, 10, {landmark(11, 1, 1)})));  // id outside the chunk
+  EXPECT_FALSE(v.on_global_map(chunk(0, 300, {})));       // beyond max_landmark_id
+  global_map_t lying = chunk(0, 10, {landmark(3, 1, 1)});
+  lying.num_landmarks = 5;                                // count does not match the array
+  EXPECT_FALSE(v.on_global_map(lying));
+  dynamic_notice_t n{};
+  n.landmark_id = 999;
+  EXPECT_FALSE(v.on_notice(n));
+  EXPECT_EQ(v.bad_messages(), 7);
+  EXPECT_EQ(drawn(v), before);
+  EXPECT_EQ(state(v)["viewer"]["bad_by_reason"]["POSE not finite"], 1);
+}
+
+// A decoder that reuses its message (NodeShell) leaves entries beyond the counts:
+// only the counted ones are read.
+TEST(ViewState, OnlyTheCountedEntriesOfAChunkAreRead) {
+  ViewState v;
+  global_map_t m = chunk(0, 10, {landmark(3, 1, 1), landmark(50, 2, 2)}, {4, 60});
+  m.num_landmarks = 1;
+  m.num_moving = 0;
+  ASSERT_TRUE(v.on_global_map(m));
+  const auto j = state(v);
+  ASSERT_EQ(j["landmarks"].size(), 1u);
+  EXPECT_EQ(j["landmarks"][0]["id"], 3);
+}
+
+TEST(ViewState, NoticesAreListedOnceNewestLastAndBounded) {
+  ViewLimits lim;
+  lim.notices = 3;
+  ViewState v(lim);
+  for (int k = 0; k < 5; ++k) {
+    dynamic_notice_t n{};
+    n.frame = 10 + k, n.landmark_id = k, n.detected_by = 2;
+    ASSERT_TRUE(v.on_notice(n));
+    ASSERT_TRUE(v.on_notice(n));  // re-sent: listed once
+  }
+  const auto j = state(v);
+  ASSERT_EQ(j["notices"].size(), 3u);
+  EXPECT_EQ(j["notices"][2], nlohmann::json({{"frame", 14}, {"landmark", 4}, {"robot", 2}}));
+}
+
+TEST(ViewState, StatusGivesTheHealthRow) {
+  ViewState v;
+  node_status_t s{};
+  s.node_kind = node_status_t::ROBOT, s.node_id = 3;
+  s.frames = 120, s.frames_dropped = 2, s.queue_drops = 1;
+  s.refused[node_status_t::REFUSED_STALE] = 4;
+  s.auth_refused = 1;
+  s.fault_flags = node_status_t::FAULT_INCONSISTENT;
+  s.processing_us_p50 = 40, s.processing_us_p99 = 400;
+  ASSERT_TRUE(v.on_status(s, 1.0));
+  const auto h = nlohmann::json::parse(v.to_json(3.5))["robots"][0]["health"];
+  EXPECT_EQ(h["frames"], 120);
+  EXPECT_EQ(h["refused"], 5);
+  EXPECT_EQ(h["faults"], nlohmann::json({"inconsistent"}));
+  EXPECT_EQ(h["latency_p99_us"], 400);
+  EXPECT_DOUBLE_EQ(h["status_age_s"], 2.5);
+  s.node_kind = node_status_t::MAIN;  // main's status is not a robot's row
+  EXPECT_FALSE(v.on_status(s, 1.0));
+}
+
+// fuzz_viewer's first finding: a forged STATUS whose refusal counters sum beyond
+// 2^63 (signed overflow in the health row). Now the sum saturates, and a negative
+// counter is refused.
+TEST(ViewState, HugeOrNegativeStatusCountersAreHandled) {
+  ViewState v;
+  node_status_t s{};
+  s.node_kind = node_status_t::ROBOT, s.node_id = 1;
+  s.refused[0] = s.refused[1] = INT64_MAX;
+  ASSERT_TRUE(v.on_status(s, 0.0));
+  EXPECT_EQ(state(v)["robots"][0]["health"]["refused"], INT64_MAX);
+  s.refused[2] = -1;
+  EXPECT_FALSE(v.on_status(s, 0.0));
+  EXPECT_EQ(state(v)["viewer"]["bad_by_reason"]["STATUS negative counter"], 1);
+}
+
+TEST(ViewState, GroundTruthOverlay) {
+  ViewState v;
+  ground_truth_t g{};
+  g.frame = 5;
+  g.num_robots = 1;
+  g.robot_ids[0] = 1;
+  g.robots[0].x = 2.0;
+  g.num_landmarks = 2;
+  g.landmarks[0].id = 0, g.landmarks[0].x = 1.0;
+  g.landmarks[1].id = 1, g.landmarks[1].moving = true;
+  ASSERT_TRUE(v.on_truth(g));
+  const auto j = state(v);
+  EXPECT_DOUBLE_EQ(j["robots"][0]["truth"]["x"], 2.0);
+  EXPECT_TRUE(j["robots"][0]["x"].is_null());  // no POSE yet
+  ASSERT_EQ(j["truth_landmarks"].size(), 2u);
+  EXPECT_EQ(j["truth_landmarks"][1]["moving"], true);
+}
+
+candidate_list_t candidates(int robot, int frame, std::vector<int> ids) {
+  candidate_list_t m{};
+  m.robot_id = static_cast<std::int16_t>(robot);
+  m.frame = frame;
+  for (int id : ids) {
+    landmark_estimate_t l{};
+    l.id = id, l.x = id, l.y = 1.0;
+    l.cov[0][0] = l.cov[1][1] = 0.01;
+    m.candidates.push_back(l);
+  }
+  m.num_candidates = static_cast<std::int16_t>(ids.size());
+  return m;
+}
+
+std::map<int, std::string> statuses(const ViewState& v) {
+  std::map<int, std::string> out;
+  const nlohmann::json j = state(v);
+  for (const auto& l : j["landmarks"]) out[l["id"].get<int>()] = l["status"].get<std::string>();
+  return out;
+}
+
+TEST(ViewState, CandidatesAreDrawnUnlessTheMapHasThemStatic) {
+  ViewState v;
+  ASSERT_TRUE(v.on_global_map(chunk(0, 10, {landmark(3, 1, 1)}, {4})));
+  ASSERT_TRUE(v.on_candidates(candidates(2, 10, {3, 4, 5})));
+  // 3 is static in the map; 4 moved and is seen again: a candidate; 5 is new.
+  EXPECT_EQ(statuses(v), (std::map<int, std::string>{{3, "static"}, {4, "candidate"}, {5, "candidate"}}));
+  ASSERT_TRUE(v.on_candidates(candidates(2, 11, {})));  // robot 2's candidates are gone
+  EXPECT_EQ(statuses(v), (std::map<int, std::string>{{3, "static"}}));
+  ASSERT_TRUE(v.on_candidates(candidates(1, 11, {6})));
+  for (int f = 12; f < 12 + ViewState::kCandidateFrames + 1; ++f) ASSERT_TRUE(v.on_pose(pose(2, f, 0, 0)));
+  EXPECT_EQ(statuses(v).count(6), 0u);  // robot 1 went quiet: its list is stale
+  EXPECT_FALSE(v.on_candidates(candidates(1, 40, {999})));
+}
+
+}  // namespace
+}  // namespace elaslam::viewer

@@ -1,0 +1,108 @@
+// What the viewer draws (viewer/STATE_SCHEMA.md): the team's state as the bus tells
+// it, built from RUN_INFO, POSE_<r>, GLOBAL_MAP (its chunks), DYNAMIC_NOTICE,
+// STATUS_ROBOT_<r> and GROUND_TRUTH, and written as one JSON document. A plain
+// subscriber's state: every message is checked before it is taken (a bad one is
+// counted and changes nothing), and everything kept is bounded (trails, notices,
+// landmark ids below max_landmark_id, robot ids 1..kMaxRobots).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "elaslam/candidate_list_t.hpp"
+#include "elaslam/dynamic_notice_t.hpp"
+#include "elaslam/global_map_t.hpp"
+#include "elaslam/ground_truth_t.hpp"
+#include "elaslam/node_status_t.hpp"
+#include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/run_info_t.hpp"
+
+namespace elaslam::viewer {
+
+struct ViewLimits {
+  int max_landmark_id = 256;  // landmark ids [0, max_landmark_id)
+  int trail_points = 500;     // poses kept per robot trail
+  int notices = 50;           // newest notices kept
+  double world_bound_m = 1.0e4;
+};
+
+class ViewState {
+ public:
+  static constexpr int kMaxRobots = 64;
+  explicit ViewState(const ViewLimits& limits = {});
+
+  // Each returns false, counts the message as bad and changes nothing when the
+  // message is absurd (non-finite numbers, ids out of range, inconsistent counts).
+  bool on_run_info(const run_info_t& m);
+  bool on_pose(const pose_estimate_t& m);
+  bool on_global_map(const global_map_t& m);
+  bool on_notice(const dynamic_notice_t& m);
+  bool on_status(const node_status_t& m, double now_s);
+  bool on_truth(const ground_truth_t& m);
+  /// A robot's candidates replace its earlier ones; a landmark that is a candidate
+  /// of some robot and not static in the global map is drawn as a candidate. A
+  /// robot's list older than kCandidateFrames frames is dropped (it stopped).
+  bool on_candidates(const candidate_list_t& m);
+  static constexpr int kCandidateFrames = 20;
+
+  /// The state as JSON (viewer/STATE_SCHEMA.md); `viewer_counters` is the
+  /// "viewer" object (messages, drops, clients), filled by the program.
+  std::string to_json(double now_s, const std::string& viewer_counters_json = "{}") const;
+
+  int frame() const { return frame_; }
+  long long bad_messages() const { return bad_; }
+  long long messages() const { return messages_; }
+
+ private:
+  struct Robot {
+    bool has_pose = false;
+    int frame = -1;
+    double x = 0, y = 0, theta = 0, cxx = 0, cxy = 0, cyy = 0;
+    std::deque<std::array<double, 2>> trail;
+    bool has_truth = false;
+    double tx = 0, ty = 0, ttheta = 0;
+    std::deque<std::array<double, 2>> truth_trail;
+    bool has_status = false;
+    double status_s = 0;
+    node_status_t status;
+    int candidates_frame = -1;
+    std::vector<std::array<double, 6>> candidates;  // id, x, y, cxx, cxy, cyy
+  };
+  struct Landmark {
+    bool known = false;  // a position was ever received
+    bool in_map = false;  // in the latest GLOBAL_MAP chunk covering it (static or moving)
+    bool moving = false;
+    double x = 0, y = 0, cxx = 0, cxy = 0, cyy = 0;
+    int contributors = 0;  // bit r-1: robot r
+  };
+  struct TruthLandmark {
+    int id;
+    double x, y;
+    bool moving;
+  };
+  struct Notice {
+    int frame, landmark, robot;
+  };
+
+  bool bad(const char* why);
+  void see_frame(int frame);
+  Robot& robot(int id) { return robots_[id]; }
+  void push_trail(std::deque<std::array<double, 2>>* t, double x, double y) const;
+
+  ViewLimits limits_;
+  int frame_ = -1;
+  int frames_total_ = 0;
+  long long messages_ = 0, bad_ = 0;
+  std::map<int, Robot> robots_;
+  std::vector<Landmark> landmarks_;
+  std::vector<TruthLandmark> truth_landmarks_;
+  std::deque<Notice> notices_;
+  std::int64_t map_version_ = -1;
+  std::map<std::string, long long> bad_by_reason_;  // the "viewer" object shows it
+};
+
+}  // namespace elaslam::viewer
