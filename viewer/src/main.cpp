@@ -227,7 +227,14 @@ int viewer_main(int argc, char** argv) {
         [&clients](bool) { clients.fetch_sub(1); });
   });
   transport::install_stop_handlers();
+  // Rebuilt when a message changed it, else once a second (status ages, counters).
+  long long built_changes = -1;
+  auto built_at = std::chrono::steady_clock::now();
   auto publish = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    if (state.changes() == built_changes && now - built_at < std::chrono::seconds(1)) return;
+    built_changes = state.changes();
+    built_at = now;
     const transport::ShellCounters c = shell.counters();
     char counters[256];
     std::snprintf(counters, sizeof counters,

@@ -54,6 +54,9 @@ class ViewState {
   std::string to_json(double now_s, const std::string& viewer_counters_json = "{}") const;
 
   int frame() const { return frame_; }
+  /// Counts the messages taken: unchanged, the state to draw is too (the viewer
+  /// skips rebuilding it).
+  long long changes() const { return messages_ - bad_; }
   long long bad_messages() const { return bad_; }
   long long messages() const { return messages_; }
 
