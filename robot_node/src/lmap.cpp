@@ -18,6 +18,7 @@ const char* to_string(LandmarkStatus s) {
 LifecycleRules lifecycle_rules(const RobotOptions& o) {
   LifecycleRules r;
   r.confirm_frames = o.confirm_frames;
+  r.confirm_frames_few = o.confirm_frames_few;
   r.return_frames = o.return_frames;
   r.return_backoff = o.return_backoff;
   r.moving_after = o.moving_after;
@@ -70,7 +71,9 @@ void LMap::become_moving(LMapEntry* e, int frame, bool reported) {
 // return_backoff is on (a landmark that stops and goes again and again, such as a
 // robot, earns less trust each time).
 int LMap::sightings_to_confirm(const LMapEntry& e) const {
-  if (!e.was_moving) return rules_.confirm_frames;
+  if (!e.was_moving)
+    return few_static_ && rules_.confirm_frames_few > 0 ? std::min(rules_.confirm_frames, rules_.confirm_frames_few)
+                                                        : rules_.confirm_frames;
   if (!rules_.return_backoff) return rules_.return_frames;
   return rules_.return_frames << std::min(std::max(e.times_moving - 1, 0), 10);
 }

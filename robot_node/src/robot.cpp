@@ -195,6 +195,7 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
     if (lmap_.outside_ela(v.id)) mark_moving(v.id, &v.z, s);
   }
   // 1-2. New landmarks and candidates.
+  lmap_.set_few_static(s->num_accepted < 3);
   handle_candidates(in, s);
 }
 

@@ -44,6 +44,7 @@ void parse(config::Reader& r, RobotOptions* o) {
   r.section("ela", [&](config::Reader& e) {
     e.read("gate_probability", &o->ela_gate_probability, 0.5, 1.0 - 1e-9);
     e.read("confirm_frames", &o->confirm_frames, 1, 1000);
+    e.read_optional("confirm_frames_few", &o->confirm_frames_few, 0, 1000);
     e.read("return_frames", &o->return_frames, 1, 1000);
     e.read_optional("return_backoff", &o->return_backoff);
     e.read_optional("candidate_updates", &o->candidate_updates);

@@ -39,6 +39,25 @@ TEST(LMap, ANewLandmarkIsACandidateUntilConfirmFramesSightings) {
   EXPECT_EQ(m.count(LandmarkStatus::kStatic), 1);
 }
 
+// confirm_frames_few: while the robot has few static landmarks (set by Robot each
+// frame) a new candidate needs fewer sightings; one that was moving does not.
+TEST(LMap, FewStaticLandmarksConfirmANewCandidateSooner) {
+  LifecycleRules r = rules();
+  r.confirm_frames_few = 2;
+  LMap m(8, r);
+  m.anchor_candidate(1, 10);
+  m.set_few_static(true);
+  EXPECT_TRUE(m.candidate_consistent(1));  // 2 of 2
+  m.set_few_static(false);
+  m.anchor_candidate(2, 10);
+  EXPECT_FALSE(m.candidate_consistent(2));  // 2 of 3
+  EXPECT_TRUE(m.candidate_consistent(2));
+  LMap off(8, rules());  // confirm_frames_few 0: the rule is off
+  off.set_few_static(true);
+  off.anchor_candidate(1, 10);
+  EXPECT_FALSE(off.candidate_consistent(1));
+}
+
 TEST(LMap, AnInconsistentCandidateIsReportedMovingOnceAfterMovingAfter) {
   LMap m(8, rules());
   m.anchor_candidate(2, 0);

@@ -62,6 +62,7 @@ struct LMapEntry {
 /// The lifecycle's thresholds (RobotOptions, DESIGN.md section 5).
 struct LifecycleRules {
   int confirm_frames = 3;       // consistent sightings before a new candidate becomes STATIC
+  int confirm_frames_few = 0;   // the same while the robot has few static landmarks (set_few_static), 0: off
   int return_frames = 6;        // the same for a landmark that has been moving
   bool return_backoff = false;  // return_frames doubles with every further time it is found moving
   int moving_after = 2;         // consecutive out-of-ELA verdicts / inconsistent sightings before MOVING
@@ -97,6 +98,8 @@ class LMap {
   /// A consistent sighting; true when the streak has earned STATIC (confirm_frames,
   /// or return_frames after it has moved).
   bool candidate_consistent(int id);
+  /// This frame's robot had fewer than 3 static landmarks to correct it.
+  void set_few_static(bool few) { few_static_ = few; }
   /// An inconsistent sighting; true when this one makes it MOVING (moving_after in a
   /// row) and no MOVING has been reported for it yet: report it now.
   bool candidate_inconsistent(int id);
@@ -141,6 +144,7 @@ class LMap {
   int sightings_to_confirm(const LMapEntry& e) const;
 
   LifecycleRules rules_;
+  bool few_static_ = false;
   std::vector<LMapEntry> entries_;
 };
 

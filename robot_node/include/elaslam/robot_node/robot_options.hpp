@@ -23,6 +23,10 @@ struct RobotOptions {
   // ELA gate and L-map rules (DESIGN.md section 5).
   double ela_gate_probability = 0.99;   // chi-square probability of the ELA / consensus tests
   int confirm_frames = 3;               // consistent sightings before a candidate becomes STATIC
+  /// When fewer than 3 STATIC landmarks corrected the robot in this frame, a new
+  /// candidate needs only this many (0: off; the robot needs landmarks more than
+  /// it fears a mover).
+  int confirm_frames_few = 0;
   int return_frames = 6;                // the same for a landmark that has been MOVING
   /// return_frames doubles with every further time a landmark is found moving.
   bool return_backoff = false;
