@@ -2,7 +2,7 @@
 // (MainPorts on a NodeShell: decode, validate, apply, publish notices, resync
 // requests and the global map), with config/paper.yaml. An input is a burst of
 // LMAP_EVENT, LMAP_SNAPSHOT and POSE_<r> messages (fuzz_input.hpp; POSE of robots 1,
-// 2, 3 and 7). The node is reset to a pristine copy per input. After each input the global map, the status
+// 2, 3 and 7). The node is made anew per input. After each input the global map, the status
 // and the state file's text must still be producible, and the state must load back.
 #include <cstdint>
 #include <cstdio>
@@ -28,7 +28,7 @@ const std::string kChannels[] = {channels::lmap_event(), channels::lmap_snapshot
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static fuzz::NodeHarness<MainNode, MainPorts> h("main_robot", MainNode(options()));
+  static fuzz::NodeHarness<MainNode, MainPorts> h("main_robot", [] { return MainNode(options()); });
   h.run(data, size, kChannels);
   h.ports.publish_map();
   h.ports.publish_status();

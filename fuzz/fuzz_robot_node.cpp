@@ -2,7 +2,7 @@
 // (RobotPorts on a NodeShell: decode into the preallocated message, validate, apply,
 // publish what the node answers), on robot 1 with config/paper.yaml (a smaller filter: options()). An input is a
 // burst of SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MAP, LMAP_RESYNC, POSE_1 and TEAM_MAP_1 messages (the team map on)
-// (fuzz_input.hpp). The node is reset to a pristine copy per input: a crash reproduces from its input alone.
+// (fuzz_input.hpp). The node is made anew per input: a crash reproduces from its input alone.
 // After each input the node's status and state must still be producible.
 #include <cstdint>
 #include <cstdlib>
@@ -39,7 +39,7 @@ const std::string kChannels[] = {channels::sensor(1), channels::dynamic_notice()
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static fuzz::NodeHarness<RobotNode, RobotPorts> h("robot_node 1", RobotNode(options(), 1));
+  static fuzz::NodeHarness<RobotNode, RobotPorts> h("robot_node 1", [] { return RobotNode(options(), 1); });
   h.run(data, size, kChannels);
   h.ports.publish_status();
   h.bus.dispatch_all();

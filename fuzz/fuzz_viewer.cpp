@@ -1,8 +1,8 @@
 // libFuzzer target: every input of the viewer, as the process runs them (ViewPorts on
 // a NodeShell: decode, check, apply), with config/paper.yaml's limits. An input is a
 // burst of RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_1,
-// CANDIDATES_1 and GROUND_TRUTH messages (fuzz_input.hpp). The state is reset to a
-// pristine copy per input. After each input the page's state must be valid JSON
+// CANDIDATES_1 and GROUND_TRUTH messages (fuzz_input.hpp). The state is made anew
+// per input. After each input the page's state must be valid JSON
 // whose landmarks and robots are finite.
 #include <cmath>
 #include <cstdint>
@@ -44,7 +44,7 @@ void check_finite(const nlohmann::json& j, const char* what) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static fuzz::NodeHarness<viewer::ViewState, viewer::ViewPorts> h("viewer", viewer::ViewState(limits()));
+  static fuzz::NodeHarness<viewer::ViewState, viewer::ViewPorts> h("viewer", [] { return viewer::ViewState(limits()); });
   h.run(data, size, kChannels);
   const nlohmann::json j = nlohmann::json::parse(h.node.to_json(0.0), nullptr, false);
   if (j.is_discarded()) {
