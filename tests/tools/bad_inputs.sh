@@ -155,6 +155,7 @@ opt monitor --interval -1 "out of range"
 opt viewer --port 70000 "out of range" "${P[@]}"
 opt viewer --rate 0 "out of range" "${P[@]}"
 opt viewer --max-clients 0 "out of range" "${P[@]}"
+opt viewer --bind localhost "not an IPv4 or IPv6 address" "${P[@]}"
 expect "viewer bad namespace" "viewer: cannot open the network namespace" -- "$BIN/viewer" "${P[@]}" --port 0 \
   --http-netns "$T/no_such_netns"
 

@@ -15,6 +15,7 @@
 // robot's POSE frames and counted), each browser gets only the newest state (a slow
 // one skips states; a stalled one is dropped after the write timeout), at most
 // --max-clients event streams at once. SIGINT / SIGTERM end it (exit 0).
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <sched.h>
 #include <unistd.h>
@@ -128,6 +129,11 @@ int viewer_main(int argc, char** argv) {
       ->capture_default_str()
       ->check(cli::range(1, 64));
   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
+  in6_addr any_address{};
+  if (::inet_pton(AF_INET, bind.c_str(), &any_address) != 1 && ::inet_pton(AF_INET6, bind.c_str(), &any_address) != 1) {
+    std::fprintf(stderr, "--bind: '%s' is not an IPv4 or IPv6 address\n", bind.c_str());
+    return 2;
+  }
 
   std::string config_path;
   GlobalMapOptions mo;
@@ -246,7 +252,10 @@ int viewer_main(int argc, char** argv) {
   publish();  // an empty state, never "{}", before the first browser asks
   std::thread server([&] { http.listen_after_bind(); });
   shell.every(period, publish);
-  std::printf("viewer: http://%s:%d/\n", bind == "0.0.0.0" ? "127.0.0.1" : bind.c_str(), bound);
+  // Listening on every address: this machine's loopback is one of them.
+  const std::string host = bind == "0.0.0.0" ? "127.0.0.1" : bind == "::" ? "[::1]"
+                           : bind.find(':') != std::string::npos ? "[" + bind + "]" : bind;
+  std::printf("viewer: http://%s:%d/\n", host.c_str(), bound);
   std::fflush(stdout);
   const auto exit = shell.spin(50);
   latest.stop();
