@@ -11,7 +11,8 @@
 #      leave /state.json answering at once, a 9th is refused with 503, and the count
 #      of clients is back to 0 once they close (tests/system/viewer_clients.py);
 #   3. /state.json after the replay equals the log's last POSE_<r> of each robot and
-#      its GLOBAL_MAP assembled from the chunks (tests/system/viewer_check.py);
+#      its GLOBAL_MAP assembled from the chunks (tests/system/viewer_check.py), and
+#      every key of it is in docs/data_dictionary.md;
 #   4. tools/run_team.sh --view PORT: the team runs in its private namespace and the
 #      page is reachable from here, the host side: /state.json polled during the run
 #      shows the three robots and the frames advancing.
@@ -67,6 +68,8 @@ rc=0
   > "$OUT/view.txt" 2>&1 || rc=1
 cat "$OUT/view.txt"
 "$PY" "$HERE/viewer_check.py" --build-dir "$BUILD" "$OUT/live/run.lcmlog" "$OUT/view/state.json" || rc=1
+# Every key of the state is in docs/data_dictionary.md.
+python3 "$ROOT/tests/docs/data_dictionary_check.py" "$ROOT/docs/data_dictionary.md" "$OUT/view/state.json" || rc=1
 [ -s "$OUT/view/after.png" ] || { echo "viewer: FAIL no screenshot"; rc=1; }
 grep -q "answered 404" "$OUT/view.txt" || { echo "viewer: FAIL an unknown path is not 404"; rc=1; }
 
