@@ -249,10 +249,29 @@ std::string ViewState::to_json(double now_s, const std::string& viewer_counters_
     robots.push_back(std::move(o));
   }
   j["robots"] = std::move(robots);
+  // Candidates: not static in the map (new, or back after moving: the candidate
+  // replaces the moving entry), seen by a robot lately; the first robot's is drawn.
+  struct Drawn {
+    int robot;
+    const std::array<double, 6>* c;  // id, x, y, cxx, cxy, cyy
+  };
+  std::vector<Drawn> candidates;
+  std::vector<bool> taken(landmarks_.size(), false);
+  for (std::size_t id = 0; id < landmarks_.size(); ++id) taken[id] = landmarks_[id].in_map && !landmarks_[id].moving;
+  for (const auto& [rid, r] : robots_) {
+    if (r.candidates_frame < 0 || frame_ - r.candidates_frame > kCandidateFrames) continue;
+    for (const auto& c : r.candidates) {
+      const auto id = static_cast<std::size_t>(c[0]);
+      if (taken[id]) continue;
+      taken[id] = true;
+      candidates.push_back({rid, &c});
+    }
+  }
   nlohmann::json lms = nlohmann::json::array();
   for (int id = 0; id < static_cast<int>(landmarks_.size()); ++id) {
     const Landmark& l = landmarks_[static_cast<std::size_t>(id)];
-    if (!l.in_map) continue;
+    // In the map, unless a robot's candidate took its place.
+    if (!l.in_map || (l.moving && taken[static_cast<std::size_t>(id)])) continue;
     nlohmann::json by = nlohmann::json::array();
     for (int r = 0; r < 16; ++r)
       if (l.contributors & (1 << r)) by.push_back(r + 1);
@@ -263,32 +282,14 @@ std::string ViewState::to_json(double now_s, const std::string& viewer_counters_
                    {"status", l.moving ? "moving" : "static"},
                    {"contributors", std::move(by)}});
   }
-  // Candidates: not static in the map (new, or back after moving), seen by a robot
-  // lately; the first robot's estimate is drawn.
-  std::vector<bool> drawn(landmarks_.size(), false);
-  for (int id = 0; id < static_cast<int>(landmarks_.size()); ++id) {
-    const Landmark& l = landmarks_[static_cast<std::size_t>(id)];
-    drawn[static_cast<std::size_t>(id)] = l.in_map && !l.moving;
-  }
-  for (const auto& [rid, r] : robots_) {
-    if (r.candidates_frame < 0 || frame_ - r.candidates_frame > kCandidateFrames) continue;
-    for (const auto& c : r.candidates) {
-      const int id = static_cast<int>(c[0]);
-      if (drawn[static_cast<std::size_t>(id)]) continue;
-      drawn[static_cast<std::size_t>(id)] = true;
-      // A moving landmark seen again is a candidate: its moving entry gives way.
-      for (auto it = lms.begin(); it != lms.end(); ++it)
-        if ((*it)["id"] == id) {
-          lms.erase(it);
-          break;
-        }
-      lms.push_back({{"id", id},
-                     {"x", c[1]},
-                     {"y", c[2]},
-                     {"cov", {c[3], c[4], c[5]}},
-                     {"status", "candidate"},
-                     {"contributors", {rid}}});
-    }
+  for (const Drawn& d : candidates) {
+    const auto& c = *d.c;
+    lms.push_back({{"id", static_cast<int>(c[0])},
+                   {"x", c[1]},
+                   {"y", c[2]},
+                   {"cov", {c[3], c[4], c[5]}},
+                   {"status", "candidate"},
+                   {"contributors", {d.robot}}});
   }
   j["landmarks"] = std::move(lms);
   nlohmann::json truth = nlohmann::json::array();
