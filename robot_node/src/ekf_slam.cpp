@@ -2,11 +2,13 @@
 // correction (eqs 7-13), augmentation (eq 15) and mean(diag(P)) (eq 19) on the
 // state of eqs 1-2; ekf_slam.hpp lists where the other equations live.
 //
-// Cost per call, n = state dimension: predict O(n), update O(n^2) (the rank-2/4
-// covariance downdate on the lower triangle; everything else is O(n)), add and
-// remove O(n). Only the lower triangle of P (and the 3x3 robot block in full) is
-// kept current; the block accessors read it directly and covariance() completes
-// the upper triangle on demand. Nothing here allocates after the constructor:
+// Cost per call, n = state dimension: predict O(n), update O(n k) for the k-th
+// update in a row (its gain against P and the k - 1 covariance steps still
+// pending), add and remove O(n); the pending covariance steps of a frame's updates
+// are applied together, one O(n^2 k) pass over the lower triangle, when anything
+// next reads P (settle). Only the lower triangle of P (and the 3x3 robot block in
+// full) is kept current; the block accessors read it directly and covariance()
+// completes the upper triangle on demand. Nothing here allocates after the constructor:
 // scratch lives in members, small blocks are fixed-size, and products that Eigen
 // might route through its blocked GEMM (which may allocate) are written as
 // coefficient-wise expressions or loops (ekf_kernels.hpp).
@@ -46,6 +48,15 @@ Eigen::Matrix2d diagonal_block(const Eigen::MatrixXd& P, Index off) {
   return B;
 }
 
+// The stored 5x5 block of P on the robot and the landmark at `off` (lower storage).
+Matrix5 stored_block5(const Eigen::MatrixXd& P, Index off) {
+  Matrix5 P5;
+  const Eigen::Matrix<double, 2, 3> P_lR = P.block<kL, kR>(off, 0);
+  P5 << P.topLeftCorner<kR, kR>(), P_lR.transpose(),  //
+      P_lR, diagonal_block(P, off);
+  return P5;
+}
+
 // Everything about one observation that needs only the 5x5 block of P on the robot
 // and the landmark (eqs 8, 9, 13).
 struct Innovation {
@@ -56,9 +67,8 @@ struct Innovation {
   double d2 = 0.0;
 };
 
-// Z = H P H^T + W (eq 9) from the 5x5 block; kSingular unless Z is positive definite.
-EkfStatus innovate(const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off,
-                   const Eigen::Matrix2d& W, const RangeBearing& y, Innovation* out) {
+// H and the innovation nu (eqs 7-8) from the mean.
+void observation_model(const Eigen::VectorXd& x, Index off, const RangeBearing& y, Innovation* out) {
   using L = StateLayout;
   const Pose2 pose{x(L::kX), x(L::kY), x(L::kTheta)};
   Eigen::Matrix<double, 2, 3> H_x;
@@ -66,11 +76,10 @@ EkfStatus innovate(const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off
   const RangeBearing h = observe(pose, x.segment<kL>(off), &H_x, &H_l);  // eq 7
   out->H << H_x, H_l;
   out->nu << y.range - h.range, wrap_angle(y.bearing - h.bearing);  // eq 8
-  Matrix5 P5;
-  const Eigen::Matrix<double, 2, 3> P_lR = P.block<kL, kR>(off, 0);  // lower storage
-  P5 << P.topLeftCorner<kR, kR>(), P_lR.transpose(),  //
-      P_lR, diagonal_block(P, off);
-  const Eigen::Matrix2d Z = out->H * P5 * out->H.transpose() + W;
+}
+
+// L, w and d2 from Z = H P H^T + W (eq 9); kSingular unless Z is positive definite.
+EkfStatus factor_innovation(const Eigen::Matrix2d& Z, Innovation* out) {
   // 2x2 Cholesky by hand: the comparisons also reject NaN.
   const double z00 = Z(0, 0), z10 = 0.5 * (Z(1, 0) + Z(0, 1));
   if (!(z00 > 0.0)) return EkfStatus::kSingular;
@@ -84,17 +93,27 @@ EkfStatus innovate(const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off
   return EkfStatus::kOk;
 }
 
+// Z = H P H^T + W (eq 9) from the 5x5 block.
+EkfStatus innovate(const Matrix5& P5, const Eigen::VectorXd& x, Index off, const Eigen::Matrix2d& W,
+                   const RangeBearing& y, Innovation* out) {
+  observation_model(x, off, y, out);
+  return factor_innovation(out->H * P5 * out->H.transpose() + W, out);
+}
+
+void fill_report(const Innovation& inn, UpdateReport* r) {
+  r->d2 = inn.d2;
+  r->innovation = inn.nu;
+  r->whitened = inn.w;
+}
+
 // The innovation of a located landmark into `inn`, and its numbers into `r`; false
 // (with r->status set) when the landmark was not located or Z is not positive definite.
-bool innovation_report(EkfStatus located, const Eigen::MatrixXd& P, const Eigen::VectorXd& x, Index off,
-                       const Eigen::Matrix2d& W, const RangeBearing& z, Innovation* inn, UpdateReport* r) {
-  r->status = located;
-  if (located != EkfStatus::kOk) return false;
-  r->status = innovate(P, x, off, W, z, inn);
+// P5 is the block of P on the robot and the landmark at `off`.
+bool innovation_report(const Matrix5& P5, const Eigen::VectorXd& x, Index off, const Eigen::Matrix2d& W,
+                       const RangeBearing& z, Innovation* inn, UpdateReport* r) {
+  r->status = innovate(P5, x, off, W, z, inn);
   if (r->status != EkfStatus::kOk) return false;
-  r->d2 = inn->d2;
-  r->innovation = inn->nu;
-  r->whitened = inn->w;
+  fill_report(*inn, r);
   return true;
 }
 
@@ -142,15 +161,18 @@ EkfSlam::EkfSlam(const EkfOptions& options) : options_(options) {
   id_to_slot_.assign(static_cast<std::size_t>(options.max_landmark_id), -1);
   slot_to_id_.assign(static_cast<std::size_t>(options.capacity), -1);
   PHt_ = Eigen::MatrixXd::Zero(n_max, kObs);
-  K_ = Eigen::MatrixXd::Zero(n_max, kObs);
-  tmp_rows_ = Eigen::MatrixXd::Zero(Layout::kPoseDim, n_max);
+  fa_ = Eigen::MatrixXd::Zero(n_max + kFactorPadRows, kMaxFactorCols);  // padded: lower_factor_downdate
+  if (options.joseph) fb_ = Eigen::MatrixXd::Zero(n_max + kFactorPadRows, kMaxFactorCols);
+  diag_ = Eigen::VectorXd::Zero(n_max);
+  tmp_rows_ = Eigen::MatrixXd::Zero(n_max, Layout::kPoseDim);
   lm_cols_ = Eigen::MatrixXd::Zero(n_max, kL);
   reset(Pose2{}, Eigen::Matrix3d::Zero());
 }
 
 void EkfSlam::reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov) {
   // Outside the active block P_ is kept zero (remove_landmark clears what it
-  // vacates), so clearing the active block is enough.
+  // vacates), so clearing the active block is enough. Pending steps are void.
+  pending_cols_ = 0;
   P_.topLeftCorner(state_dim(), state_dim()).setZero();
   for (int slot = 0; slot < num_landmarks_; ++slot) {
     id_to_slot_[static_cast<std::size_t>(slot_to_id_[static_cast<std::size_t>(slot)])] = -1;
@@ -175,6 +197,7 @@ EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
       (U.diagonal().array() < 0.0).any()) {
     return EkfStatus::kBadInput;
   }
+  settle();
   Eigen::Matrix3d F_x, F_u;
   const Pose2 next = motion(pose(), increment, &F_x, &F_u);  // eq 4
   const Index m = state_dim() - Layout::kPoseDim;             // landmark part of X
@@ -184,17 +207,26 @@ EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
                          F_u * U * F_u.transpose();  // eq 5, robot block
   P_RR = 0.5 * (P_RR + P_RR.transpose()).eval();
   // eq 5, cross terms: landmarks do not move, so P_LR <- P_LR F_x^T and no more.
-  // P_LR sits below the robot block (lower storage); its new transpose goes to
-  // the 3 x m scratch.
-  auto P_LR_new_T = tmp_rows_.leftCols(m);
-  P_LR_new_T.noalias() = F_x * P_.block(Layout::kPoseDim, 0, m, Layout::kPoseDim).transpose();
-  if (!P_RR.allFinite() || (P_RR.diagonal().array() < 0.0).any() || !P_LR_new_T.allFinite()) {
+  // P_LR sits below the robot block (lower storage): each row becomes F_x times
+  // itself, computed into the m x 3 scratch first.
+  const double F[3][3] = {{F_x(0, 0), F_x(0, 1), F_x(0, 2)},
+                          {F_x(1, 0), F_x(1, 1), F_x(1, 2)},
+                          {F_x(2, 0), F_x(2, 1), F_x(2, 2)}};
+  const Index ld = P_.outerStride();
+  double* t0 = tmp_rows_.col(0).data();
+  double* t1 = tmp_rows_.col(1).data();
+  double* t2 = tmp_rows_.col(2).data();
+  const bool cross_ok = predict_cross_rows(m, P_.data() + Layout::kPoseDim, P_.data() + ld + Layout::kPoseDim,
+                                           P_.data() + 2 * ld + Layout::kPoseDim, F, t0, t1, t2);
+  if (!P_RR.allFinite() || (P_RR.diagonal().array() < 0.0).any() || !cross_ok) {
     return EkfStatus::kCovarianceFault;
   }
 
   x_.head<kR>() << next.x, next.y, next.theta;  // theta wrapped by compose()
   P_.topLeftCorner<kR, kR>() = P_RR;
-  P_.block(Layout::kPoseDim, 0, m, Layout::kPoseDim) = P_LR_new_T.transpose();
+  std::copy(t0, t0 + m, P_.data() + Layout::kPoseDim);
+  std::copy(t1, t1 + m, P_.data() + ld + Layout::kPoseDim);
+  std::copy(t2, t2 + m, P_.data() + 2 * ld + Layout::kPoseDim);
   upper_stale_ = upper_stale_ || m > 0;
   return EkfStatus::kOk;
 }
@@ -211,9 +243,11 @@ UpdateReport EkfSlam::check(int id, const RangeBearing& z) const {
   UpdateReport report;
   report.threshold = gate_threshold_;
   int slot = -1;
-  const EkfStatus located = locate(id, z, &slot);
+  report.status = locate(id, z, &slot);
+  if (report.status != EkfStatus::kOk) return report;
+  const Index off = Layout::landmark_offset(slot);
   Innovation inn;
-  innovation_report(located, P_, x_, Layout::landmark_offset(std::max(slot, 0)), W_, z, &inn, &report);
+  innovation_report(block5(off), x_, off, W_, z, &inn, &report);
   return report;
 }
 
@@ -221,16 +255,27 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
   UpdateReport report;
   report.threshold = gate ? gate_threshold_ : 0.0;
   int slot = -1;
-  const EkfStatus located = locate(id, z, &slot);
-  const Index off = Layout::landmark_offset(std::max(slot, 0));
+  report.status = locate(id, z, &slot);
+  if (report.status != EkfStatus::kOk) return report;
+  // The factors of this update must fit beside the pending ones.
+  if (pending_cols_ + factor_cols() > kMaxFactorCols) settle();
+  const Index off = Layout::landmark_offset(slot);
   Innovation inn;
-  if (!innovation_report(located, P_, x_, off, W_, z, &inn, &report)) return report;
+  observation_model(x_, off, z, &inn);
+  // P H^T first (pending steps included): Z = H (P H^T) + W needs only five of its rows.
+  compute_pht(off, inn.H);
+  const Index rows[5] = {Layout::kX, Layout::kY, Layout::kTheta, off, off + 1};
+  Eigen::Matrix2d Z = W_;
+  for (int r = 0; r < 5; ++r)
+    for (int b = 0; b < kObs; ++b) Z.col(b) += inn.H.col(r) * PHt_(rows[r], b);
+  report.status = factor_innovation(Z, &inn);
+  if (report.status != EkfStatus::kOk) return report;
+  fill_report(inn, &report);
   if (gate && inn.d2 > gate_threshold_) {
     report.status = EkfStatus::kGated;
     return report;
   }
-  compute_gain(off, inn.H, inn.L);
-  if (!correction_healthy(inn.nu, inn.w)) {
+  if (!compute_gain(inn.L, inn.nu, inn.w)) {
     report.status = EkfStatus::kCovarianceFault;
     return report;
   }
@@ -241,11 +286,13 @@ UpdateReport EkfSlam::update(int id, const RangeBearing& z, bool gate) {
 UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   UpdateReport report;
   int slot = -1;
-  const EkfStatus located = locate(id, z, &slot);
-  const Index off = Layout::landmark_offset(std::max(slot, 0));
+  report.status = locate(id, z, &slot);
+  if (report.status != EkfStatus::kOk) return report;
+  settle();  // the step below is applied at once
+  const Index off = Layout::landmark_offset(slot);
   const Index n = state_dim();
   Innovation inn;
-  if (!innovation_report(located, P_, x_, off, W_, z, &inn, &report)) return report;
+  if (!innovation_report(stored_block5(P_, off), x_, off, W_, z, &inn, &report)) return report;
   // P H^T (n x 2) from the robot columns (complete) and the landmark's columns.
   load_landmark_columns(off);
   auto PHt = PHt_.topRows(n);
@@ -293,7 +340,13 @@ bool EkfSlam::position_innovation(int id, const Eigen::Vector2d& z, const Eigen:
     return false;
   }
   const Index off = Layout::landmark_offset(*slot);
-  const Eigen::Matrix2d Z = Eigen::Matrix2d(P_.block<kL, kL>(off, off).selfadjointView<Eigen::Lower>()) + R;
+  // P H^T = the landmark's two columns (pending steps included); Z = P_ll + R.
+  Matrix25 H = Matrix25::Zero();
+  H(0, kR) = 1.0;
+  H(1, kR + 1) = 1.0;
+  compute_pht(off, H);
+  Eigen::Matrix2d Z = PHt_.block<kL, kL>(off, 0) + R;
+  Z = 0.5 * (Z + Z.transpose()).eval();
   const Eigen::LLT<Eigen::Matrix2d> llt(Z);
   if (llt.info() != Eigen::Success) {
     report->status = EkfStatus::kSingular;
@@ -318,21 +371,9 @@ UpdateReport EkfSlam::update_position(int id, const Eigen::Vector2d& z, const Ei
   UpdateReport report;
   int slot = -1;
   Eigen::Matrix2d L;
+  if (pending_cols_ + factor_cols() > kMaxFactorCols) settle();
   if (!position_innovation(id, z, R, &slot, &L, &report)) return report;
-  const Index off = Layout::landmark_offset(slot);
-  const Index n = state_dim();
-  load_landmark_columns(off);  // P H^T
-  if (options_.joseph) {
-    const Eigen::Matrix2d Z = L * L.transpose();
-    const Eigen::Matrix2d Zinv = Z.inverse();
-    K_.topRows(n).noalias() = lm_cols_.topRows(n) * Zinv;
-    PHt_.topRows(n) = lm_cols_.topRows(n);
-    PHt_.topRows(n).noalias() -= 0.5 * K_.topRows(n) * Z;
-  } else {
-    const Eigen::Matrix2d Linv_T = L.inverse().transpose();
-    K_.topRows(n).noalias() = lm_cols_.topRows(n) * Linv_T;
-  }
-  if (!correction_healthy(report.innovation, report.whitened)) {
+  if (!compute_gain(L, report.innovation, report.whitened)) {  // from position_innovation's P H^T
     report.status = EkfStatus::kCovarianceFault;
     return report;
   }
@@ -342,7 +383,7 @@ UpdateReport EkfSlam::update_position(int id, const Eigen::Vector2d& z, const Ei
 
 // The landmark's two columns of P into lm_cols_: above the landmark block they are
 // read along its rows (lower storage), from the block down along the columns.
-void EkfSlam::load_landmark_columns(Index off) {
+void EkfSlam::load_landmark_columns(Index off) const {
   const Index n = state_dim();
   lm_cols_.topRows(off) = P_.block(off, 0, 2, off).transpose();
   lm_cols_.block(off, 0, n - off, 1) = P_.col(off).segment(off, n - off);
@@ -350,58 +391,118 @@ void EkfSlam::load_landmark_columns(Index off) {
   lm_cols_.block(off + 1, 1, n - off - 1, 1) = P_.col(off + 1).segment(off + 1, n - off - 1);
 }
 
-// P H^T from the five non-zero columns of H (O(n)), then the gain factors:
-//   Joseph:   K = P H^T Z^-1 (eq 10) in K_, and B = P H^T - K Z / 2 in PHt_, so that
-//             (I-KH)P(I-KH)^T + K W K^T = P - K PHt^T - PHt K^T + K Z K^T
-//                                      = P - K B^T - B K^T            (rank 4);
-//   standard: M = P H^T L^-T in K_, so that P - K Z K^T = P - M M^T   (eq 12, rank 2).
-// In exact arithmetic both equal P - PHt Z^-1 PHt^T; the Joseph form adds
-// E Z E^T for an error E in K, so it stays positive semi-definite for any gain.
-void EkfSlam::compute_gain(Index off, const Matrix25& H, const Eigen::Matrix2d& L) {
-  const Index n = state_dim();
-  load_landmark_columns(off);
-
-  const GainCoefficients c = gain_coefficients(H, L);
-  // Robot columns 0..2 of P are complete (the robot block is kept full).
-  if (options_.joseph) {
-    gain_rows_joseph(c, n, P_.col(Layout::kX).data(), P_.col(Layout::kY).data(), P_.col(Layout::kTheta).data(),
-                     lm_cols_.col(0).data(), lm_cols_.col(1).data(), K_.col(0).data(),
-                     K_.col(1).data(), PHt_.col(0).data(), PHt_.col(1).data());
-  } else {
-    gain_rows_standard(c, n, P_.col(Layout::kX).data(), P_.col(Layout::kY).data(), P_.col(Layout::kTheta).data(),
-                       lm_cols_.col(0).data(), lm_cols_.col(1).data(), K_.col(0).data(),
-                       K_.col(1).data());
+// The block of P on the robot and the landmark at `off` with the pending steps
+// applied: the stored block minus the pending factors' rows of those five states,
+// O(25 k) for k pending columns.
+Matrix5 EkfSlam::block5(Index off) const {
+  Matrix5 P5 = stored_block5(P_, off);
+  if (pending_cols_ == 0) return P5;
+  const Index rows[5] = {Layout::kX, Layout::kY, Layout::kTheta, off, off + 1};
+  const Eigen::MatrixXd& fb = options_.joseph ? fb_ : fa_;
+  for (int q = 0; q < pending_cols_; ++q) {
+    Eigen::Matrix<double, 5, 1> a, b;
+    for (int r = 0; r < 5; ++r) {
+      a(r) = fa_(rows[r], q);
+      b(r) = fb(rows[r], q);
+    }
+    P5.noalias() -= a * b.transpose();
   }
+  return 0.5 * (P5 + P5.transpose());
 }
 
-// O(n) preview of the update: the new mean and the new diagonal of P must be
-// finite, the diagonal non-negative (up to rounding), and no off-diagonal product
-// may overflow. Then the O(n^2) step cannot make P or X non-finite.
-bool EkfSlam::correction_healthy(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) const {
+// G = P H^T into PHt_ from the five non-zero columns of H, O(n), corrected for the
+// pending steps (P = P_ - A B^T, so G -= A (H B^T)^T, O(n k)).
+void EkfSlam::compute_pht(Index off, const Matrix25& H) const {
   const Index n = state_dim();
-  // Mean step: Joseph K nu, standard M w (the same vector, eq 11). Diagonal step:
-  // Joseph 2 k_i . b_i, standard m_i . m_i.
-  const bool joseph = options_.joseph;
-  const double* b0 = joseph ? PHt_.col(0).data() : K_.col(0).data();
-  const double* b1 = joseph ? PHt_.col(1).data() : K_.col(1).data();
-  const Eigen::Vector2d& v = joseph ? nu : w;
-  return rows_healthy(n, P_.data(), P_.outerStride() + 1, x_.data(), K_.col(0).data(),
-                      K_.col(1).data(), b0, b1, v(0), v(1), joseph ? 2.0 : 1.0);
+  GainCoefficients c{};
+  for (int k = 0; k < 5; ++k) {
+    c.h0[k] = H(0, k);
+    c.h1[k] = H(1, k);
+  }
+  double* g0 = PHt_.col(0).data();
+  double* g1 = PHt_.col(1).data();
+  // Robot columns 0..2 of P are complete (the robot block is kept full).
+  pht_rows(c, n, off, P_.data(), P_.outerStride(), g0, g1);
+  if (pending_cols_ == 0) return;
+  const Index rows[5] = {Layout::kX, Layout::kY, Layout::kTheta, off, off + 1};
+  const Eigen::MatrixXd& fb = options_.joseph ? fb_ : fa_;
+  for (int q = 0; q < pending_cols_; ++q) {  // E = H B^T on the five states, 2 x k, by rows
+    double e0 = 0.0, e1 = 0.0;
+    for (int r = 0; r < 5; ++r) {
+      e0 += c.h0[r] * fb(rows[r], q);
+      e1 += c.h1[r] * fb(rows[r], q);
+    }
+    erow0_[static_cast<std::size_t>(q)] = e0;
+    erow1_[static_cast<std::size_t>(q)] = e1;
+  }
+  subtract_factor_rows(n, fa_.data(), fa_.outerStride(), pending_cols_, erow0_.data(), erow1_.data(), g0, g1);
 }
 
+// The gain factors of one correction from G = P H^T (compute_pht), into the next
+// free columns of fa_:
+//   Joseph:   K = G Z^-1 (eq 10) and B = G - K Z / 2, so that
+//             (I-KH)P(I-KH)^T + K W K^T = P - K G^T - G K^T + K Z K^T
+//                                      = P - K B^T - B K^T            (rank 4);
+//   standard: M = G L^-T, so that P - K Z K^T = P - M M^T             (eq 12, rank 2).
+// In exact arithmetic both equal P - G Z^-1 G^T; the Joseph form adds E Z E^T for
+// an error E in K, so it stays positive semi-definite for any gain.
+// With them, the O(n) preview of the update: the new mean and the new diagonal of
+// P must be finite, the diagonal non-negative (up to rounding), and no
+// off-diagonal product may overflow; then the covariance step cannot make P or X
+// non-finite. Mean step: Joseph K nu, standard M w (the same vector, eq 11);
+// diagonal step: Joseph 2 k_i . b_i, standard m_i . m_i. False: refuse the update.
+bool EkfSlam::compute_gain(const Eigen::Matrix2d& L, const Eigen::Vector2d& nu, const Eigen::Vector2d& w) {
+  const Index n = state_dim();
+  const GainCoefficients c = gain_coefficients(Matrix25::Zero(), L);
+  const double* g0 = PHt_.col(0).data();
+  const double* g1 = PHt_.col(1).data();
+  const int p = pending_cols_;
+  double* k0 = fa_.col(p).data();
+  double* k1 = fa_.col(p + 1).data();
+  // The health check below reads P's diagonal: P_'s, or diag_ (P's with the
+  // pending steps in) while steps are pending.
+  const double* diag = p == 0 ? P_.data() : diag_.data();
+  const Index stride = p == 0 ? P_.outerStride() + 1 : 1;
+  if (!options_.joseph) {
+    gain_standard(c, n, g0, g1, k0, k1);
+    return rows_healthy(n, diag, stride, x_.data(), k0, k1, k0, k1, w(0), w(1), 1.0);
+  }
+  double* b0 = fa_.col(p + 2).data();
+  double* b1 = fa_.col(p + 3).data();
+  gain_joseph(c, n, g0, g1, k0, k1, b0, b1);
+  return rows_healthy(n, diag, stride, x_.data(), k0, k1, b0, b1, nu(0), nu(1), 2.0);
+}
+
+// The mean step now (eq 11); the covariance step joins the pending ones (settle).
 void EkfSlam::apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) {
   const Index n = state_dim();
-  const Index ld = P_.outerStride();
-  if (options_.joseph) {
-    x_.head(n) += K_.col(0).head(n) * nu(0) + K_.col(1).head(n) * nu(1);  // eq 11
-    lower_rank4_downdate(P_.data(), ld, n, K_.col(0).data(), K_.col(1).data(),
-                         PHt_.col(0).data(), PHt_.col(1).data());
-  } else {
-    // eq 11: K nu = M L^-1 nu = M w
-    x_.head(n) += K_.col(0).head(n) * w(0) + K_.col(1).head(n) * w(1);
-    lower_rank2_downdate(P_.data(), ld, n, K_.col(0).data(), K_.col(1).data());  // eq 12
-  }
+  const bool joseph = options_.joseph;
+  const int p = pending_cols_;
+  const Eigen::Vector2d& v = joseph ? nu : w;  // Joseph: K nu; standard: K nu = M L^-1 nu = M w
+  const double* a0 = fa_.col(p).data();
+  const double* a1 = fa_.col(p + 1).data();
+  const double* b0 = joseph ? fa_.col(p + 2).data() : a0;
+  const double* b1 = joseph ? fa_.col(p + 3).data() : a1;
+  if (p == 0) diag_.head(n) = P_.diagonal().head(n);
+  commit_rows(n, x_.data(), diag_.data(), a0, a1, b0, b1, v(0), v(1), joseph ? 2.0 : 1.0);
   x_(Layout::kTheta) = wrap_angle(x_(Layout::kTheta));
+  if (joseph) {  // P -= [K B] [B K]^T = K B^T + B K^T
+    fb_.col(p).head(n) = fa_.col(p + 2).head(n);
+    fb_.col(p + 1).head(n) = fa_.col(p + 3).head(n);
+    fb_.col(p + 2).head(n) = fa_.col(p).head(n);
+    fb_.col(p + 3).head(n) = fa_.col(p + 1).head(n);
+  }
+  pending_cols_ += factor_cols();
+  upper_stale_ = true;
+}
+
+// The pending covariance steps, one pass over the lower triangle (O(n^2 k)).
+void EkfSlam::settle() const {
+  if (pending_cols_ == 0) return;
+  const double* fb = options_.joseph ? fb_.data() : fa_.data();
+  lower_factor_downdate(P_.data(), P_.outerStride(), state_dim(), fa_.data(), fb, fa_.outerStride(),
+                        pending_cols_);
+  pending_cols_ = 0;
   // Keep the robot block full: columns 0..2 of P stay complete.
   P_(Layout::kX, Layout::kY) = P_(Layout::kY, Layout::kX);
   P_(Layout::kX, Layout::kTheta) = P_(Layout::kTheta, Layout::kX);
@@ -422,6 +523,7 @@ EkfStatus EkfSlam::add_landmark(int id, const RangeBearing& z) {
   if (!valid_id(id) || !finite(z) || !(z.range > 0.0)) return EkfStatus::kBadInput;
   if (has_landmark(id)) return EkfStatus::kAlreadyMapped;
   if (num_landmarks_ >= options_.capacity) return EkfStatus::kFull;
+  settle();
 
   Eigen::Matrix<double, 2, 3> G_x;
   Eigen::Matrix2d G_z;
@@ -458,6 +560,7 @@ EkfStatus EkfSlam::remove_landmark(int id) {
   if (!valid_id(id)) return EkfStatus::kBadInput;
   const int hole = slot_of(id);
   if (hole < 0) return EkfStatus::kUnknownLandmark;
+  settle();
   const int last = num_landmarks_ - 1;
   const Index oh = Layout::landmark_offset(hole), ol = Layout::landmark_offset(last);
   if (hole != last) {
@@ -503,6 +606,7 @@ EkfStatus EkfSlam::restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, c
     id_to_slot_[static_cast<std::size_t>(slot_ids[static_cast<std::size_t>(slot)])] = slot;
   }
   num_landmarks_ = n;
+  pending_cols_ = 0;
   x_.setZero();
   x_.head(dim) = x;
   P_.setZero();  // the inactive part of P stays zero (reset, remove_landmark)
@@ -519,7 +623,10 @@ int EkfSlam::slot_of(int id) const {
 
 Pose2 EkfSlam::pose() const { return {x_(Layout::kX), x_(Layout::kY), x_(Layout::kTheta)}; }
 
-Eigen::Matrix3d EkfSlam::pose_cov() const { return P_.topLeftCorner<kR, kR>(); }
+Eigen::Matrix3d EkfSlam::pose_cov() const {
+  settle();
+  return P_.topLeftCorner<kR, kR>();
+}
 
 // Unmapped ids give NaN rather than a throw: library code never throws per frame.
 Eigen::Vector2d EkfSlam::landmark(int id) const {
@@ -531,12 +638,14 @@ Eigen::Vector2d EkfSlam::landmark(int id) const {
 Eigen::Matrix2d EkfSlam::landmark_cov(int id) const {
   const int slot = slot_of(id);
   if (slot < 0) return Eigen::Matrix2d::Constant(kNaN);
+  settle();
   return diagonal_block(P_, Layout::landmark_offset(slot));
 }
 
 Eigen::Matrix2d EkfSlam::landmark_cross_cov(int id_i, int id_j) const {
   const int si = slot_of(id_i), sj = slot_of(id_j);
   if (si < 0 || sj < 0) return Eigen::Matrix2d::Constant(kNaN);
+  settle();
   const Index oi = Layout::landmark_offset(si), oj = Layout::landmark_offset(sj);
   if (si == sj) return diagonal_block(P_, oi);
   return si > sj ? Eigen::Matrix2d(P_.block<kL, kL>(oi, oj))
@@ -546,9 +655,13 @@ Eigen::Matrix2d EkfSlam::landmark_cross_cov(int id_i, int id_j) const {
 Eigen::Matrix<double, 3, 2> EkfSlam::pose_landmark_cov(int id) const {
   const int slot = slot_of(id);
   if (slot < 0) return Eigen::Matrix<double, 3, 2>::Constant(kNaN);
+  settle();
   return P_.block<kL, kR>(Layout::landmark_offset(slot), 0).transpose();
 }
 
-double EkfSlam::mean_diag() const { return P_.diagonal().head(state_dim()).mean(); }  // eq 19
+double EkfSlam::mean_diag() const {  // eq 19
+  settle();
+  return P_.diagonal().head(state_dim()).mean();
+}
 
 }  // namespace elaslam

@@ -68,6 +68,117 @@ INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfKnownAnswer, ::testing::Bool(),
                            return i.param ? std::string("Joseph") : std::string("Standard");
                          });
 
+// ---- batched covariance steps -------------------------------------------------------------
+
+// Runs of consecutive updates (1 to 40, so beyond kMaxBatch too, with gated and
+// refused ones inside) are held as pending steps and applied in one pass when the
+// filter is next read. Compared only at the end of each run, so the runs really
+// are batched: the result must be the dense EKF's after the same sequential
+// updates, and a twin filter read after every update (so never batching) must
+// agree to rounding.
+class EkfBatch : public ::testing::TestWithParam<bool> {};
+
+TEST_P(EkfBatch, BatchedUpdatesEqualSequentialOnes) {
+  EkfOptions o = small_options(GetParam());
+  o.capacity = 40;
+  EkfSlam ekf(o), twin(o);
+  DenseEkf ref(o);
+  RandomWorld w(0xBA7C4 + (GetParam() ? 1 : 0));
+  const Eigen::Matrix3d P0 = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+  ekf.reset(w.truth, P0);
+  twin.reset(w.truth, P0);
+  ref.reset(w.truth, P0);
+  for (int id = 0; id < 30; ++id) {
+    const RangeBearing z = w.sense(id, o);
+    ASSERT_EQ(ekf.add_landmark(id, z), EkfStatus::kOk);
+    ASSERT_EQ(twin.add_landmark(id, z), EkfStatus::kOk);
+    ref.add(id, z);
+  }
+  int batched = 0, longest = 0, gated = 0, position = 0;
+  double worst_ref = 0.0, worst_twin = 0.0;
+  for (int run = 0; run < 60; ++run) {
+    const Pose2 u = w.move();
+    const Eigen::Matrix3d U = odometry_covariance(u, kOdoNoise);
+    ASSERT_EQ(ekf.predict(u, U), EkfStatus::kOk);
+    ASSERT_EQ(twin.predict(u, U), EkfStatus::kOk);
+    ref.predict(u, U);
+    const int k = 1 + w.pick(40);
+    for (int i = 0; i < k; ++i) {
+      const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
+      if (i % 9 == 4) {  // a gross outlier, refused by the gate: no step, nothing changes
+        const RangeBearing far{w.sense(id, o).range + 20.0, 0.0};
+        ASSERT_EQ(ekf.update(id, far, true).status, EkfStatus::kGated);
+        ASSERT_EQ(twin.update(id, far, true).status, EkfStatus::kGated);
+        ++gated;
+        continue;
+      }
+      if (i % 11 == 6) {  // a position measurement joins the batch too
+        const Eigen::Matrix2d R = 0.01 * Eigen::Matrix2d::Identity();
+        const Vec2 zp = w.landmarks[static_cast<std::size_t>(id)] + Vec2(0.02, -0.01);
+        ASSERT_EQ(ekf.update_position(id, zp, R).status, EkfStatus::kOk);
+        ASSERT_EQ(twin.update_position(id, zp, R).status, EkfStatus::kOk);
+        ref.update_position(id, zp, R);
+        (void)twin.pose_cov();
+        ++position;
+        continue;
+      }
+      const RangeBearing z = w.sense(id, o);
+      const UpdateReport a = ekf.update(id, z), b = twin.update(id, z);
+      ASSERT_EQ(a.status, EkfStatus::kOk);
+      ASSERT_EQ(b.status, EkfStatus::kOk);
+      // The innovation of a batched update is that of the sequential one.
+      ASSERT_NEAR(a.d2, b.d2, 1e-9 * (1.0 + b.d2)) << "run " << run << ", update " << i;
+      ref.update(id, z);
+      (void)twin.pose_cov();  // a read: the twin applies each step at once
+    }
+    batched += k;
+    longest = std::max(longest, k);
+    worst_ref = std::max(worst_ref, max_difference(ekf, ref));
+    worst_twin = std::max(worst_twin, (ekf.covariance() - twin.covariance()).cwiseAbs().maxCoeff() +
+                                          (ekf.mean() - twin.mean()).cwiseAbs().maxCoeff());
+    ASSERT_LT(worst_ref, 1e-9) << "after run " << run << " of " << k << " updates";
+    ASSERT_LT(worst_twin, 1e-12) << "after run " << run << " of " << k << " updates";
+  }
+  EXPECT_GT(longest, EkfSlam::kMaxBatch);  // some runs needed two passes
+  EXPECT_GT(gated, 20);
+  EXPECT_GT(position, 20);
+  RecordProperty("max_difference_to_dense", ::testing::PrintToString(worst_ref));
+  RecordProperty("max_difference_to_sequential", ::testing::PrintToString(worst_twin));
+}
+
+// A refused update inside a batch (its variance would go negative) changes
+// nothing, and the pending steps before it still apply. The state: landmark 2
+// independent of everything (and poorly known: its update changes little),
+// landmark 1 "correlated" with the robot's x beyond what a covariance allows (P
+// indefinite, its diagonal positive), so that observing it drives a variance
+// below zero.
+TEST_P(EkfBatch, RefusedUpdateInsideABatchLeavesThePendingSteps) {
+  EkfOptions o;
+  o.joseph = GetParam();
+  o.range_sigma = 1e-3;
+  EkfSlam ekf(o), twin(o);
+  Eigen::VectorXd x(7);
+  x << 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0;
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(7, 7);
+  P.diagonal() << 1e-4, 1e-4, 1e-5, 1e-2, 1e-2, 1.0, 1.0;
+  P(3, 0) = P(0, 3) = 2e-3;  // correlation 2
+  for (EkfSlam* f : {&ekf, &twin}) ASSERT_EQ(f->restore(x, P, {1, 2}), EkfStatus::kOk);
+  // The twin takes only the accepted update; the filter takes it and then the
+  // refused one, in the same batch.
+  const RangeBearing z2 = observe(ekf.pose(), ekf.landmark(2));
+  ASSERT_EQ(twin.update(2, z2).status, EkfStatus::kOk);
+  ASSERT_EQ(ekf.update(2, z2).status, EkfStatus::kOk);
+  const UpdateReport r = ekf.update(1, {1.0, 0.0});
+  EXPECT_EQ(r.status, EkfStatus::kCovarianceFault) << to_string(r.status);
+  EXPECT_EQ(ekf.mean(), twin.mean());
+  EXPECT_EQ(ekf.covariance(), twin.covariance());
+}
+
+INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfBatch, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& i) {
+                           return i.param ? std::string("Joseph") : std::string("Standard");
+                         });
+
 // A filter and its dense reference, both covariance forms, after each of 300 random
 // operations that leave at least two landmarks: `check(w, ekf, ref, k)` applies
 // the update under test to both and compares them. Returns how many were checked.

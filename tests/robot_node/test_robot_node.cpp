@@ -189,7 +189,10 @@ TEST(RobotNodeTeamMap, TeamEstimatesGoIntoTheAidedFilterOnly) {
   const Robot& robot = node.robot();
   ASSERT_TRUE(robot.filter().has_landmark(1));
   const Eigen::VectorXd own_mean = robot.filter().mean();
-  EXPECT_EQ(robot.estimate().mean(), own_mean);  // nothing fused yet: the two filters agree
+  // Nothing fused yet: the two filters agree, up to rounding (each applies its
+  // pending covariance steps when it is next read, and only the own filter is
+  // read between updates, so they group them differently: EkfSlam::update).
+  EXPECT_LT((robot.estimate().mean() - own_mean).cwiseAbs().maxCoeff(), 1e-12);
   global_map_t g{};
   g.incarnation = 7;
   g.version = 10;

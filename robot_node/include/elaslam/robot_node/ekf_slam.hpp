@@ -12,6 +12,7 @@
 // status; none throws or exits on bad data.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -38,8 +39,13 @@ struct EkfOptions {
   double range_sigma = 0.1;    // [m]   std dev of range measurements
   double bearing_sigma = 0.01; // [rad] std dev of bearing measurements
   double gate_probability = 0.99;  // chi-square gate probability (mode "gated")
-  /// Joseph-form covariance update (true) or the symmetric rank-2 form P - K Z K^T.
-  bool joseph = true;
+  /// Covariance step of update(): the symmetric form P - M M^T, M = P H^T L^-T
+  /// (false: rank 2 per update, rank 2k per frame of k) or the Joseph form
+  /// (true: rank 4 per update, twice the arithmetic). Every gain is the optimal one
+  /// for P with the earlier steps in, so the two agree to rounding (tests
+  /// EkfKnownAnswer, EkfBatch); docs/decisions.md. update_landmark_only, whose gain
+  /// is deliberately not optimal, always uses the Joseph form.
+  bool joseph = false;
 };
 
 enum class EkfStatus : std::uint8_t {
@@ -85,6 +91,11 @@ class EkfSlam {
   /// Correction with one observation (eqs 8-13), using the sparsity of H.
   /// With `gate` true, an innovation beyond the chi-square quantile of
   /// options.gate_probability is refused with kGated (filter unchanged).
+  /// The mean is corrected at once; the covariance step is held with the other
+  /// pending ones (up to kMaxBatch updates) and applied with them in one pass over
+  /// P when anything next reads P or changes its shape. Each update's gain is
+  /// computed against P with all the earlier steps in, so the result is that of
+  /// sequential updates (up to rounding): a batch is invisible to callers.
   UpdateReport update(int id, const RangeBearing& z, bool gate = false);
 
   /// Correction of landmark `id` alone (a Schmidt-Kalman "consider" update): the
@@ -100,7 +111,8 @@ class EkfSlam {
   /// Correction with a direct measurement of landmark `id`'s position: z = l + v,
   /// v ~ N(0, R) (H selects the landmark; the team map's information, team_aid.hpp).
   /// R must be symmetric positive definite. d2 = (z - l)^T (P_ll + R)^-1 (z - l).
-  /// Same gain, health check and Joseph / standard covariance step as update(). O(n^2).
+  /// Same gain, health check and Joseph / standard covariance step as update(),
+  /// batched like it.
   UpdateReport update_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
   /// The same measurement's innovation and d2 without changing the filter.
   UpdateReport check_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) const;
@@ -137,6 +149,7 @@ class EkfSlam {
   /// Not thread-safe, not even for concurrent const calls.
   Eigen::Ref<const Eigen::VectorXd> mean() const { return x_.head(state_dim()); }
   Eigen::Ref<const Eigen::MatrixXd> covariance() const {
+    settle();
     if (upper_stale_) complete_upper_triangle();
     return P_.topLeftCorner(state_dim(), state_dim());
   }
@@ -154,7 +167,15 @@ class EkfSlam {
   /// Start-up only (not the frame path).
   EkfStatus restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids);
 
+ /// Most updates whose covariance steps are applied in one pass.
+  static constexpr int kMaxBatch = 16;
+
  private:
+  using Matrix5 = Eigen::Matrix<double, 5, 5>;
+  using Matrix25 = Eigen::Matrix<double, 2, 5>;
+  /// Columns of fa_ one update uses: K, B (Joseph) or M (standard).
+  int factor_cols() const { return options_.joseph ? 4 : 2; }
+  static constexpr int kMaxFactorCols = 4 * kMaxBatch;
   bool valid_id(int id) const { return id >= 0 && id < options_.max_landmark_id; }
   /// check_position / update_position: input checks, the innovation and d2 into
   /// `report`, the Cholesky factor of Z = P_ll + R into L; false (status set) on failure.
@@ -163,14 +184,21 @@ class EkfSlam {
   /// Input checks shared by check() and update(): kBadInput / kUnknownLandmark.
   EkfStatus locate(int id, const RangeBearing& z, int* slot) const;
   /// The two columns of P of the landmark at offset `off`, into lm_cols_ (O(n)).
-  void load_landmark_columns(Eigen::Index off);
-  /// P H^T and the gain factors of one correction, into PHt_ and K_ (O(n)).
-  void compute_gain(Eigen::Index off, const Eigen::Matrix<double, 2, 5>& H,
-                    const Eigen::Matrix2d& L);
-  /// O(n) preview: would the correction leave X and P finite with diag(P) >= 0?
-  bool correction_healthy(const Eigen::Vector2d& nu, const Eigen::Vector2d& w) const;
-  /// Mean and rank-2 (standard) or rank-4 (Joseph) covariance step, O(n^2).
+  void load_landmark_columns(Eigen::Index off) const;
+  /// P's block on the robot and the landmark at `off`, pending steps included.
+  Matrix5 block5(Eigen::Index off) const;
+  /// P H^T into PHt_, pending steps included (O(n k), k pending columns).
+  void compute_pht(Eigen::Index off, const Matrix25& H) const;
+  /// The gain factors of one correction from PHt_ and the factor L of Z, into the
+  /// next free columns of fa_, and the O(n) preview: would the correction leave X
+  /// and P finite with diag(P) >= 0? (O(n).)
+  bool compute_gain(const Eigen::Matrix2d& L, const Eigen::Vector2d& nu, const Eigen::Vector2d& w);
+  /// The mean step now; the rank-2 (standard) or rank-4 (Joseph) covariance step
+  /// joins the pending ones.
   void apply_correction(const Eigen::Vector2d& nu, const Eigen::Vector2d& w);
+  /// Apply the pending covariance steps: P_ -= fa_ fb_^T (fb_ = fa_ for the
+  /// standard form) on the lower triangle, one pass, O(n^2 k).
+  void settle() const;
   /// Copy the lower triangle of the active block into the upper one (symmetrise).
   void complete_upper_triangle() const;
 
@@ -187,10 +215,17 @@ class EkfSlam {
   std::vector<int> id_to_slot_;  // max_landmark_id entries, -1 when absent
   std::vector<int> slot_to_id_;  // capacity entries
   // Scratch allocated once, used by predict/update/add/remove.
-  Eigen::MatrixXd PHt_;        // n x 2: P H^T, then B = P H^T - K Z / 2 (Joseph)
-  Eigen::MatrixXd K_;          // n x 2: K (Joseph) or M = P H^T L^-T (standard)
-  Eigen::MatrixXd tmp_rows_;   // 3 x n: new P_LR^T in predict
-  Eigen::MatrixXd lm_cols_;    // n x 2: the observed landmark's two columns of P
+  // Scratch (mutable: const readers use it too, e.g. check_position).
+  mutable Eigen::MatrixXd PHt_;  // n x 2: P H^T
+  // The pending covariance steps: P = P_ - fa_ fb_^T on the lower triangle, over
+  // the first pending_cols_ columns; per update [K B] and [B K] (Joseph) or M in
+  // fa_ alone (standard, fb_ unused). diag_: diag(P) while steps are pending.
+  mutable Eigen::MatrixXd fa_, fb_;
+  mutable int pending_cols_ = 0;
+  Eigen::VectorXd diag_;
+  mutable std::array<double, kMaxFactorCols> erow0_{}, erow1_{};  // H fb_^T, by rows
+  Eigen::MatrixXd tmp_rows_;   // n x 3: the new P_LR in predict
+  mutable Eigen::MatrixXd lm_cols_;  // n x 2: the observed landmark's two columns of P
 };
 
 }  // namespace elaslam
