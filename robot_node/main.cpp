@@ -155,7 +155,7 @@ class StateKeeper {
   const std::int64_t refused_at_start_;
 };
 
-void final_line(const RobotNode& node) {
+void final_line(const RobotNode& node, const FrameStages& st) {
   const auto& c = node.counters();
   std::fprintf(stderr,
                "robot_node %d: frames=%lld gaps=%lld duplicates=%lld out_of_order=%lld rejected=%lld "
@@ -166,6 +166,13 @@ void final_line(const RobotNode& node) {
                (long long)c.filter_faults, (long long)c.events_sent, (long long)c.notices_applied,
                node.robot().filter().num_landmarks(), (long long)node.processing().quantile(0.5),
                (long long)node.processing().quantile(0.99), (long long)node.processing().max());
+  // Where the frames' time went (FrameStages; receive needs the sender's clock).
+  const auto q = [](const DurationHistogram& h) {
+    return std::to_string(h.quantile(0.5)) + "/" + std::to_string(h.quantile(0.99)) + "/" + std::to_string(h.max());
+  };
+  std::fprintf(stderr, "robot_node %d: stages_us p50/p99/max receive=%s frame=%s outputs=%s pose=%s\n",
+               node.robot_id(), q(st.receive).c_str(), q(st.frame).c_str(), q(st.outputs).c_str(),
+               q(st.pose).c_str());
   if (node.robot().options().team_map_fuse) {  // robot.team_map: what the other robots' map did
     const TeamCounters& t = node.robot().team_counters();
     std::fprintf(stderr,
@@ -210,7 +217,7 @@ int run(const Args& a) {
   const bool transport_failed = shell.spin(100) == transport::NodeShell::Exit::kTransportError;
   if (!a.state.empty()) save(a.state, node);  // SIGINT / SIGTERM (and a failed transport): the latest state
   if (!transport_failed) ports.publish_status();
-  final_line(node);
+  final_line(node, ports.stages());
   return transport_failed ? 1 : 0;
 }
 

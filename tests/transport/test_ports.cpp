@@ -98,6 +98,37 @@ TEST(RobotPorts, EachFrameGoesOutAsItsEventsThenItsPose) {
   EXPECT_EQ(static_cast<int>(node.counters().events_sent), events);
 }
 
+// Where each processed frame's time went (FrameStages): one sample per stage per
+// processed frame and none for a refused one; "receive" is measured from the
+// SENSOR's own stamp, so a frame stamped 50 ms before it is published reads
+// between 50 ms and 50 ms plus the whole loop there; the other stages of a frame
+// lie within the loop. (Bounds by the measured loop, not by any expected speed.)
+TEST(RobotPorts, EveryProcessedFrameIsTimedByStage) {
+  InProcessTransport bus;
+  NodeShell shell(bus, ShellOptions("robot_node 1", "", nullptr));
+  RobotNode node(load_robot_options(kConfig), 1);
+  RobotPorts<NodeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  Observer obs(bus, "");
+  std::vector<sensor_frame_t> frames = robot1_frames(6);
+  const std::int64_t start = shell.now_utime();
+  for (auto& f : frames) {
+    f.utime = shell.now_utime() - 50000;  // sent 50 ms ago
+    obs.shell().publish(channels::sensor(1), f);
+    bus.dispatch_all();
+  }
+  const std::int64_t loop = shell.now_utime() - start;
+  obs.shell().publish(channels::sensor(1), frames[2]);  // a duplicate: refused, not timed
+  bus.dispatch_all();
+  const FrameStages& st = ports.stages();
+  EXPECT_EQ(node.counters().frames, 6);
+  for (const DurationHistogram* h : {&st.receive, &st.frame, &st.outputs, &st.pose}) EXPECT_EQ(h->count(), 6);
+  EXPECT_GE(st.receive.quantile(0.5), 50000);
+  EXPECT_LE(st.receive.max(), 50000 + loop);
+  EXPECT_LE(st.frame.max() + st.outputs.max() + st.pose.max(), 3 * loop);
+  EXPECT_LE(st.frame.max(), loop);
+}
+
 TEST(RobotPorts, BadInputIsCountedByTheNodeAndLoggedByTheShell) {
   InProcessTransport bus;
   std::FILE* log = std::tmpfile();

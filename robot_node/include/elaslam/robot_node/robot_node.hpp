@@ -227,6 +227,21 @@ struct RobotQueues {
 /// in-process team run both run this, so the live and in-process paths share it.
 /// A template on the shell only so that this library builds without the transport
 /// (the no-allocation test compiles its sources alone); Shell is NodeShell.
+///
+/// Where a frame's time goes (issue 18), per processed frame, wall-clock [us]:
+///   receive: the SENSOR's publish stamp (its utime) to this handler: the sender's
+///            encode and send, the network, the wake-up and scheduling of this
+///            process, LCM's receive thread and queue, decode and the MAC check.
+///            Meaningful only when the sender's clock is this one's (one machine,
+///            or synchronised clocks); across unsynchronised clocks it is clamped
+///            at 0 or absurd.
+///   frame:   RobotNode::on_sensor: the filter, the gate, the outgoing messages filled.
+///   outputs: this frame's LMAP_EVENTs, snapshot chunks and CANDIDATES encoded and sent.
+///   pose:    the POSE encoded and sent (its utime is stamped just before).
+struct FrameStages {
+  DurationHistogram receive, frame, outputs, pose;
+};
+
 template <class Shell>
 class RobotPorts {
  public:
@@ -274,10 +289,14 @@ class RobotPorts {
   /// run reads the frame's gate records there).
   void after_frame(std::function<void(const RobotNode&)> fn) { after_frame_ = std::move(fn); }
 
+  /// Where the processed frames' time went (FrameStages).
+  const FrameStages& stages() const { return stages_; }
+
  private:
   void on_sensor(const sensor_frame_t& msg) {
     std::string why;
-    const auto v = node_.on_sensor(msg, shell_.now_utime(), &why);
+    const std::int64_t received = shell_.now_utime();
+    const auto v = node_.on_sensor(msg, received, &why);
     if (v == RobotNode::Verdict::kInvalid) shell_.refuse("sensor frame refused: " + why);
     if (v != RobotNode::Verdict::kProcessed) return;
     if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
@@ -292,6 +311,11 @@ class RobotPorts {
     pose_estimate_t pose = node_.pose_msg();
     pose.utime = shell_.now_utime();
     shell_.publish(pose_, pose);
+    const std::int64_t sent = shell_.now_utime();
+    stages_.receive.add(received - msg.utime);
+    stages_.frame.add(now - received);
+    stages_.outputs.add(pose.utime - now);
+    stages_.pose.add(sent - pose.utime);
   }
 
   void publish_snapshot() {
@@ -331,6 +355,7 @@ class RobotPorts {
   const std::string event_, snapshot_, pose_, status_, candidates_;  // channel names, built once
   typename Shell::SequenceGaps notice_seq_;            // DYNAMIC_NOTICE's seq: lost notices
   std::function<void(const RobotNode&)> after_frame_;
+  FrameStages stages_;
 };
 
 }  // namespace elaslam
