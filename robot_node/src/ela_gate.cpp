@@ -80,17 +80,6 @@ void set_local(InView* v, const Eigen::Matrix2d& W) {
   v->M = J * W * J.transpose();
 }
 
-LocalPrediction predict_from_neighbour(const EkfSlam& ekf, int id_i, const InView& j) {
-  Eigen::Vector2d d;
-  Eigen::Matrix2d S;
-  Eigen::RowVector2d c;
-  relative(ekf, id_i, j.id, &d, &S, &c);
-  LocalPrediction p = rotate_into_body(ekf, d, S, c);
-  p.mean += j.m;
-  p.cov += j.M;
-  return p;
-}
-
 double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j) {
   Eigen::Vector2d d;
   Eigen::Matrix2d S;
@@ -100,39 +89,41 @@ double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j) {
   return mahalanobis2((i.m - j.m) - rel.mean, i.M + j.M + rel.cov);
 }
 
+Eigen::Matrix2d neighbour_weight(const EkfSlam& ekf, const InView& j) {
+  const Eigen::Matrix2d Rt = rotation(ekf.pose().theta).transpose();
+  const Eigen::LLT<Eigen::Matrix2d> llt(j.M + Rt * ekf.landmark_cov(j.id) * Rt.transpose());
+  if (llt.info() != Eigen::Success) return Eigen::Matrix2d::Zero();  // a degenerate neighbour adds nothing
+  return llt.solve(Eigen::Matrix2d::Identity());
+}
+
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active) {
-  // Each neighbour's prediction of view[i] once (O(n)); the residual covariance's
-  // double sum below then costs O(n^2) small products.
   constexpr int kMax = contract::kMaxObsPerFrame;
   n = std::min(n, kMax);  // a frame holds at most kMaxObsPerFrame observations (the message bound)
-  std::array<Eigen::Matrix2d, kMax> info;   // C_j^-1 of neighbour j's prediction
-  std::array<std::uint8_t, kMax> use{};     // j shapes the ELA (active, not i, C_j positive definite)
-  // Mean (eq 16): product of the Gaussians predicted from each neighbour j, i.e.
-  // information weights W_j = (sum_k C_k^-1)^-1 C_j^-1, summing to I.
+  std::array<Eigen::Matrix2d, kMax> info;   // b_j, the weight of neighbour j
+  std::array<std::uint8_t, kMax> use{};     // j shapes the ELA (active, not i)
+  const Eigen::Matrix2d Rt0 = rotation(ekf.pose().theta).transpose();
+  // Mean: the predictions p_ij = m_j + R^T (l_i - l_j), fused with weights
+  // W_j = (sum_k b_k)^-1 b_j, which sum to I.
   Eigen::Matrix2d Lambda = Eigen::Matrix2d::Zero();
   Eigen::Vector2d eta = Eigen::Vector2d::Zero();
   for (int j = 0; j < n; ++j) {
     if (j == i || (active && !active[j])) continue;
-    const LocalPrediction p = predict_from_neighbour(ekf, view[i].id, view[j]);
-    const Eigen::LLT<Eigen::Matrix2d> llt(p.cov);
-    if (llt.info() != Eigen::Success) continue;  // a degenerate neighbour adds no information
     const auto uj = static_cast<std::size_t>(j);
-    info[uj] = llt.solve(Eigen::Matrix2d::Identity());
+    info[uj] = neighbour_weight(ekf, view[j]);
     use[uj] = 1;
     Lambda += info[uj];
-    eta += info[uj] * p.mean;
+    eta += info[uj] * (view[j].m + Rt0 * (ekf.landmark(view[i].id) - ekf.landmark(view[j].id)));
   }
   const Eigen::LLT<Eigen::Matrix2d> llt(Lambda);
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
   const Eigen::Matrix2d fused_cov = llt.solve(Eigen::Matrix2d::Identity());
   const Eigen::Vector2d residual = view[i].m - fused_cov * eta;
 
-  // Covariance of the residual. The product of Gaussians treats the neighbours'
-  // predictions as independent, but they all contain l_i, the heading and
-  // correlated map errors; (sum_j W_j C_j W_j^T) would be overconfident (a static
-  // landmark then fails ~5x more often than the gate allows). So the weights are
-  // kept and the residual's covariance is computed exactly (to first order) from its
-  // parts, the residual being linear in the estimate's errors e and the noises n:
+  // Covariance of the residual. The predictions all contain l_i, the heading and
+  // correlated map errors, so they are not independent (treating them so, a static
+  // landmark failed ~5x more often than the gate allows). The residual's covariance
+  // is computed exactly (to first order) from its parts, the residual being linear
+  // in the estimate's errors e and the noises n:
   //   r = n_i - sum_j W_j n_j - R^T e_li + sum_j A_j e_lj - g e_th,
   //   A_j = W_j R^T, g = sum_j W_j J_j,
   // so cov(r) = M_i + sum_j W_j M_j W_j^T + H P H^T over (th, l_i, l_j...), the
@@ -184,14 +175,11 @@ ElaGate::ElaGate(const RobotOptions& options)
   prior_.reserve(n);
   Hx_.resize(n);
   Hl_.resize(n);
-  pair_info_.resize(n * n);
   Q_.resize(n * n);
-  v_.resize(n * n);
-  pair_mean_.resize(n * n);
-  pair_ok_.resize(n * n);
+  b_.resize(n);
+  v_.resize(n);
   lm_.resize(n);
   c_.resize(n);
-  sums_.resize(n);
   d2_.reserve(n);
   mask_.reserve(n);
   verdicts_.reserve(n);
@@ -292,8 +280,8 @@ void ElaGate::judge_eq16(const EkfSlam& ekf) {
 }
 
 // Everything eq 16 needs for the view, once per frame (ela_multi_d2 spells out the
-// algebra): every neighbour's prediction of every landmark, O(n^2); each landmark's
-// sums over its neighbours and v_ij, O(n^3) in all (small 2 x 2 products).
+// algebra): Q_ij for every pair and v_i = sum_k Q_ik b_k over the active set
+// (mask_) for every landmark, O(n^2); the active set's totals, O(n).
 void ElaGate::prepare_eq16(const EkfSlam& ekf) {
   const int n = view_size();
   const auto N = static_cast<std::size_t>(n);
@@ -302,87 +290,87 @@ void ElaGate::prepare_eq16(const EkfSlam& ekf) {
   var_th_ = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
   cos_th_ = std::cos(pose.theta);
   sin_th_ = std::sin(pose.theta);
-  for (std::size_t j = 0; j < N; ++j) {
-    lm_[j] = ekf.landmark(view_[j].id);
-    c_[j] = heading_landmark_cov(ekf, view_[j].id) * Rt_.transpose();
-  }
-  for (std::size_t i = 0; i < N; ++i)
-    for (std::size_t j = 0; j < N; ++j) {
-      Q_[i * N + j] = Rt_ * ekf.landmark_cross_cov(view_[i].id, view_[j].id) * Rt_.transpose();
-      pair_ok_[i * N + j] = 0;
-      if (i == j) continue;
-      const LocalPrediction p = predict_from_neighbour(ekf, view_[i].id, view_[j]);
-      const Eigen::LLT<Eigen::Matrix2d> llt(p.cov);
-      if (llt.info() != Eigen::Success) continue;  // a degenerate neighbour adds no information
-      pair_info_[i * N + j] = llt.solve(Eigen::Matrix2d::Identity());
-      pair_mean_[i * N + j] = p.mean;
-      pair_ok_[i * N + j] = 1;
-    }
+  D_ << -sin_th_, cos_th_, -cos_th_, -sin_th_;  // heading_jacobian(c, s, d) = D d
   for (std::size_t i = 0; i < N; ++i) {
-    Eq16Sums& sm = sums_[i];
-    sm.Lambda.setZero();
-    sm.S1.setZero();
-    sm.S2.setZero();
-    sm.T.setZero();
-    sm.eta.setZero();
-    sm.S3.setZero();
-    sm.S4.setZero();
-    for (std::size_t j = 0; j < N; ++j) {
-      if (!pair_ok_[i * N + j]) continue;
-      const Eigen::Matrix2d& a = pair_info_[i * N + j];
-      sm.Lambda += a;
-      sm.eta += a * pair_mean_[i * N + j];
-      sm.S1 += a * view_[j].M * a;
-      sm.S2 += Q_[i * N + j] * a;
-      sm.S3 += a * heading_jacobian(cos_th_, sin_th_, lm_[i] - lm_[j]);
-      sm.S4 += c_[j] * a;
-      Eigen::Matrix2d v = Eigen::Matrix2d::Zero();
-      for (std::size_t k = 0; k < N; ++k)
-        if (pair_ok_[i * N + k]) v += Q_[j * N + k] * pair_info_[i * N + k];
-      v_[i * N + j] = v;
-      sm.T += a * v;
+    for (std::size_t j = 0; j < i; ++j) {
+      Q_[i * N + j] = Rt_ * ekf.landmark_cross_cov(view_[i].id, view_[j].id) * Rt_.transpose();
+      Q_[j * N + i] = Q_[i * N + j].transpose();
     }
+    Q_[i * N + i] = Rt_ * ekf.landmark_cov(view_[i].id) * Rt_.transpose();
+    lm_[i] = ekf.landmark(view_[i].id);
+    c_[i] = heading_landmark_cov(ekf, view_[i].id) * Rt_.transpose();
+    const Eigen::LLT<Eigen::Matrix2d> llt(view_[i].M + Q_[i * N + i]);  // neighbour_weight
+    b_[i] = llt.info() == Eigen::Success ? Eigen::Matrix2d(llt.solve(Eigen::Matrix2d::Identity()))
+                                         : Eigen::Matrix2d::Zero();
+  }
+  tot_.Lambda.setZero();
+  tot_.S1.setZero();
+  tot_.T.setZero();
+  tot_.eta.setZero();
+  tot_.sigma.setZero();
+  tot_.S4.setZero();
+  for (std::size_t j = 0; j < N; ++j) {
+    if (!mask_[j]) continue;
+    const Eigen::Matrix2d& b = b_[j];
+    tot_.Lambda += b;
+    tot_.S1 += b * view_[j].M * b;
+    tot_.eta += b * (view_[j].m - Rt_ * lm_[j]);
+    tot_.sigma += b * (D_ * lm_[j]);
+    tot_.S4 += c_[j] * b;
+  }
+  for (std::size_t i = 0; i < N; ++i) {
+    Eigen::Matrix2d v = Eigen::Matrix2d::Zero();
+    for (std::size_t k = 0; k < N; ++k)
+      if (mask_[k]) v += Q_[i * N + k] * b_[k];
+    v_[i] = v;
+    if (mask_[i]) tot_.T += b_[i] * v;
   }
 }
 
-// Landmark m stops shaping the others' ELAs: its terms leave every other active
-// landmark's sums, O(1) each, and v_ij, O(n) each.
+// Landmark m stops shaping the others' ELAs: its terms leave the totals, O(1), and
+// every v_i, O(n).
 void ElaGate::set_aside_eq16(int m) {
   const auto N = static_cast<std::size_t>(view_size());
   const auto um = static_cast<std::size_t>(m);
   mask_[um] = 0;
-  for (std::size_t i = 0; i < N; ++i) {
-    if (!mask_[i] || !pair_ok_[i * N + um]) continue;
-    Eq16Sums& sm = sums_[i];
-    const Eigen::Matrix2d& a = pair_info_[i * N + um];
-    const Eigen::Matrix2d& vm = v_[i * N + um];
-    sm.Lambda -= a;
-    sm.eta -= a * pair_mean_[i * N + um];
-    sm.S1 -= a * view_[um].M * a;
-    sm.S2 -= Q_[i * N + um] * a;
-    sm.S3 -= a * heading_jacobian(cos_th_, sin_th_, lm_[i] - lm_[um]);
-    sm.S4 -= c_[um] * a;
-    // T = sum_jk a_j Q_jk a_k without j = m and k = m: minus row m (a_m v_im), minus
-    // column m (its transpose), plus the (m, m) term taken twice.
-    sm.T += -a * vm - vm.transpose() * a + a * Q_[um * N + um] * a;
-    for (std::size_t j = 0; j < N; ++j)
-      if (mask_[j] && pair_ok_[i * N + j]) v_[i * N + j] -= Q_[j * N + um] * a;
-  }
+  const Eigen::Matrix2d& b = b_[um];
+  const Eigen::Matrix2d vm = v_[um];
+  tot_.Lambda -= b;
+  tot_.S1 -= b * view_[um].M * b;
+  tot_.eta -= b * (view_[um].m - Rt_ * lm_[um]);
+  tot_.sigma -= b * (D_ * lm_[um]);
+  tot_.S4 -= c_[um] * b;
+  // T = sum_jk b_j Q_jk b_k without j = m and k = m: minus row m (b_m v_m), minus
+  // column m (its transpose), plus the (m, m) term taken twice.
+  tot_.T += -b * vm - vm.transpose() * b + b * Q_[um * N + um] * b;
+  for (std::size_t i = 0; i < N; ++i) v_[i] -= Q_[i * N + um] * b;
 }
 
-// Eq 16's d2 of landmark i from its sums (the same as ela_multi_d2 with mask_).
+// Eq 16's d2 of landmark i against the active set (mask_): its neighbours' sums
+// are the active set's totals, minus its own terms when it is in the set (the same
+// numbers as ela_multi_d2 with mask_).
 double ElaGate::eq16_d2(int i) const {
   const auto ui = static_cast<std::size_t>(i);
-  const Eq16Sums& sm = sums_[ui];
-  const Eigen::LLT<Eigen::Matrix2d> llt(sm.Lambda);
+  const auto N = static_cast<std::size_t>(view_size());
+  const Eigen::Matrix2d bi = mask_[ui] ? b_[ui] : Eigen::Matrix2d::Zero();
+  const Eigen::Matrix2d& vi = v_[ui];
+  const Eigen::Matrix2d& Qii = Q_[ui * N + ui];
+  const Eigen::Matrix2d Lambda = tot_.Lambda - bi;
+  const Eigen::LLT<Eigen::Matrix2d> llt(Lambda);
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
   const Eigen::Matrix2d F = llt.solve(Eigen::Matrix2d::Identity());
-  const Eigen::Vector2d residual = view_[ui].m - F * sm.eta;
-  const Eigen::Matrix2d cross = sm.S2 * F.transpose();
-  Eigen::Matrix2d cov = view_[ui].M + F * sm.S1 * F.transpose() + Q_[ui * static_cast<std::size_t>(view_size()) + ui] -
-                        cross - cross.transpose() + F * sm.T * F.transpose();
-  const Eigen::Vector2d J = F * sm.S3;
-  const Eigen::Matrix2d th_cross = J * (c_[ui] - sm.S4 * F.transpose());
+  const Eigen::Vector2d Rl = Rt_ * lm_[ui];
+  const Eigen::Vector2d eta = tot_.eta - bi * (view_[ui].m - Rl) + Lambda * Rl;  // sum b_j p_ij
+  const Eigen::Vector2d residual = view_[ui].m - F * eta;
+  const Eigen::Matrix2d S1 = tot_.S1 - bi * view_[ui].M * bi;
+  const Eigen::Matrix2d S2 = vi - Qii * bi;                                  // sum_j Q_ij b_j
+  const Eigen::Matrix2d T = tot_.T - bi * vi - vi.transpose() * bi + bi * Qii * bi;
+  const Eigen::Vector2d S3 = Lambda * (D_ * lm_[ui]) - (tot_.sigma - bi * (D_ * lm_[ui]));  // sum b_j D (l_i - l_j)
+  const Eigen::RowVector2d S4 = tot_.S4 - c_[ui] * bi;
+  const Eigen::Matrix2d cross = S2 * F.transpose();
+  Eigen::Matrix2d cov = view_[ui].M + F * S1 * F.transpose() + Qii - cross - cross.transpose() + F * T * F.transpose();
+  const Eigen::Vector2d J = F * S3;
+  const Eigen::Matrix2d th_cross = J * (c_[ui] - S4 * F.transpose());
   cov += var_th_ * J * J.transpose() + th_cross + th_cross.transpose();
   return mahalanobis2(residual, 0.5 * (cov + cov.transpose()));
 }
@@ -436,6 +424,7 @@ void ElaGate::judge_consensus(const EkfSlam& ekf) {
   // landmark): it is re-tested against the whole clique with the fused ELA (eq 16
   // restricted to the clique, mask_) and admitted when it agrees.
   for (int i = 0; i < n; ++i) mask_[static_cast<std::size_t>(i)] = (chosen >> i) & 1u;
+  if (!fallback) prepare_eq16(ekf);  // eq 16 over the clique, O(n^2) for the view
   for (int i = 0; i < n; ++i) {
     const int id = view_[static_cast<std::size_t>(i)].id;
     if (fallback) {  // fewer than two agree: each landmark's single test
@@ -443,7 +432,7 @@ void ElaGate::judge_consensus(const EkfSlam& ekf) {
     } else if (mask_[static_cast<std::size_t>(i)]) {
       decide(i, {id, GateKind::kConsensus, 0.0, ela_threshold_, true}, false);
     } else {
-      const double d2 = ela_multi_d2(ekf, view_.data(), n, i, mask_.data());
+      const double d2 = eq16_d2(i);
       decide(i, {id, GateKind::kConsensus, d2, ela_threshold_, d2 <= ela_threshold_}, false);
     }
   }

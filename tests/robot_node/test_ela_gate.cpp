@@ -114,8 +114,9 @@ TEST(ElaGate, StaticLandmarksFlaggedAtTheGateRateUnderHeadingUncertainty) {
   RecordProperty("pair_rate", std::to_string(pair_rate));
 }
 
-// Eq 16's d2 against a dense reference: the residual r = m_i - sum_j W_j p_j (the
-// weights from predict_from_neighbour) is linear in the state's errors,
+// Eq 16's d2 against a dense reference: the residual r = m_i - sum_j W_j p_j, with
+// p_j = m_j + R^T (l_i - l_j) and W_j = (sum_k b_k)^-1 b_j (b_j from
+// neighbour_weight: (M_j + R^T P_jj R)^-1), is linear in the state's errors,
 // r = n_i - sum_j W_j n_j + H e with H = [-g at th, -R^T at l_i, W_j R^T at l_j], so
 // cov(r) = M_i + sum_j W_j M_j W_j^T + H P H^T with the whole of P.
 TEST(ElaGate, Eq16CovarianceIsTheDenseLinearisedOne) {
@@ -137,10 +138,12 @@ TEST(ElaGate, Eq16CovarianceIsTheDenseLinearisedOne) {
     std::vector<Eigen::Matrix2d> info(5);
     for (int j = 0; j < 5; ++j) {
       if (j == i) continue;
-      const LocalPrediction p = predict_from_neighbour(ekf, i, view[static_cast<std::size_t>(j)]);
-      info[static_cast<std::size_t>(j)] = p.cov.inverse();
+      const InView& vj = view[static_cast<std::size_t>(j)];
+      const Eigen::Matrix2d Pjj = P.block<2, 2>(StateLayout::landmark_offset(ekf.slot_of(j)),
+                                                StateLayout::landmark_offset(ekf.slot_of(j)));
+      info[static_cast<std::size_t>(j)] = (vj.M + Rt * Pjj * Rt.transpose()).inverse();
       Lambda += info[static_cast<std::size_t>(j)];
-      eta += info[static_cast<std::size_t>(j)] * p.mean;
+      eta += info[static_cast<std::size_t>(j)] * (vj.m + Rt * (ekf.landmark(i) - ekf.landmark(j)));
     }
     const Eigen::Matrix2d F = Lambda.inverse();
     const Eigen::Vector2d r = view[static_cast<std::size_t>(i)].m - F * eta;
@@ -329,6 +332,13 @@ TEST(ElaGateFrame, ConsensusRecordsTheCliqueAndTheReTest) {
     EXPECT_EQ(g.inside, k != 5) << k;
     if (k == 5) {
       EXPECT_GT(g.d2, g.threshold);  // re-tested against the clique by eq 16
+      // ... the same number as the reference, eq 16 restricted to the clique
+      std::vector<InView> view;
+      for (int i = 0; i < 8; ++i) view.push_back(gate.in_view(i));
+      std::vector<std::uint8_t> clique(8, 1);
+      clique[5] = 0;
+      const double want = ela_multi_d2(ekf, view.data(), 8, 5, clique.data());
+      EXPECT_NEAR(g.d2, want, 1e-9 * want);
     }
     expect_consistent(g);
   }

@@ -69,26 +69,26 @@ struct LocalPrediction {
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
 };
 
-/// Where landmark i should appear, predicted from neighbour j's observation and the
-/// map's relative vector: m_j + R(th)^T d_ij, covariance
-/// M_j + R^T S_ij R + J s_th^2 J^T + J c_ij R + R^T c_ij^T J^T
-/// with S_ij = P_ii + P_jj - P_ij - P_ji, J = d(R(th)^T d_ij)/d th and
-/// c_ij = P_th,li - P_th,lj the relative vector's covariance with the heading.
-LocalPrediction predict_from_neighbour(const EkfSlam& ekf, int id_i, const InView& j);
-
 /// Mahalanobis distance squared of the pair (i, j): (m_i - m_j) - R^T d_ij against
 /// M_i + M_j + R^T S_ij R + the heading's share (its variance and its covariance with
 /// d_ij). Symmetric in i and j.
 double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j);
 
-/// Eq 16: the ELA of view[i] as the product of the Gaussians predicted from every
-/// other landmark in view (only those with active[j] != 0 when `active` is given);
-/// returns d2 of m_i against it. The mean is the paper's product of Gaussians; the
-/// covariance of the residual is computed exactly, to first order, from the joint
-/// covariance of the heading and the landmarks (the neighbours' predictions share
+/// The weight of neighbour j in eq 16's fusion: the information of its own share
+/// of any prediction it makes, (M_j + R^T P_jj R)^-1 (its observation's noise and
+/// its map uncertainty, in the robot frame); zero when that is not positive
+/// definite. It depends on j alone, which makes the exact residual covariance of
+/// every landmark in view O(n^2) for the whole view (docs/decisions.md).
+Eigen::Matrix2d neighbour_weight(const EkfSlam& ekf, const InView& j);
+
+/// Eq 16: the ELA of view[i] as the fusion of the predictions of it from every
+/// other landmark in view (only those with active[j] != 0 when `active` is given),
+/// p_ij = m_j + R^T (l_i - l_j), weighted by neighbour_weight; returns d2 of m_i
+/// against it. The covariance of the residual is computed exactly, to first order,
+/// from the joint covariance of the heading and the landmarks (the predictions share
 /// l_i, the heading and correlated map errors; the map's errors are correlated with
 /// the heading's), so that a static landmark fails at the gate's nominal rate.
-/// O(n) predictions and O(n^2) small products per landmark.
+/// The reference for ElaGate's O(n^2)-per-view computation: O(n^2) per landmark.
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active = nullptr);
 
 /// Steps 2-3 of DESIGN.md section 5 for one frame: which observations are inside
@@ -154,21 +154,21 @@ class ElaGate {
   std::vector<GateRecord> records_;  // view first, then candidates / classic observations
   std::vector<Eigen::Matrix<double, 2, 3>> Hx_;  // per landmark in view: the observation's Jacobians
   std::vector<Eigen::Matrix2d> Hl_;
-  // Eq 16 for the whole view at once (judge_eq16; the same numbers as ela_multi_d2):
-  // per pair (i, j), row-major n x n: neighbour j's prediction of i (information and
-  // mean), Q_ij = R^T P_ij R, and v_ij = sum_k Q_jk info_ik over i's neighbours; per
-  // landmark, the sums its residual's covariance is made of. Setting a landmark
-  // aside subtracts its terms: O(n^2) per set-aside instead of a new O(n^3) pass.
-  struct Eq16Sums {
-    Eigen::Matrix2d Lambda, S1, S2, T;  // sum info; info M info; Q_ij info; sum_jk info Q info
-    Eigen::Vector2d eta, S3;            // sum info mean; sum info J
-    Eigen::RowVector2d S4;              // sum c_j info
+  // Eq 16 for the whole view at once (judge_eq16; the same numbers as ela_multi_d2).
+  // The weights b_j depend on the neighbour alone, so every sum over a landmark's
+  // neighbours is a sum over the active set minus its own term: the active set's
+  // totals, and per landmark v_i = sum_k Q_ik b_k over the active set. Setting a
+  // landmark aside subtracts its terms, O(n); the whole view costs O(n^2).
+  struct Eq16Totals {
+    Eigen::Matrix2d Lambda, S1, T;  // sum b; sum b M b; sum_jk b_j Q_jk b_k
+    Eigen::Vector2d eta, sigma;     // sum b (m - R^T l); sum b D l
+    Eigen::RowVector2d S4;          // sum c_j b_j
   };
-  std::vector<Eigen::Matrix2d> pair_info_, Q_, v_;
-  std::vector<Eigen::Vector2d> pair_mean_, lm_;
-  std::vector<std::uint8_t> pair_ok_;
-  std::vector<Eigen::RowVector2d> c_;  // P_th,lj R
-  std::vector<Eq16Sums> sums_;
+  std::vector<Eigen::Matrix2d> Q_, b_, v_;  // Q_ij = R^T P_ij R (n x n, row-major); b_j; v_i
+  std::vector<Eigen::Vector2d> lm_;         // l_j (world)
+  std::vector<Eigen::RowVector2d> c_;       // P_th,lj R
+  Eq16Totals tot_;
+  Eigen::Matrix2d D_ = Eigen::Matrix2d::Zero();  // d R(th)^T / d th
   Eigen::Matrix2d Rt_ = Eigen::Matrix2d::Identity();
   double var_th_ = 0.0, cos_th_ = 1.0, sin_th_ = 0.0;
 };
