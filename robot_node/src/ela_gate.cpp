@@ -27,6 +27,12 @@ Eigen::Vector2d heading_jacobian(double c, double s, const Eigen::Vector2d& d) {
   return {-s * d.x() + c * d.y(), -c * d.x() - s * d.y()};
 }
 
+// A Gaussian prediction of where a landmark should appear in the robot frame.
+struct LocalPrediction {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+};
+
 // The heading's covariance with landmark `id`: row theta of P_Rl.
 Eigen::RowVector2d heading_landmark_cov(const EkfSlam& ekf, int id) {
   return ekf.pose_landmark_cov(id).row(StateLayout::kTheta);

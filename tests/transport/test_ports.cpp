@@ -64,22 +64,29 @@ std::vector<sensor_frame_t> robot1_frames(int n) {
   return out;
 }
 
-TEST(RobotPorts, EachFrameGoesOutAsItsEventsThenItsPose) {
+/// Robot 1's node on its ports over an in-process bus, and an observer of the team's
+/// channels that also publishes the SENSOR frames.
+class RobotOnBus : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(ports.open()); }
+  void send(const sensor_frame_t& f) {
+    obs.shell().publish(channels::sensor(1), f);
+    bus.dispatch_all();
+  }
   InProcessTransport bus;
-  NodeShell shell(bus, ShellOptions("robot_node 1", "", nullptr));
-  RobotNode node(load_robot_options(kConfig), 1);
-  RobotPorts<NodeShell> ports(shell, node);
-  ASSERT_TRUE(ports.open());
+  NodeShell shell{bus, ShellOptions("robot_node 1", "", nullptr)};
+  RobotNode node{load_robot_options(kConfig), 1};
+  RobotPorts<NodeShell> ports{shell, node};
+  Observer obs{bus, ""};
+};
+
+TEST_F(RobotOnBus, EachFrameGoesOutAsItsEventsThenItsPose) {
   int after_frame = 0;
   ports.after_frame([&](const RobotNode& n) {
     EXPECT_EQ(&n, &node);
     ++after_frame;
   });
-  Observer obs(bus, "");
-  for (const auto& f : robot1_frames(12)) {
-    obs.shell().publish(channels::sensor(1), f);
-    bus.dispatch_all();
-  }
+  for (const auto& f : robot1_frames(12)) send(f);
   EXPECT_EQ(after_frame, 12);
   // Per frame: its events, a snapshot every 10 frames, then the POSE (the frame's end).
   int frame = 0, events = 0, snapshots = 0;
@@ -103,30 +110,22 @@ TEST(RobotPorts, EachFrameGoesOutAsItsEventsThenItsPose) {
 // SENSOR's own stamp, so a frame stamped 50 ms before it is published reads
 // between 50 ms and 50 ms plus the whole loop there; the other stages of a frame
 // lie within the loop. (Bounds by the measured loop, not by any expected speed.)
-TEST(RobotPorts, EveryProcessedFrameIsTimedByStage) {
-  InProcessTransport bus;
-  NodeShell shell(bus, ShellOptions("robot_node 1", "", nullptr));
-  RobotNode node(load_robot_options(kConfig), 1);
-  RobotPorts<NodeShell> ports(shell, node);
-  ASSERT_TRUE(ports.open());
-  Observer obs(bus, "");
+TEST_F(RobotOnBus, EveryProcessedFrameIsTimedByStage) {
   std::vector<sensor_frame_t> frames = robot1_frames(6);
   const std::int64_t start = shell.now_utime();
   for (auto& f : frames) {
     f.utime = shell.now_utime() - 50000;  // sent 50 ms ago
-    obs.shell().publish(channels::sensor(1), f);
-    bus.dispatch_all();
+    send(f);
   }
   const std::int64_t loop = shell.now_utime() - start;
-  obs.shell().publish(channels::sensor(1), frames[2]);  // a duplicate: refused, not timed
-  bus.dispatch_all();
+  send(frames[2]);  // a duplicate: refused, not timed
   const FrameStages& st = ports.stages();
   EXPECT_EQ(node.counters().frames, 6);
-  for (const DurationHistogram* h : {&st.receive, &st.frame, &st.outputs, &st.pose}) EXPECT_EQ(h->count(), 6);
+  for (const DurationHistogram* h : {&st.receive, &st.frame, &st.outputs, &st.pose}) {
+    EXPECT_EQ(h->count(), 6);
+    EXPECT_LE(h->max(), h == &st.receive ? 50000 + loop : loop);
+  }
   EXPECT_GE(st.receive.quantile(0.5), 50000);
-  EXPECT_LE(st.receive.max(), 50000 + loop);
-  EXPECT_LE(st.frame.max() + st.outputs.max() + st.pose.max(), 3 * loop);
-  EXPECT_LE(st.frame.max(), loop);
 }
 
 TEST(RobotPorts, BadInputIsCountedByTheNodeAndLoggedByTheShell) {

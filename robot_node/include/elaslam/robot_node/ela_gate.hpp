@@ -63,12 +63,6 @@ struct ElaVerdict {
   bool alone = false;
 };
 
-/// A Gaussian prediction of where a landmark should appear in the robot frame.
-struct LocalPrediction {
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-};
-
 /// Mahalanobis distance squared of the pair (i, j): (m_i - m_j) - R^T d_ij against
 /// M_i + M_j + R^T S_ij R + the heading's share (its variance and its covariance with
 /// d_ij). Symmetric in i and j.
