@@ -26,8 +26,11 @@ ViewState team(int robots, int landmarks) {
     elaslam::ground_truth_t g{};
     g.frame = f;
     g.num_robots = static_cast<std::int16_t>(robots);
+    g.robot_ids.resize(static_cast<std::size_t>(robots));
+    g.robots.resize(static_cast<std::size_t>(robots));
     for (int r = 0; r < robots; ++r) g.robot_ids[r] = static_cast<std::int16_t>(r + 1), g.robots[r].x = r;
     g.num_landmarks = static_cast<std::int16_t>(landmarks);
+    g.landmarks.resize(static_cast<std::size_t>(landmarks));
     for (int k = 0; k < landmarks; ++k) g.landmarks[k].id = k, g.landmarks[k].x = k;
     v.on_truth(g);
   }

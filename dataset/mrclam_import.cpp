@@ -66,8 +66,8 @@ run_info_t run_info(const mrclam::FrameSource& src, const mrclam::Options& o, co
   m.landmark_speed_mps = -1.0;
   m.rate_hz = o.rate_hz;
   m.frames = src.num_frames();
-  m.num_robots = static_cast<std::int16_t>(std::min<std::size_t>(src.robot_ids().size(), contract::kMaxRobots));
-  for (int i = 0; i < m.num_robots; ++i) m.robot_ids[i] = static_cast<std::int16_t>(src.robot_ids()[static_cast<std::size_t>(i)]);
+  contract::set_count(&m.robot_ids, &m.num_robots, static_cast<int>(src.robot_ids().size()));  // <= kMaxRobots (FrameSource)
+  for (std::size_t i = 0; i < src.robot_ids().size(); ++i) m.robot_ids[i] = static_cast<std::int16_t>(src.robot_ids()[i]);
   m.config_yaml = config::edit_yaml(effective_yaml, [&o](YAML::Node& root) {  // the overrides, recorded
     YAML::Node d = root["dataset"];
     d["rate_hz"] = o.rate_hz;

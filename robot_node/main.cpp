@@ -51,11 +51,16 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
     std::fprintf(stderr, "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
     return false;
   }
+  if (!o->limits.in_team(a.robot)) {  // its own team would refuse every message it sends
+    std::fprintf(stderr, "robot_node: --robot %d is not in robot.limits.team (%s) of %s\n", a.robot,
+                 team_text(o->limits.team_mask).c_str(), cfg->path.c_str());
+    return false;
+  }
   return true;
 }
 
 // More event seq numbers than a robot can send in any save interval (at most
-// 2 x 64 + capacity + 8 events a frame).
+// Robot::event_capacity, 3 x 64 + capacity + 8, events a frame).
 constexpr std::int64_t kResumeSeqSkip = std::int64_t{1} << 24;
 
 std::int64_t wall_clock_us() {
@@ -160,11 +165,12 @@ void final_line(const RobotNode& node, const FrameStages& st) {
   std::fprintf(stderr,
                "robot_node %d: frames=%lld gaps=%lld duplicates=%lld out_of_order=%lld rejected=%lld "
                "decode_errors=%lld filter_faults=%lld events=%lld notices_applied=%lld landmarks=%d "
-               "frame_us p50=%lld p99=%lld max=%lld\n",
+               "evictions=%lld restored=%lld frame_us p50=%lld p99=%lld max=%lld\n",
                node.robot_id(), (long long)c.frames, (long long)c.frames_gap, (long long)c.frames_duplicate,
                (long long)c.frames_out_of_order, (long long)c.rejected_inputs, (long long)c.decode_errors,
                (long long)c.filter_faults, (long long)c.events_sent, (long long)c.notices_applied,
-               node.robot().filter().num_landmarks(), (long long)node.processing().quantile(0.5),
+               node.robot().filter().num_landmarks(), (long long)c.evictions, (long long)c.restored,
+               (long long)node.processing().quantile(0.5),
                (long long)node.processing().quantile(0.99), (long long)node.processing().max());
   // Where the frames' time went (FrameStages; receive needs the sender's clock).
   const auto q = [](const DurationHistogram& h) {
@@ -231,7 +237,7 @@ int main(int argc, char** argv) {
     CLI::App app{"elaslam robot_node: one robot's EKF-SLAM with the ELA gate, on LCM"};
     cli::add_version_flag(app, "robot_node");
     cli::add_config_option(app, &a.config, "its robot: section");
-    app.add_option("--robot", a.robot, "this robot's id (1 to 8: the team's capacity)")
+    app.add_option("--robot", a.robot, "this robot's id: 1 to 16, and in robot.limits.team")
         ->required()
         ->check(cli::range(1, elaslam::contract::kMaxRobots));
     app.add_option("--mode", a.mode, "override robot.mode: ekf, gated, ela, consensus");

@@ -314,7 +314,8 @@ std::string reported_mode(const LogData& d, bool* disagree) {
 
 nlohmann::json run_info_json(const run_info_t& m) {
   nlohmann::json robots = nlohmann::json::array();
-  for (int i = 0; i < contract::bounded(m.num_robots, contract::kMaxRobots); ++i) robots.push_back(m.robot_ids[i]);
+  const int n = contract::bounded(m.num_robots, static_cast<int>(m.robot_ids.size()));
+  for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) robots.push_back(m.robot_ids[i]);
   return {{"source", m.source},   {"version", m.version},
           {"scenario", m.scenario}, {"mode", m.mode},
           {"seed", m.seed},       {"dynamism_percent", m.dynamism_percent},

@@ -12,6 +12,8 @@
 
 namespace elaslam {
 
+static_assert(MessageLimits::kAllRobots == (1 << contract::kMaxRobots) - 1, "limits.team's default: every robot id");
+
 const char* to_string(Refusal r) {
   switch (r) {
     case Refusal::kMalformed: return "malformed";
@@ -39,11 +41,13 @@ bool parse_team(const std::string& text, int* mask, std::string* why) {
   while (std::getline(ss, item, ',')) {
     const auto b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
     const std::string t = b == std::string::npos ? "" : item.substr(b, e - b + 1);
-    if (t.size() != 1 || t[0] < '1' || t[0] > '8') {
+    const bool digits = !t.empty() && t.size() <= 2 && t.find_first_not_of("0123456789") == std::string::npos && t[0] != '0';
+    const int id = digits ? std::stoi(t) : 0;
+    if (id < 1 || id > contract::kMaxRobots) {
       *why = "'" + t + "' is not a robot id in [1, " + std::to_string(contract::kMaxRobots) + "]";
       return false;
     }
-    const int bit = 1 << (t[0] - '1');
+    const int bit = 1 << (id - 1);
     if (bits & bit) {
       *why = "robot " + t + " given twice";
       return false;
@@ -93,7 +97,7 @@ std::vector<std::string> check_shared_config(const std::string& path) {
       problems.push_back("main.max_landmark_id (" + mid.as<std::string>() + ") is smaller than robot.filter.max_landmark_id (" +
                          rid.as<std::string>() + "): main_robot would refuse every event about the ids between");
     const auto team = [](const YAML::Node& section) {
-      int mask = 0xff;
+      int mask = MessageLimits::kAllRobots;
       std::string why;
       if (section["limits"] && section["limits"]["team"]) parse_team(section["limits"]["team"].as<std::string>(), &mask, &why);
       return mask;

@@ -332,8 +332,9 @@ FrameSource::FrameSource(const Dataset& d, const Options& o) : options_(o), land
   for (double v : {o.odom_var_trans_per_m, o.odom_var_rot_per_rad, o.odom_var_rot_per_m})
     if (!(std::isfinite(v) && v >= 0.0))
       throw std::invalid_argument("mrclam: odom_var_* must be finite and >= 0, got " + std::to_string(v));
-  if (landmarks_.size() + o.robots.size() > static_cast<std::size_t>(contract::kMaxLandmarksPerMessage))
-    throw std::invalid_argument("mrclam: more landmarks than ground_truth_t holds");
+  if (landmarks_.size() + o.robots.size() > static_cast<std::size_t>(contract::kMaxWorldLandmarks))
+    throw std::invalid_argument("mrclam: more landmarks than ground_truth_t holds (" +
+                                std::to_string(contract::kMaxWorldLandmarks) + ")");
 
   compute_frame_times(d);
   per_robot_.resize(o.robots.size());
@@ -496,10 +497,12 @@ void FrameSource::frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* 
   const auto kk = static_cast<std::size_t>(k);
   const std::size_t nr = per_robot_.size();
   if (gt) {
-    *gt = ground_truth_t{};
     gt->utime = utime;
     gt->frame = k;
-    gt->num_robots = static_cast<std::int16_t>(nr);  // <= kMaxRobots (constructor)
+    const int nl = static_cast<int>(landmarks_.size() + (options_.with_robot_barcodes ? nr : 0));
+    contract::set_count(&gt->robot_ids, &gt->num_robots, static_cast<int>(nr));  // <= kMaxRobots (constructor)
+    contract::set_count(&gt->robots, &gt->num_robots, static_cast<int>(nr));
+    contract::set_count(&gt->landmarks, &gt->num_landmarks, nl);  // <= kMaxWorldLandmarks (constructor)
     for (std::size_t i = 0; i < nr; ++i) {
       const Pose2& T = per_robot_[i].truth[kk];
       gt->robot_ids[i] = static_cast<std::int16_t>(options_.robots[i]);
@@ -507,23 +510,11 @@ void FrameSource::frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* 
       gt->robots[i].y = T.y;
       gt->robots[i].theta = T.theta;
     }
-    int l = 0;
-    for (const LandmarkTruth& lm : landmarks_) {
-      gt->landmarks[l].id = lm.subject;
-      gt->landmarks[l].x = lm.x;
-      gt->landmarks[l].y = lm.y;
-      gt->landmarks[l].moving = false;
-      ++l;
-    }
+    std::size_t l = 0;
+    for (const LandmarkTruth& lm : landmarks_) gt->landmarks[l++] = {lm.subject, lm.x, lm.y, false};
     if (options_.with_robot_barcodes)
-      for (std::size_t i = 0; i < nr; ++i) {
-        gt->landmarks[l].id = options_.robots[i];
-        gt->landmarks[l].x = per_robot_[i].truth[kk].x;
-        gt->landmarks[l].y = per_robot_[i].truth[kk].y;
-        gt->landmarks[l].moving = true;
-        ++l;
-      }
-    gt->num_landmarks = static_cast<std::int16_t>(l);
+      for (std::size_t i = 0; i < nr; ++i)
+        gt->landmarks[l++] = {options_.robots[i], per_robot_[i].truth[kk].x, per_robot_[i].truth[kk].y, true};
   }
   if (sensors) {
     sensors->resize(nr);

@@ -1,3 +1,4 @@
+#include "elaslam/common/contract.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 
 #include <algorithm>
@@ -12,7 +13,7 @@
 namespace elaslam {
 
 void parse(config::Reader& r, GlobalMapOptions* o) {
-  r.read("max_landmark_id", &o->max_landmark_id, 1, 1 << 20);
+  r.read("max_landmark_id", &o->max_landmark_id, 1, contract::kMaxLandmarkIdLimit);
   std::string fusion = o->fusion == Fusion::kInformation ? "information" : "covariance_intersection";
   r.read_enum("fusion", &fusion, {"information", "covariance_intersection"});
   o->fusion = fusion == "information" ? Fusion::kInformation : Fusion::kCovarianceIntersection;
@@ -333,8 +334,10 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
     loaded.version_ = integer(j, "version", 0, kMaxSeq);
     loaded.newest_frame_ = static_cast<int>(integer(j, "newest_frame", -1, kIntMax));
     const json& rs = j.at("robots");
-    if (!rs.is_array() || rs.size() != static_cast<std::size_t>(kMaxTeamRobots))
-      throw std::runtime_error("robots: expected 8 entries");
+    // One entry per robot id 1..kMaxTeamRobots; a file of a build with fewer robot
+    // ids (8 before issue 18) holds fewer, and the rest start fresh.
+    if (!rs.is_array() || rs.empty() || rs.size() > static_cast<std::size_t>(kMaxTeamRobots))
+      throw std::runtime_error("robots: expected 1 to " + std::to_string(kMaxTeamRobots) + " entries");
     for (std::size_t r = 0; r < rs.size(); ++r) {
       const std::string where = "robots[" + std::to_string(r) + "].";
       try {

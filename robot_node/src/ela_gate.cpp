@@ -14,14 +14,6 @@
 namespace elaslam {
 namespace {
 
-// d2 = r^T C^-1 r for a 2x2 symmetric C; +inf when C is not positive definite.
-double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C) {
-  const double det = C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0);
-  if (!(det > 0.0) || !(C(0, 0) > 0.0)) return std::numeric_limits<double>::infinity();
-  const Eigen::Matrix2d inv = (Eigen::Matrix2d() << C(1, 1), -C(0, 1), -C(1, 0), C(0, 0)).finished() / det;
-  return r.dot(inv * r);
-}
-
 // d/dth of R(th)^T d = [-s c; -c -s] d (c, s: cos and sin of th).
 Eigen::Vector2d heading_jacobian(double c, double s, const Eigen::Vector2d& d) {
   return {-s * d.x() + c * d.y(), -c * d.x() - s * d.y()};

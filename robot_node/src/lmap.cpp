@@ -46,6 +46,7 @@ void LMap::set_status(int id, LandmarkStatus s, int frame) {
   LMapEntry& e = at(id);
   if (e.status != s) e.status_frame = frame;
   e.status = s;
+  e.archived = false;  // whatever it becomes, it is handled in the filter from now on
 }
 
 void LMap::restart_streak(LMapEntry* e, int sightings) {
@@ -103,6 +104,15 @@ bool LMap::candidate_inconsistent(int id) {
 }
 
 void LMap::drop_candidate(int id) { restart_streak(&at(id), 0); }
+
+void LMap::archive(int id, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov) {
+  LMapEntry& e = at(id);
+  e.archived = true;
+  e.position = position;
+  e.cov = cov;
+  e.missing_frames = 0;
+  e.outside_streak = 0;
+}
 
 bool LMap::confirm(int id, int frame) {
   set_status(id, LandmarkStatus::kStatic, frame);

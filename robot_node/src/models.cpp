@@ -5,8 +5,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace elaslam {
+
+double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C) {
+  const double det = C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0);
+  if (!(det > 0.0) || !(C(0, 0) > 0.0)) return std::numeric_limits<double>::infinity();
+  const Eigen::Matrix2d inv = (Eigen::Matrix2d() << C(1, 1), -C(0, 1), -C(1, 0), C(0, 0)).finished() / det;
+  return r.dot(inv * r);
+}
 
 namespace {
 // Variance floor [m^2 or rad^2]: keeps U positive definite for a robot standing

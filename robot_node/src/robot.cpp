@@ -7,15 +7,13 @@
 #include <limits>
 
 namespace elaslam {
-namespace {
 
-// Room for one frame's events: every observation can yield one event, every mapped
-// landmark can go missing, plus UPDATEs for the corrected ones.
-std::size_t event_capacity(const RobotOptions& o) {
-  return static_cast<std::size_t>(2 * kMaxObservations + o.ekf.capacity + 8);
+// Room for one frame's events: every observation can yield an UPDATE, an ADD or
+// MOVING and the UPDATE of a landmark it evicts (make_room), every mapped landmark
+// can go missing.
+std::size_t Robot::event_capacity(const RobotOptions& o) {
+  return static_cast<std::size_t>(3 * kMaxObservations + o.ekf.capacity + 8);
 }
-
-}  // namespace
 
 const char* to_string(EventKind k) {
   switch (k) {
@@ -38,6 +36,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   if (options.team_map_fuse) aided_.emplace(options.ekf);
   team_gate_threshold_ = options.team_map_gate_probability < 1.0 ? chi2_quantile(options.team_map_gate_probability, 2)
                                                                   : std::numeric_limits<double>::infinity();
+  restore_threshold_ = chi2_quantile(options.drift_gate_probability, 2);
   updated_.reserve(kMaxObservations);
   events_.reserve(event_capacity(options));
 }
@@ -158,6 +157,7 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
     if (ekf_.has_landmark(o.landmark_id)) continue;
     ++s->num_candidates;
+    make_room(s);  // an archived landmark comes back as new: its ADD replaces the old estimate at main
     if (!added(mirror_add(o.landmark_id, o.z, s), s)) continue;
     lmap_.map_at_once(o.landmark_id, in.frame);
     emit(EventKind::kAdd, o.landmark_id);
@@ -173,7 +173,8 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   //    consensus clique or the single-landmark test, then the drift test).
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
-    if (lmap_[o.landmark_id].status == LandmarkStatus::kStatic) gate_.add_to_view(o.landmark_id, o.z);
+    if (lmap_[o.landmark_id].status == LandmarkStatus::kStatic && ekf_.has_landmark(o.landmark_id))
+      gate_.add_to_view(o.landmark_id, o.z);  // not the archived ones (restore_archived, below)
   }
   gate_.judge_view(ekf_, &lmap_);
   // 3, inside: correct the filter (eqs 7-13), in view order.
@@ -194,6 +195,7 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
     if (!options_.lone_verdicts && verdict.alone) continue;
     if (lmap_.outside_ela(v.id)) mark_moving(v.id, &v.z, s);
   }
+  restore_archived(in, s);
   // 1-2. New landmarks and candidates.
   lmap_.set_few_static(s->num_accepted < 3);
   handle_candidates(in, s);
@@ -242,6 +244,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     }
     // New, seen again after moving or after a gap, or inconsistent: (re)anchor here.
     lmap_.anchor_candidate(id, in.frame);
+    make_room(s);
     added(mirror_add(id, o.z, s), s);  // kFull: candidate outside the filter
   }
 }
@@ -318,6 +321,65 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   ++s->num_moving;
 }
 
+// The bounded filter (docs/decisions.md, "Bounded filter"): a robot in a world
+// larger than its filter keeps the landmarks near it. When an add finds every slot
+// taken, the held landmark farthest from the robot goes, if it is beyond
+// sensor_range and was not seen this frame (it cannot be in view: nothing the
+// robot sees now is given up). A STATIC one sends its last estimate to main_robot
+// (an UPDATE; the global map keeps it) and stays in the L-map as archived, listed
+// in the snapshots; a candidate is dropped, as one unseen too long is. O(n).
+bool Robot::make_room(FrameSummary* s) {
+  if (ekf_.num_landmarks() < ekf_.capacity()) return true;
+  const Eigen::Vector2d here = ekf_.pose().translation();
+  int victim = -1;
+  double farthest = options_.sensor_range;
+  for (int slot = 0; slot < ekf_.num_landmarks(); ++slot) {
+    const int id = ekf_.id_at(slot);
+    if (lmap_[id].last_seen_frame == last_frame_) continue;
+    const double d = (ekf_.landmark(id) - here).norm();
+    if (d > farthest) {
+      farthest = d;
+      victim = id;
+    }
+  }
+  if (victim < 0) return false;
+  if (lmap_[victim].status == LandmarkStatus::kStatic) {
+    const Eigen::Vector2d p = ekf_.landmark(victim);
+    const Eigen::Matrix2d C = ekf_.landmark_cov(victim);
+    emit_at(EventKind::kUpdate, victim, p, C);
+    lmap_.reported(victim, last_frame_);
+    mirror_remove(victim);
+    lmap_.archive(victim, p, C);
+  } else {
+    mirror_remove(victim);
+    lmap_.drop_candidate(victim);
+  }
+  ++s->evicted;
+  return true;
+}
+
+// An archived landmark seen again re-enters the filter from this observation (its
+// old estimate cannot be fused back: it is correlated with the robot's pose and
+// map in ways the filter no longer tracks) and is STATIC at once. The two
+// estimates are tested against each other, at drift_gate_probability (one strict
+// test standing for moving_after ELA tests): one that moved while out of the
+// filter is found moving here, as the ELA gate would have found it in view.
+void Robot::restore_archived(const FrameInput& in, FrameSummary* s) {
+  for (int k = 0; k < in.num_obs; ++k) {
+    const Observation& o = in.obs[static_cast<std::size_t>(k)];
+    const LMapEntry& e = lmap_[o.landmark_id];
+    if (e.status != LandmarkStatus::kStatic || !e.archived) continue;
+    make_room(s);
+    if (!added(mirror_add(o.landmark_id, o.z, s), s)) continue;  // stays archived
+    const Eigen::Vector2d kept = e.position;
+    const Eigen::Matrix2d kept_cov = e.cov;
+    lmap_.unarchive(o.landmark_id);
+    ++s->restored;
+    const double d2 = mahalanobis2(ekf_.landmark(o.landmark_id) - kept, ekf_.landmark_cov(o.landmark_id) + kept_cov);
+    if (d2 > restore_threshold_) mark_moving(o.landmark_id, &o.z, s);
+  }
+}
+
 // The L-map's record of a sighting: world position g(R, y) (eq 15) and its covariance.
 void Robot::record_sighting(int id, const RangeBearing& z) {
   Eigen::Matrix<double, 2, 3> Gx;
@@ -347,7 +409,7 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   const bool in_filter = ekf_.has_landmark(landmark_id);
   const bool held = in_filter && lmap_[landmark_id].status == LandmarkStatus::kStatic;
   const bool removed = in_filter && mirror_remove(landmark_id) == EkfStatus::kOk;
-  lmap_.told_moving(landmark_id, frame, removed);
+  lmap_.told_moving(landmark_id, frame, removed || lmap_[landmark_id].archived);
   return removed && held;
 }
 

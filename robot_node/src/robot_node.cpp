@@ -52,7 +52,7 @@ Eigen::Matrix2d get_cov2(const double (&src)[2][2]) {
 
 RobotNode::RobotNode(const RobotOptions& options, int robot_id)
     : options_(options), robot_id_(robot_id), robot_(options, robot_id) {
-  events_.reserve(static_cast<std::size_t>(2 * kMaxObservations + options.ekf.capacity + 8));
+  events_.reserve(Robot::event_capacity(options));
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
   held_.reserve(kMaxHeldNotices);
@@ -65,12 +65,13 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   candidates_.candidates.resize(kMaxCandidates);  // num_candidates says how many count
 }
 
-// Snapshot chunks, sized from the generated code, a pool for the largest map.
+// Snapshot chunks, sized from the generated code, a pool for the largest map: every
+// id static (held in the filter or archived, Robot::make_room).
 void RobotNode::prepare_snapshot_chunks() {
   const int max_id = options_.ekf.max_landmark_id;
   static_ids_.reserve(static_cast<std::size_t>(max_id));
   moving_ids_.reserve(static_cast<std::size_t>(max_id));
-  prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, std::min(options_.ekf.capacity, max_id), max_id,
+  prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, max_id, max_id,
                  &chunk_sizes_, &chunks_);
   spans_.reserve(chunks_.size());
 }
@@ -202,6 +203,8 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   ++counters_.frames;
   counters_.filter_faults += s.filter_faults;
   if (s.filter_full > 0) note_filter_full(s.filter_full);
+  counters_.evictions += s.evicted;
+  counters_.restored += s.restored;
   if (s.inconsistent) note_inconsistent(s.recovered);
   fill_events(now_utime);
   if (msg.frame % options_.snapshot_period_frames == 0) {
@@ -309,7 +312,8 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
   moving_ids_.clear();
   for (int id = 0; id < lm.size(); ++id) {
     const LMapEntry& e = lm[id];
-    if (e.status == LandmarkStatus::kStatic && f.has_landmark(id)) static_ids_.push_back(id);  // candidates are not the map
+    if (e.status == LandmarkStatus::kStatic && (f.has_landmark(id) || e.archived))
+      static_ids_.push_back(id);  // candidates are not the map; archived landmarks are
     else if (e.status == LandmarkStatus::kMoving || (e.status == LandmarkStatus::kCandidate && e.was_moving))
       moving_ids_.push_back(id);
   }
@@ -333,10 +337,11 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
       const int id = static_ids_[static_cast<std::size_t>(sp.first_a + i)];
       landmark_estimate_t& l = c.landmarks[static_cast<std::size_t>(i)];
       l.id = id;
-      const Eigen::Vector2d p = f.landmark(id);
+      const LMapEntry& e = lm[id];
+      const Eigen::Vector2d p = e.archived ? e.position : f.landmark(id);
       l.x = p.x();
       l.y = p.y();
-      set_cov2(l.cov, f.landmark_cov(id));
+      set_cov2(l.cov, e.archived ? e.cov : f.landmark_cov(id));
     }
     grow_moving(&c, sp.count_b);
     for (int i = 0; i < sp.count_b; ++i) {

@@ -220,6 +220,7 @@ json RobotStateAccess::save_lmap(const LMap& m) {
     json j = {{"id", id}, {"status", to_string(e.status)}, {"cov", to_json(e.cov)}};
     for (const auto& f : kEntryInts) j[f.name] = e.*f.field;
     for (const auto& f : kEntryBools) j[f.first] = e.*f.second;
+    if (e.archived) j["archived"] = true;  // absent: false (and in files of before issue 18)
     for (const auto& f : kEntryVecs) j[f.name] = to_json(e.*f.field);
     entries.push_back(std::move(j));
   }
@@ -361,13 +362,15 @@ void RobotStateAccess::load_lmap(const json& s, Robot* r) {
     e.cov = cov2(need(j, w, "cov"), w + ".cov", r->options_.limits);
     for (const auto& f : kEntryInts) e.*f.field = static_cast<int>(whole(need(j, w, f.name), w + "." + f.name, f.lo, kMaxFrame));
     for (const auto& f : kEntryBools) e.*f.second = boolean(need(j, w, f.first), w + "." + f.first);
+    if (j.contains("archived")) e.archived = boolean(j["archived"], w + ".archived");
     for (const auto& f : kEntryVecs)
       e.*f.field = vec2(need(j, w, f.name), w + "." + f.name, f.bound > 0.0 ? f.bound : r->options_.limits.world_bound);
     r->lmap_.restore(id, e);
   }
 }
 
-// The filter holds exactly the STATIC landmarks and (some) candidates: what Robot keeps true.
+// The filter holds exactly the STATIC landmarks that are not archived and (some)
+// candidates: what Robot keeps true.
 void RobotStateAccess::check_consistency(const Robot& r) {
   for (int slot = 0; slot < r.ekf_.num_landmarks(); ++slot) {
     const int id = r.ekf_.id_at(slot);
@@ -376,9 +379,14 @@ void RobotStateAccess::check_consistency(const Robot& r) {
       fail("filter.slot_ids[" + std::to_string(slot) + "]",
            "landmark " + std::to_string(id) + " is in the filter but " + to_string(st) + " in the L-map");
   }
-  for (int id = 0; id < r.lmap_.size(); ++id)
-    if (r.lmap_[id].status == LandmarkStatus::kStatic && !r.ekf_.has_landmark(id))
-      fail("lmap", "landmark " + std::to_string(id) + " is static but not in the filter");
+  for (int id = 0; id < r.lmap_.size(); ++id) {
+    const LMapEntry& e = r.lmap_[id];
+    if (e.archived && (e.status != LandmarkStatus::kStatic || r.ekf_.has_landmark(id)))
+      fail("lmap", "landmark " + std::to_string(id) + " is archived but " +
+                       (r.ekf_.has_landmark(id) ? std::string("in the filter") : "not static"));
+    if (e.status == LandmarkStatus::kStatic && !e.archived && !r.ekf_.has_landmark(id))
+      fail("lmap", "landmark " + std::to_string(id) + " is static but neither in the filter nor archived");
+  }
 }
 
 void RobotStateAccess::load(const json& s, RobotNode* scratch) {

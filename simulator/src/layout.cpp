@@ -103,9 +103,9 @@ bool random_layout(const ScenarioOptions& o, std::vector<Eigen::Vector2d>* p, st
 
 bool generate_layout(const ScenarioOptions& o, std::vector<Eigen::Vector2d>* p_LinW, std::string* why) {
   p_LinW->clear();
-  if (o.landmarks.count < 1 || o.landmarks.count > contract::kMaxLandmarksPerMessage) {
-    *why = "count must be in [1, " + std::to_string(contract::kMaxLandmarksPerMessage) + "] (ground_truth_t holds " +
-           std::to_string(contract::kMaxLandmarksPerMessage) + " landmarks)";
+  if (o.landmarks.count < 1 || o.landmarks.count > contract::kMaxWorldLandmarks) {
+    *why = "count must be in [1, " + std::to_string(contract::kMaxWorldLandmarks) + "] (ground_truth_t holds " +
+           std::to_string(contract::kMaxWorldLandmarks) + " landmarks)";
     return false;
   }
   p_LinW->reserve(static_cast<std::size_t>(std::max(o.landmarks.count, 0)));

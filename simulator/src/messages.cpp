@@ -36,26 +36,34 @@ elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime) {
 
 elaslam::ground_truth_t to_message(const World& w, std::int64_t utime) {
   elaslam::ground_truth_t m{};
-  m.utime = utime;
-  m.frame = w.frame();
-  // Capacities (8 robots, 256 landmarks) are enforced by the scenario's ranges.
-  m.num_robots = static_cast<std::int16_t>(w.num_robots());
+  to_message(w, utime, &m);
+  return m;
+}
+
+void to_message(const World& w, std::int64_t utime, elaslam::ground_truth_t* m) {
+  m->utime = utime;
+  m->frame = w.frame();
+  // The counts fit: check_scenario bounds robots by kMaxRobots and landmarks by
+  // kMaxWorldLandmarks.
+  contract::set_count(&m->robot_ids, &m->num_robots, w.num_robots());
+  contract::set_count(&m->robots, &m->num_robots, w.num_robots());
   for (int r = 0; r < w.num_robots(); ++r) {
     const Pose2& T = w.robot_pose(r);
-    m.robot_ids[r] = static_cast<std::int16_t>(w.options().robots[static_cast<std::size_t>(r)].id);
-    m.robots[r].x = T.x;
-    m.robots[r].y = T.y;
-    m.robots[r].theta = T.theta;
+    const auto k = static_cast<std::size_t>(r);
+    m->robot_ids[k] = static_cast<std::int16_t>(w.options().robots[k].id);
+    m->robots[k].x = T.x;
+    m->robots[k].y = T.y;
+    m->robots[k].theta = T.theta;
   }
-  m.num_landmarks = static_cast<std::int16_t>(w.num_landmarks());
+  contract::set_count(&m->landmarks, &m->num_landmarks, w.num_landmarks());
   const auto& p = w.landmark_positions();
   for (int i = 0; i < w.num_landmarks(); ++i) {
-    m.landmarks[i].id = i;
-    m.landmarks[i].x = p[static_cast<std::size_t>(i)].x();
-    m.landmarks[i].y = p[static_cast<std::size_t>(i)].y();
-    m.landmarks[i].moving = w.is_moving(i);
+    auto& l = m->landmarks[static_cast<std::size_t>(i)];
+    l.id = i;
+    l.x = p[static_cast<std::size_t>(i)].x();
+    l.y = p[static_cast<std::size_t>(i)].y();
+    l.moving = w.is_moving(i);
   }
-  return m;
 }
 
 }  // namespace elaslam::sim
@@ -77,8 +85,8 @@ elaslam::run_info_t to_run_info(const ScenarioOptions& o, const std::string& sce
   m.landmark_speed_mps = o.landmark_speed_mps;
   m.rate_hz = o.rate_hz;
   m.frames = o.frames;
-  m.num_robots = static_cast<std::int16_t>(o.robots.size());  // <= kMaxRobots: checked by check_scenario
-  for (std::size_t i = 0; i < o.robots.size() && i < static_cast<std::size_t>(contract::kMaxRobots); ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
+  contract::set_count(&m.robot_ids, &m.num_robots, static_cast<int>(o.robots.size()));  // <= kMaxRobots: check_scenario
+  for (std::size_t i = 0; i < o.robots.size(); ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
   m.config_yaml = config::edit_yaml(effective_yaml, [&o](YAML::Node& root) {  // the overrides, recorded
     YAML::Node sc = root["scenario"];
     sc["frames"] = o.frames;

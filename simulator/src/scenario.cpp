@@ -40,7 +40,7 @@ void parse_landmarks(config::Reader& r, LandmarkOptions* l) {
   std::string layout = "grid";
   r.read_enum("layout", &layout, {"grid", "cloister", "random"});
   l->layout = layout == "cloister" ? Layout::kCloister : layout == "random" ? Layout::kRandom : Layout::kGrid;
-  r.read("count", &l->count, 1, contract::kMaxLandmarksPerMessage);
+  r.read("count", &l->count, 1, contract::kMaxWorldLandmarks);
   auto want = [&](Layout which, const char* key) { return l->layout == which || r.has(key); };
   if (want(Layout::kGrid, "grid_columns")) r.read("grid_columns", &l->grid_columns, 1, 256);
   if (want(Layout::kGrid, "grid_rows")) r.read("grid_rows", &l->grid_rows, 1, 256);

@@ -12,18 +12,22 @@ void set_truth(const ground_truth_t& gt, FrameData* f) {
   f->frame = gt.frame;
   f->robot_ids.clear();
   f->true_poses.clear();
-  for (int i = 0; i < contract::bounded(gt.num_robots, contract::kMaxRobots); ++i) {
+  // A logged message may be anything: read no further than its arrays hold.
+  const int nr = contract::bounded(gt.num_robots, static_cast<int>(std::min(gt.robot_ids.size(), gt.robots.size())));
+  for (std::size_t i = 0; i < static_cast<std::size_t>(nr); ++i) {
     f->robot_ids.push_back(gt.robot_ids[i]);
     f->true_poses.push_back({gt.robots[i].x, gt.robots[i].y, gt.robots[i].theta});
   }
-  const int n = contract::bounded(gt.num_landmarks, contract::kMaxLandmarksPerMessage);
+  const auto n = static_cast<std::size_t>(contract::bounded(gt.num_landmarks, static_cast<int>(gt.landmarks.size())));
+  const auto known = [](const landmark_truth_t& l) { return l.id >= 0 && l.id < contract::kMaxLandmarkIdLimit; };
   int max_id = -1;
-  for (int i = 0; i < n; ++i) max_id = std::max(max_id, gt.landmarks[i].id);
+  for (std::size_t i = 0; i < n; ++i)
+    if (known(gt.landmarks[i])) max_id = std::max(max_id, gt.landmarks[i].id);
   f->true_landmarks.assign(static_cast<std::size_t>(max_id + 1), Eigen::Vector2d::Zero());
   f->truly_moving.assign(static_cast<std::size_t>(max_id + 1), 0);
-  for (int i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     const auto& l = gt.landmarks[i];
-    if (l.id < 0) continue;
+    if (!known(l)) continue;
     f->true_landmarks[static_cast<std::size_t>(l.id)] = {l.x, l.y};
     f->truly_moving[static_cast<std::size_t>(l.id)] = l.moving ? 1 : 0;
   }
@@ -104,7 +108,7 @@ bool GlobalMapAssembly::add(const global_map_t& c) {
 
 std::string check_logged(const pose_estimate_t& p, std::int64_t received_us, const MessageLimits& l, Refusal* reason) {
   *reason = Refusal::kMalformed;
-  if (p.robot_id < 1 || p.robot_id > contract::kMaxRobots) return contract::got("robot_id outside [1, 8]", p.robot_id);
+  if (p.robot_id < 1 || p.robot_id > contract::kMaxRobots) return contract::got(contract::outside("robot_id", 1, contract::kMaxRobots), p.robot_id);
   // Latency is receive - source_utime: a source stamp after the receipt (beyond the
   // clock skew of synchronised computers) is forged or from a wrong clock.
   if (p.source_utime < 0 || p.source_utime > received_us + kClockSlackUs)
@@ -114,7 +118,7 @@ std::string check_logged(const pose_estimate_t& p, std::int64_t received_us, con
 
 std::string check_logged(const sensor_frame_t& s, const MessageLimits& l, Refusal* reason) {
   *reason = Refusal::kMalformed;
-  if (s.robot_id < 1 || s.robot_id > contract::kMaxRobots) return contract::got("robot_id outside [1, 8]", s.robot_id);
+  if (s.robot_id < 1 || s.robot_id > contract::kMaxRobots) return contract::got(contract::outside("robot_id", 1, contract::kMaxRobots), s.robot_id);
   if (s.frame < 0) return contract::got("frame is negative", s.frame);
   if (!contract::count_fits(s.obs, s.num_obs) || s.num_obs > contract::kMaxObsPerFrame)
     return contract::got("num_obs does not match the array", s.num_obs);

@@ -241,7 +241,8 @@ struct Reader {
 
 std::vector<int> robot_ids_of(const run_info_t& m) {
   std::vector<int> ids;
-  for (int i = 0; i < m.num_robots && i < contract::kMaxRobots; ++i) ids.push_back(m.robot_ids[i]);
+  const int n = contract::bounded(m.num_robots, static_cast<int>(m.robot_ids.size()));
+  for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i) ids.push_back(m.robot_ids[i]);
   return ids;
 }
 

@@ -77,12 +77,20 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
                          {"rms", m.landmark_error_rms},
                          {"static_only_mean_euclidean", m.landmark_error_static}};
   nlohmann::json robots = nlohmann::json::array();
-  for (const auto& rm : m.robots)
-    robots.push_back({{"id", rm.id},
-                      {"error_mean", rm.error_mean},
-                      {"error_rms", rm.error_rms},
-                      {"final_uncertainty", rm.final_uncertainty},
-                      {"frames", rm.frames}});
+  for (const auto& rm : m.robots) {
+    nlohmann::json r = {{"id", rm.id},
+                        {"error_mean", rm.error_mean},
+                        {"error_rms", rm.error_rms},
+                        {"final_uncertainty", rm.final_uncertainty},
+                        {"frames", rm.frames}};
+    if (rm.node_counters) {
+      r["filter_full"] = rm.filter_full;
+      r["evictions"] = rm.evictions;
+      r["restored"] = rm.restored;
+      r["final_landmarks"] = rm.final_landmarks;
+    }
+    robots.push_back(std::move(r));
+  }
   j["robots"] = robots;
   j["detection"] = {{"precision", m.precision},
                     {"recall", m.recall},

@@ -93,7 +93,7 @@ void SimulatorFrames::frame(int k, ground_truth_t* gt, std::vector<sensor_frame_
   if (k > 0) world_.step();
   const std::int64_t t0 = 1'000'000'000'000'000;  // a fixed epoch: runs are reproducible
   const std::int64_t utime = t0 + static_cast<std::int64_t>(std::llround(k * options_.dt_s() * 1e6));
-  *gt = sim::to_message(world_, utime);
+  sim::to_message(world_, utime, gt);
   sensors->resize(static_cast<std::size_t>(world_.num_robots()));
   for (int i = 0; i < world_.num_robots(); ++i)
     sim::to_message(world_.sensor_frame(i), utime, &(*sensors)[static_cast<std::size_t>(i)]);
@@ -248,6 +248,15 @@ RunResult InProcessTeam::finish() {
   out.metrics = acc_.finish();
   out.frames = acc_.frames();
   out.robot_ids = acc_.robot_ids();
+  for (RobotMetrics& rm : out.metrics.robots)
+    for (const RobotNode& node : robots_) {
+      if (node.robot_id() != rm.id) continue;
+      rm.node_counters = true;
+      rm.filter_full = node.counters().filter_full;
+      rm.evictions = node.counters().evictions;
+      rm.restored = node.counters().restored;
+      rm.final_landmarks = node.robot().filter().num_landmarks();
+    }
   for (int id = 0; id < main_.map().max_landmark_id(); ++id) {
     const GlobalEntry& g = main_.map().entry(id);
     if (g.status == GlobalStatus::kStatic) out.final_map.push_back({id, g.fused, g.fused_cov});

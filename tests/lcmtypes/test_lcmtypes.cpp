@@ -69,6 +69,24 @@ struct Shape<lmap_snapshot_t> : TwoArrays<lmap_snapshot_t> {};
 template <>
 struct Shape<global_map_t> : TwoArrays<global_map_t> {};
 
+// ground_truth_t: header, robot count, ids and poses, landmark count, landmarks.
+template <>
+struct Shape<ground_truth_t> {
+  static void fill(ground_truth_t* m) {
+    contract::set_count(&m->robot_ids, &m->num_robots, 3);
+    m->robots.resize(3);
+    contract::set_count(&m->landmarks, &m->num_landmarks, 5);
+  }
+  static std::vector<std::size_t> counts(const ground_truth_t& m) {
+    ground_truth_t one{};
+    contract::set_count(&one.robot_ids, &one.num_robots, 1);
+    one.robots.resize(1);
+    const auto header = static_cast<std::size_t>(ground_truth_t{}.getEncodedSize()) - 4;
+    const auto robot_bytes = static_cast<std::size_t>(one.getEncodedSize() - ground_truth_t{}.getEncodedSize());
+    return {header, header + 2 + static_cast<std::size_t>(m.num_robots) * robot_bytes};
+  }
+};
+
 // A message with every byte of its payload random but its count fields: any such
 // payload decodes, and re-encoding must give the same bytes.
 template <typename T>

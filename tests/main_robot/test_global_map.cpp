@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
+#include "../support/messages.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 
 namespace elaslam {
@@ -218,6 +220,24 @@ TEST(GlobalMap, PersistenceRoundTripAndRestart) {
   EXPECT_EQ(restarted.apply(ev(1, 3, landmark_event_t::UPDATE, 2, 5, 5), nullptr), EventResult::kApplied);
 }
 
+// A state file of a build with 8 robot ids (before issue 18) loads: its robots'
+// streams continue, the others start fresh.
+TEST(GlobalMap, StateOfEightRobotIdsLoads) {
+  GlobalMap m(options());
+  m.apply(ev(2, 1, landmark_event_t::ADD, 2, 1, 1), nullptr);
+  nlohmann::json j = nlohmann::json::parse(m.to_json());
+  ASSERT_EQ(j["robots"].size(), static_cast<std::size_t>(kMaxTeamRobots));
+  j["robots"].erase(j["robots"].begin() + 8, j["robots"].end());
+  GlobalMap old(options());
+  std::string why;
+  ASSERT_TRUE(old.from_json(j.dump(), &why)) << why;
+  EXPECT_EQ(old.apply(ev(2, 1, landmark_event_t::UPDATE, 2, 5, 5), nullptr), EventResult::kDuplicate);
+  EXPECT_EQ(old.apply(ev(16, 1, landmark_event_t::ADD, 2, 5, 5), nullptr), EventResult::kApplied);
+  j["robots"] = nlohmann::json::array();
+  EXPECT_FALSE(old.from_json(j.dump(), &why));
+  EXPECT_NE(why.find("robots"), std::string::npos) << why;
+}
+
 TEST(GlobalMap, MalformedStateIsRefusedAndMapUnchanged) {
   GlobalMap m(options());
   m.apply(ev(1, 1, landmark_event_t::ADD, 2, 1, 1), nullptr);
@@ -232,17 +252,7 @@ TEST(GlobalMap, MalformedStateIsRefusedAndMapUnchanged) {
   EXPECT_EQ(m.to_json(), before);
 }
 
-landmark_event_t msg_event(int robot, std::int64_t seq, int kind, int id) {
-  landmark_event_t m{};
-  m.robot_id = static_cast<int16_t>(robot);
-  m.seq = seq;
-  m.kind = static_cast<int8_t>(kind);
-  m.landmark_id = id;
-  m.x = 1.0;
-  m.y = 2.0;
-  m.cov[0][0] = m.cov[1][1] = 0.01;
-  return m;
-}
+landmark_event_t msg_event(int robot, std::int64_t seq, int kind, int id) { return test::event_msg(robot, seq, kind, id); }
 
 TEST(MainNode, BadMessagesAreCountedAndDropped) {
   MainNode node(options());
@@ -253,7 +263,7 @@ TEST(MainNode, BadMessagesAreCountedAndDropped) {
   bad.x = std::nan("");
   EXPECT_FALSE(node.on_event(bad, &why));
   EXPECT_NE(why.find("finite"), std::string::npos);
-  bad = msg_event(9, 2, landmark_event_t::ADD, 3);
+  bad = msg_event(17, 2, landmark_event_t::ADD, 3);
   EXPECT_FALSE(node.on_event(bad, &why));
   EXPECT_NE(why.find("robot_id"), std::string::npos);
   bad = msg_event(1, 2, landmark_event_t::ADD, 32);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "../support/messages.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 
 namespace elaslam {
@@ -20,16 +21,7 @@ GlobalMapOptions options(const std::string& team = "1,2,3,4,5,6,7,8") {
 }
 
 landmark_event_t add(int robot, std::int64_t seq, int id, double var = 0.01, int frame = 0) {
-  landmark_event_t m{};
-  m.robot_id = static_cast<int16_t>(robot);
-  m.seq = seq;
-  m.frame = frame;
-  m.kind = landmark_event_t::ADD;
-  m.landmark_id = id;
-  m.x = 1.0;
-  m.y = 2.0;
-  m.cov[0][0] = m.cov[1][1] = var;
-  return m;
+  return test::event_msg(robot, seq, landmark_event_t::ADD, id, frame, 1.0, 2.0, var);
 }
 
 lmap_snapshot_t snapshot(int robot, std::int64_t seq, int frame, std::vector<int> ids, std::vector<int> moving = {}) {
@@ -54,13 +46,7 @@ lmap_snapshot_t snapshot(int robot, std::int64_t seq, int frame, std::vector<int
   return s;
 }
 
-pose_estimate_t pose(int robot, int frame) {
-  pose_estimate_t p{};
-  p.robot_id = static_cast<int16_t>(robot);
-  p.frame = frame;
-  p.cov[0][0] = p.cov[1][1] = p.cov[2][2] = 1e-4;
-  return p;
-}
+pose_estimate_t pose(int robot, int frame) { return test::pose_msg(robot, frame); }
 
 // GIVEN an ADD whose covariance is denormal (1e-320: inverts to infinity, a NaN
 // landmark) or zero (pins the landmark)  THEN it is refused as implausible, naming
@@ -160,6 +146,30 @@ TEST(MainLimits, APoseFromOutsideTheTeamNeverStallsTheMap) {
   }
   EXPECT_FALSE(node.on_event(add(5, 1, 3), &why));
   EXPECT_EQ(node.counters().refused[Refusal::kOutsideTeam], 2);
+}
+
+// Robot ids go up to 16 (config/large.yaml); limits.team names any of them, and an
+// absent team accepts all 16.
+TEST(MainLimits, TeamsOfUpToSixteenRobots) {
+  int mask = 0;
+  std::string why;
+  EXPECT_TRUE(parse_team("1, 9,16", &mask, &why)) << why;
+  EXPECT_EQ(mask, (1 << 0) | (1 << 8) | (1 << 15));
+  EXPECT_EQ(team_text(mask), "1,9,16");
+  for (const char* bad : {"17", "0", "1,1", "01", "1,x", "100", ""}) {
+    EXPECT_FALSE(parse_team(bad, &mask, &why)) << bad;
+    EXPECT_FALSE(why.empty());
+  }
+  EXPECT_TRUE(MessageLimits{}.in_team(16));
+  EXPECT_FALSE(MessageLimits{}.in_team(17));
+  MainNode node(options("1,16"));
+  EXPECT_TRUE(node.on_event(add(16, 1, 3), &why)) << why;
+  EXPECT_FALSE(node.on_event(add(9, 1, 4), &why));
+  EXPECT_NE(why.find("limits.team"), std::string::npos) << why;
+  EXPECT_EQ(node.on_pose(pose(1, 0)), 0);
+  EXPECT_EQ(node.on_pose(pose(16, 0)), -1);
+  EXPECT_EQ(node.on_pose(pose(1, 1)), -1);  // robot 16 is a member: its frame 1 is awaited
+  EXPECT_EQ(node.on_pose(pose(16, 1)), 1);
 }
 
 // A frame of INT32_MAX pinned GLOBAL_MAP.frame there.

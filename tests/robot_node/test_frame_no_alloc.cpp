@@ -4,6 +4,8 @@
 // notices, snapshots.
 #include <gtest/gtest.h>
 
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "../support/no_alloc.hpp"
@@ -22,10 +24,14 @@ struct Tally {
 
 TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
   const TeamConfig base = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  for (Mode mode : {Mode::kEkf, Mode::kGated, Mode::kEla, Mode::kConsensus}) {
-    SCOPED_TRACE(to_string(mode));
+  // The last two runs with filters of 24 slots: robots evict (Robot::make_room).
+  const std::pair<Mode, int> runs[] = {{Mode::kEkf, 0}, {Mode::kGated, 0}, {Mode::kEla, 0}, {Mode::kConsensus, 0},
+                                       {Mode::kEkf, 24}, {Mode::kEla, 24}};
+  for (const auto& [mode, capacity] : runs) {
+    SCOPED_TRACE(std::string(to_string(mode)) + " capacity " + std::to_string(capacity));
     TeamConfig c = base;
     c.robot.mode = mode;
+    if (capacity > 0) c.robot.ekf.capacity = capacity;
     c.scenario.dynamism_percent = 50.0;
     c.scenario.landmark_speed_mps = 0.5;
     // The consistency monitor and its recovery on (they fire at 50 % dynamism).
@@ -82,6 +88,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     long fused = 0;
     for (const auto& r : robots) fused += r.robot().team_counters().fused;
     EXPECT_GT(fused, 30);
+    std::int64_t evictions = 0;
+    for (const auto& r : robots) evictions += r.counters().evictions;
+    if (capacity > 0) EXPECT_GT(evictions, 5);
     if (mode == Mode::kEla || mode == Mode::kConsensus) {
       EXPECT_GT(t.events[landmark_event_t::MOVING], 10);
       EXPECT_GT(t.events[landmark_event_t::RETURN], 0);

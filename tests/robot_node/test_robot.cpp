@@ -444,6 +444,122 @@ TEST_F(RobotPaths, DynamicNoticeRemovesWithoutEventAndReturnNeedsReturnFrames) {
   EXPECT_EQ(returned_at, 5);  // six consistent sightings
 }
 
+// The bounded filter (Robot::make_room): two clusters of six landmarks 20 m apart
+// and a filter of eight slots. The robot maps cluster A, drives to B (observing
+// what is within its sensor range on the way), maps B, and drives back.
+class BoundedFilter : public ::testing::Test {
+ protected:
+  BoundedFilter() : options_(test::robot_options(Mode::kEla)) {
+    options_.ekf.capacity = 8;
+    lms_ = test::ring(6, 3.0);
+    for (const Eigen::Vector2d& p : test::ring(6, 3.0)) lms_.push_back(p + Eigen::Vector2d(20.0, 0.0));
+  }
+  /// One frame at x (true pose = odometer), observing every landmark within range.
+  FrameSummary at(Robot& r, double x) {
+    const Pose2 pose{x, 0.0, 0.0};
+    std::vector<int> ids;
+    for (std::size_t i = 0; i < lms_.size(); ++i)
+      if ((lms_[i] - pose.translation()).norm() < options_.sensor_range) ids.push_back(static_cast<int>(i));
+    const FrameSummary s = r.process(test::frame_from(frame_++, pose, pose, lms_, ids));
+    EXPECT_LE(r.filter().num_landmarks(), 8) << "frame " << frame_ - 1;
+    evicted_ += s.evicted;
+    restored_ += s.restored;
+    return s;
+  }
+  /// Stand at x for four frames (three confirm a candidate), then drive to x_to in 1 m steps.
+  void map_then_drive(Robot& r, double x, double x_to) {
+    for (int k = 0; k < 4; ++k) at(r, x);
+    const double step = x_to > x ? 1.0 : -1.0;
+    for (double p = x + step; step * (x_to - p) >= 0.0; p += step) at(r, p);
+  }
+  /// The highest id of cluster A that is archived, -1 when none is.
+  static int an_archived(const Robot& r) {
+    int id = -1;
+    for (int k = 0; k < 6; ++k)
+      if (r.lmap()[k].archived) id = k;
+    return id;
+  }
+  RobotOptions options_;
+  std::vector<Eigen::Vector2d> lms_;
+  int frame_ = 0, evicted_ = 0, restored_ = 0;
+};
+
+TEST_F(BoundedFilter, TheFarthestLandmarksMakeRoomAndComeBackWhenSeenAgain) {
+  Robot r(options_, 1);
+  map_then_drive(r, 0.0, 20.0);
+  // B's six arrive with two slots free: four of A left, each with an UPDATE of its
+  // last estimate, and A stays STATIC in the L-map, archived with that estimate.
+  EXPECT_EQ(evicted_, 4);
+  int archived = 0;
+  for (int id = 0; id < 6; ++id) {
+    const LMapEntry& e = r.lmap()[id];
+    EXPECT_EQ(e.status, LandmarkStatus::kStatic) << id;
+    if (!e.archived) continue;
+    ++archived;
+    EXPECT_FALSE(r.filter().has_landmark(id));
+    EXPECT_LT((e.position - lms_[static_cast<std::size_t>(id)]).norm(), 0.05) << id;
+    EXPECT_GT(e.cov.trace(), 0.0);
+  }
+  EXPECT_EQ(archived, 4);
+  for (int k = 0; k < 4; ++k) at(r, 20.0);  // B confirmed
+  for (int id = 6; id < 12; ++id) EXPECT_EQ(r.lmap()[id].status, LandmarkStatus::kStatic) << id;
+  // Back at A: the archived four re-enter the filter (B's farthest make room),
+  // consistent with where they were: STATIC, no MOVING.
+  int moving = 0;
+  for (double p = 19.0; p >= 0.0; p -= 1.0) {
+    at(r, p);
+    moving += count_events(r, EventKind::kMoving);
+  }
+  EXPECT_EQ(restored_, 4);
+  EXPECT_EQ(moving, 0);
+  for (int id = 0; id < 6; ++id) {
+    EXPECT_TRUE(r.filter().has_landmark(id)) << id;
+    EXPECT_FALSE(r.lmap()[id].archived) << id;
+    EXPECT_EQ(r.lmap()[id].status, LandmarkStatus::kStatic) << id;
+  }
+  EXPECT_GE(evicted_, 8);  // B's made room in turn
+  EXPECT_LT((r.filter().pose().translation() - Eigen::Vector2d(0.0, 0.0)).norm(), 0.05);
+}
+
+TEST_F(BoundedFilter, ALandmarkThatMovedWhileArchivedIsFoundMovingWhenSeenAgain) {
+  Robot r(options_, 1);
+  map_then_drive(r, 0.0, 20.0);
+  const int moved = an_archived(r);
+  ASSERT_GE(moved, 0);
+  lms_[static_cast<std::size_t>(moved)] += Eigen::Vector2d(0.0, 0.8);  // while the robot is away
+  for (int k = 0; k < 4; ++k) at(r, 20.0);
+  int found = 0;
+  for (double p = 19.0; p >= 0.0; p -= 1.0) {
+    at(r, p);
+    found += count_events(r, EventKind::kMoving, moved);
+    EXPECT_EQ(count_events(r, EventKind::kMoving) - count_events(r, EventKind::kMoving, moved), 0);
+  }
+  EXPECT_EQ(found, 1);
+  EXPECT_FALSE(r.lmap()[moved].archived);
+  EXPECT_EQ(r.lmap()[moved].status, LandmarkStatus::kCandidate);  // re-anchored where it is now
+}
+
+TEST_F(BoundedFilter, ANoticeAboutAnArchivedLandmarkTakesItOutOfTheMap) {
+  Robot r(options_, 1);
+  map_then_drive(r, 0.0, 20.0);
+  const int id = an_archived(r);
+  ASSERT_GE(id, 0);
+  EXPECT_FALSE(r.apply_notice(id, frame_));  // not in the filter
+  EXPECT_EQ(r.lmap()[id].status, LandmarkStatus::kMoving);
+  EXPECT_FALSE(r.lmap()[id].archived);
+}
+
+// Nothing in view is ever given up: with every held landmark within sensor range,
+// an add fails and says so (filter_full), the filter unchanged.
+TEST_F(BoundedFilter, WhenEverythingHeldIsInRangeTheAddFailsLoudly) {
+  options_.ekf.capacity = 4;
+  Robot r(options_, 1);
+  const FrameSummary s = at(r, 0.0);  // six new candidates, four slots, all in view
+  EXPECT_EQ(s.evicted, 0);
+  EXPECT_EQ(s.filter_full, 2);
+  EXPECT_EQ(r.filter().num_landmarks(), 4);
+}
+
 TEST_F(RobotPaths, EkfModeAddsAtOnceAndNeverRemoves) {
   Robot r(test::robot_options(Mode::kEkf), 1);
   FrameSummary s = step(r, test::all_ids(6));

@@ -286,7 +286,58 @@ TEST_F(RobotStateCorrupt, InconsistentSlotsAreRefused) {
       for (int j = 0; j <= i; ++j, ++k)
         if (i != 3 && i != 4 && j != 3 && j != 4) lower.push_back(s["filter"]["cov_lower"][static_cast<std::size_t>(k)]);
     s["filter"]["cov_lower"] = lower;
-  }), "static but not in the filter");
+  }), "static but neither in the filter nor archived");
+  expect_refused(edited([](json& s) {  // an archived landmark still in the filter
+    const int id = s["filter"]["slot_ids"][0].get<int>();
+    for (auto& e : s["lmap"])
+      if (e["id"] == id) e["archived"] = true;
+  }), "archived but in the filter");
+  expect_refused(edited([](json& s) { s["lmap"][0]["archived"] = "yes"; }), "lmap[0].archived");
+}
+
+// A robot whose filter evicts (config/large.yaml, its filter cut to 24 slots):
+// every state of its run loads back, archived landmarks and all, and resumes the
+// same snapshots (archived landmarks listed with their kept estimates).
+TEST(RobotState, StatesWithArchivedLandmarksLoadBack) {
+  TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/large.yaml");
+  c.robot.ekf.capacity = 24;
+  c.scenario.frames = 300;
+  const auto frames = sensor_frames(c);
+  const std::size_t R = c.scenario.robots.size();
+  RobotNode node(c.robot, 1);
+  int archived = 0;
+  for (std::size_t f = 0; f < frames.size(); f += R) {
+    ASSERT_EQ(node.on_sensor(frames[f], 0), RobotNode::Verdict::kProcessed);
+    if (frames[f].frame % 25 != 24) continue;
+    const std::string text = save_robot_state(node);
+    RobotNode copy(c.robot, 1);
+    std::string why;
+    ASSERT_TRUE(load_robot_state(text, &copy, &why)) << "frame " << frames[f].frame << ": " << why;
+    EXPECT_EQ(save_robot_state(copy), text);
+    archived = 0;
+    for (int id = 0; id < node.robot().lmap().size(); ++id) archived += node.robot().lmap()[id].archived ? 1 : 0;
+  }
+  EXPECT_LE(node.robot().filter().num_landmarks(), 24);
+  EXPECT_GT(node.counters().evictions, 0);
+  EXPECT_GT(archived, 0);
+  // The snapshot lists every STATIC landmark, archived ones with their kept estimate.
+  node.make_snapshot(0);
+  int listed = 0, listed_archived = 0;
+  for (int k = 0; k < node.num_snapshot_chunks(); ++k) {
+    const lmap_snapshot_t& c = node.snapshot_chunk(k);
+    for (int i = 0; i < c.num_landmarks; ++i) {
+      const landmark_estimate_t& l = c.landmarks[static_cast<std::size_t>(i)];
+      const LMapEntry& e = node.robot().lmap()[l.id];
+      ASSERT_EQ(e.status, LandmarkStatus::kStatic) << l.id;
+      ++listed;
+      if (!e.archived) continue;
+      ++listed_archived;
+      EXPECT_EQ(l.x, e.position.x());
+      EXPECT_EQ(l.cov[1][1], e.cov(1, 1));
+    }
+  }
+  EXPECT_EQ(listed, node.robot().lmap().count(LandmarkStatus::kStatic));
+  EXPECT_EQ(listed_archived, archived);
 }
 
 TEST_F(RobotStateCorrupt, AnotherRobotsOrAnotherConfigurationsStateIsRefused) {

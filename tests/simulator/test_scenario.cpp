@@ -112,9 +112,9 @@ TEST(SimScenario, OutOfRange) {
                   "scenario.sensor.detection_probability", "out of range: got 1.5");
   expect_rejected(with("dynamism_percent: 20.0", "dynamism_percent: 101"), "scenario.dynamism_percent",
                   "out of range");
-  expect_rejected(with("count: 72, grid_columns: 9", "count: 300, grid_columns: 9"), "scenario.landmarks.count",
-                  "expected an integer in [1, 256]");
-  expect_rejected(with("{id: 2,", "{id: 9,"), "scenario.robots[1].id", "expected an integer in [1, 8]");
+  expect_rejected(with("count: 72, grid_columns: 9", "count: 40000, grid_columns: 9"), "scenario.landmarks.count",
+                  "expected an integer in [1, 32767]");
+  expect_rejected(with("{id: 2,", "{id: 17,"), "scenario.robots[1].id", "expected an integer in [1, 16]");
 }
 
 TEST(SimScenario, UnknownKeyAndSection) {

@@ -299,6 +299,40 @@ TEST(SimWorld, GroundTruthMessage) {
   EXPECT_EQ(s.odom_var_rot_per_m, 3.0e-4);
 }
 
+// The large world (config/large.yaml, issue 18): 16 robots and 1,024 landmarks fit
+// one GROUND_TRUTH, which survives LCM's encoding whole; filling it again in place
+// keeps the arrays sized to the world.
+TEST(SimWorld, GroundTruthOfTheLargeWorldRoundTrips) {
+  const ScenarioOptions o = load_scenario(std::string(ELASLAM_SOURCE_DIR) + "/config/large.yaml");
+  ASSERT_EQ(o.robots.size(), 16u);
+  ASSERT_EQ(o.landmarks.count, 1024);
+  World w(o);
+  for (int k = 0; k < 3; ++k) w.step();
+  ground_truth_t m = to_message(w, 77);
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  ground_truth_t d;
+  ASSERT_EQ(d.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  ASSERT_EQ(d.num_robots, 16);
+  ASSERT_EQ(d.num_landmarks, 1024);
+  for (int r = 0; r < 16; ++r) {
+    EXPECT_EQ(d.robot_ids[static_cast<std::size_t>(r)], r + 1);
+    EXPECT_EQ(d.robots[static_cast<std::size_t>(r)].x, w.robot_pose(r).x);
+  }
+  int moving = 0;
+  for (int i = 0; i < 1024; ++i) {
+    const auto& l = d.landmarks[static_cast<std::size_t>(i)];
+    EXPECT_EQ(l.id, i);
+    EXPECT_EQ(l.y, w.landmark_positions()[static_cast<std::size_t>(i)].y());
+    moving += l.moving ? 1 : 0;
+  }
+  EXPECT_EQ(moving, 205);  // round(20 % of 1,024)
+  w.step();
+  to_message(w, 78, &d);
+  EXPECT_EQ(d.landmarks.size(), 1024u);
+  EXPECT_EQ(d.frame, 4);
+}
+
 TEST(SimWorld, InvalidOptionsAreAProgrammingError) {
   ScenarioOptions o = test::paper();
   o.reversal_period_frames = 0;

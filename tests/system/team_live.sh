@@ -45,24 +45,32 @@ if [ "$HOSTS" = --team-map ]; then  # the robots fused the team map (their final
       { echo "robot $r: no team map fused"; grep -rh "team_map" "$OUT/live" || true; exit 1; }
   done
 fi
-python3 - "$OUT/live" "$OUT/inproc" <<'PY'
+"$BUILD/bin/log_info" --json "$OUT/live/run.lcmlog" > "$OUT/log_info.json"
+python3 - "$OUT/live" "$OUT/inproc" "$OUT/log_info.json" <<'PY'
 import csv, json, math, sys
-live_dir, ref_dir = sys.argv[1:3]
+live_dir, ref_dir, info_path = sys.argv[1:4]
 live, ref = (json.load(open(d + "/metrics.json")) for d in (live_dir, ref_dir))
+logged = {c["name"]: c["count"] for c in json.load(open(info_path))["channels"]}
 fails = []
 def close(name, a, b, tol=1e-6):
     if abs(a - b) > tol:
         fails.append(f"{name}: live {a} vs in-process {b}")
-assert live["frames"] == ref["frames"] == 150, (live["frames"], ref["frames"])
+# The live figures are over the frames whose GROUND_TRUTH the recorder kept: all 150
+# unless lcm-logger (a 30-message queue) lost one under load, which is accounted for,
+# not a failure (the in-process run has them all).
+assert ref["frames"] == 150, ref["frames"]
+assert live["frames"] == logged["GROUND_TRUTH"] >= 145, (live["frames"], logged["GROUND_TRUTH"])
 # Every robot processed every frame: none dropped, none before it started. A POSE the
-# recorder (lcm-logger, 30-message queue) lost is accounted for, not a failure.
+# recorder lost is accounted for the same way.
 for key in ("frames_dropped", "frames_not_started"):
     if live[key] != 0:
         fails.append(f"{key}: {live[key]}")
 missing = live["poses_missing_from_log"]
 for r in live["robots"]:
-    if r["frames"] + r["poses_missing_from_log"] != 150:
-        fails.append(f"robot {r['id']}: {r['frames']} poses logged + {r['poses_missing_from_log']} missing != 150")
+    # Each evaluated frame without this robot's POSE is one the recorder lost.
+    if not 0 <= live["frames"] - r["frames"] <= r["poses_missing_from_log"] <= 5:
+        fails.append(f"robot {r['id']}: {r['frames']} poses evaluated of {live['frames']} frames, "
+                     f"{r['poses_missing_from_log']} missing from the log")
 # Frame by frame: each logged pose's error equals the in-process run's.
 rows = lambda d: {int(row["frame"]): row for row in csv.DictReader(open(d + "/frames.csv"))}
 live_rows, ref_rows = rows(live_dir), rows(ref_dir)
@@ -72,13 +80,14 @@ for k, row in live_rows.items():
             close(f"frame {k} {key}", float(value), float(ref_rows[k][key]))
 close("precision", live["detection"]["precision"], ref["detection"]["precision"])
 close("recall", live["detection"]["recall"], ref["detection"]["recall"])
-if missing == 0:  # whole-run figures average over the same frames only when nothing is missing
+if missing == 0 and live["frames"] == 150:  # whole-run figures average over the same frames only then
     for r_live, r_ref in zip(live["robots"], ref["robots"]):
         close(f"robot {r_live['id']} error_mean", r_live["error_mean"], r_ref["error_mean"])
         close(f"robot {r_live['id']} final_uncertainty", r_live["final_uncertainty"], r_ref["final_uncertainty"], 1e-9)
     close("landmark error", live["landmark_error"]["mean_euclidean"], ref["landmark_error"]["mean_euclidean"])
 else:
-    print(f"note: {missing} POSEs missing from the recording (the recorder's loss): compared frame by frame")
+    print(f"note: {missing} POSEs and {150 - live['frames']} GROUND_TRUTHs missing from the recording "
+          "(the recorder's loss): compared frame by frame")
 # Provenance: what ran, from the log and the config.
 if live["config"] is None or live["config"]["scenario"]["dynamism_percent"] != 50:
     fails.append(f"metrics.json config: {live['config'] and live['config']['scenario']}")
@@ -93,9 +102,8 @@ PY
 PY="$ROOT/.venv/bin/python"
 if [ -x "$PY" ]; then
   "$PY" "$ROOT/tools/decode_log.py" "$OUT/live/run.lcmlog" --build-dir "$BUILD" > "$OUT/decoded.txt"
-  # As many as the log holds, by the C++ reader's count: 150 each unless the
-  # recorder lost one (accounted for above), never fewer decoded than recorded.
-  "$BUILD/bin/log_info" --json "$OUT/live/run.lcmlog" > "$OUT/log_info.json"
+  # As many as the log holds, by the C++ reader's count (log_info.json, above): 150
+  # each unless the recorder lost one (accounted for above), never fewer decoded.
   for ch in POSE_1 POSE_2 POSE_3 SENSOR_1 GROUND_TRUTH; do
     n=$(python3 -c 'import json, sys; print(next(c["count"] for c in json.load(open(sys.argv[1]))["channels"] if c["name"] == sys.argv[2]))' \
         "$OUT/log_info.json" "$ch")

@@ -340,8 +340,7 @@ class SyntheticLog : public ::testing::Test {
     info.rate_hz = 10.0;
     info.frames = 10;
     info.num_robots = 2;
-    info.robot_ids[0] = 1;
-    info.robot_ids[1] = 2;
+    info.robot_ids = {1, 2};
     info.config_yaml = "scenario: {}\n";
     std::int64_t n2 = 0;
     for (int k = 0; k < 10; ++k) {
@@ -355,8 +354,8 @@ class SyntheticLog : public ::testing::Test {
       gt.utime = t;
       gt.frame = k;
       gt.num_robots = 2;
-      gt.robot_ids[0] = 1;
-      gt.robot_ids[1] = 2;
+      gt.robot_ids = {1, 2};
+      gt.robots.resize(2);
       put(&log, "GROUND_TRUTH", t, gt);
       for (int r = 1; r <= 2; ++r) {
         if (r == 2 && k == 6) continue;

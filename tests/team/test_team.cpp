@@ -113,6 +113,46 @@ TEST(TeamRun, SameSeedSameMetricsApartFromTiming) {
   EXPECT_NE(a, c);
 }
 
+// The large world (config/large.yaml: 16 robots, 1,024 landmarks) runs in process
+// with each robot's filter bounded at its capacity of 40: robots evict (and say so
+// in metrics.json), and every filter stays within its slots. In this scenario no
+// evicted landmark is seen again before the run ends, and removing a landmark from
+// an EKF marginalises it exactly, so the robots' estimates equal those of a run
+// with room for every landmark (eq 19's mean(diag(P)) differs: it averages over
+// the landmarks held). The global map holds the same landmarks (main keeps the
+// evicted ones); an evicted landmark's estimate stays as it was when it left, while
+// the roomy filter went on correcting it through its correlations: centimetres.
+TEST(TeamRun, TheLargeWorldRunsWithBoundedFiltersAndLosesNothing) {
+  const TeamConfig bounded = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/large.yaml");
+  ASSERT_EQ(bounded.robot.ekf.capacity, 40);
+  TeamConfig roomy = bounded;
+  roomy.robot.ekf.capacity = bounded.robot.ekf.max_landmark_id;
+  const RunResult a = run_team(bounded), b = run_team(roomy);
+  ASSERT_EQ(a.metrics.robots.size(), 16u);
+  std::int64_t evictions = 0;
+  for (std::size_t i = 0; i < 16; ++i) {
+    const RobotMetrics &ra = a.metrics.robots[i], &rb = b.metrics.robots[i];
+    EXPECT_LE(ra.final_landmarks, 40);
+    EXPECT_EQ(ra.filter_full, 0);
+    EXPECT_EQ(rb.evictions, 0);
+    evictions += ra.evictions;
+    EXPECT_NEAR(ra.error_mean, rb.error_mean, 1e-9) << "robot " << ra.id;
+  }
+  EXPECT_GT(evictions, 50);
+  ASSERT_EQ(a.final_map.size(), b.final_map.size());
+  EXPECT_GT(a.final_map.size(), 500u);
+  double largest = 0.0;
+  for (std::size_t k = 0; k < a.final_map.size(); ++k) {
+    EXPECT_EQ(a.final_map[k].id, b.final_map[k].id);
+    largest = std::max(largest, (a.final_map[k].p - b.final_map[k].p).norm());
+  }
+  std::printf("largest difference in the global map %.4f m; eq 18 %.4f m bounded, %.4f m not\n", largest,
+              a.metrics.landmark_error_mean, b.metrics.landmark_error_mean);
+  EXPECT_LT(largest, 0.05);  // measured 0.020 m
+  EXPECT_EQ(a.final_moving, b.final_moving);
+  EXPECT_NEAR(a.metrics.landmark_error_mean, b.metrics.landmark_error_mean, 0.002);  // measured 0.0002 m
+}
+
 // metrics.json says what ran: provenance, and the effective config with every
 // override applied (what the run used, not what the file said).
 TEST(TeamRun, MetricsJsonCarriesProvenanceAndTheConfigThatRan) {

@@ -146,7 +146,8 @@ opt sweep --runs 0 "out of range" "${P[@]}" --check --out "$T/sweep"
 opt evaluate --dynamism 150 "out of range" --log "$T/tiny.lcmlog" --quiet
 opt evaluate --seed -2 "out of range" --log "$T/tiny.lcmlog" --quiet
 opt robot_node --status-period 0 "out of range" "${P[@]}" --robot 1 --check
-opt robot_node --robot 9 "out of range" "${P[@]}" --check
+opt robot_node --robot 17 "out of range" "${P[@]}" --check
+opt robot_node --robot 9 "not in robot.limits.team" "${P[@]}" --check
 opt main_robot --event-queue 0 "out of range" "${P[@]}" --check
 opt run_dataset --start -1 "out of range" "${M[@]}" --check --out "$T/ds"
 opt mrclam_import --rate 0 "out of range" "${M[@]}" --check --out "$T/x.lcmlog"

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/messages.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/main_robot/main_node.hpp"
@@ -163,23 +164,10 @@ TEST(RobotPorts, BadInputIsCountedByTheNodeAndLoggedByTheShell) {
 }
 
 landmark_event_t event(int robot, std::int64_t seq, int frame, int kind, int id) {
-  landmark_event_t e{};
-  e.robot_id = static_cast<int16_t>(robot);
-  e.seq = seq;
-  e.frame = frame;
-  e.kind = static_cast<int8_t>(kind);
-  e.landmark_id = id;
-  e.x = id;
-  e.cov[0][0] = e.cov[1][1] = 0.01;
-  return e;
+  return test::event_msg(robot, seq, kind, id, frame, id, 0.0);
 }
 
-pose_estimate_t pose(int robot, int frame) {
-  pose_estimate_t p{};
-  p.robot_id = static_cast<int16_t>(robot);
-  p.frame = frame;
-  return p;
-}
+pose_estimate_t pose(int robot, int frame) { return test::pose_msg(robot, frame, 0.0); }
 
 TEST(MainPorts, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
   InProcessTransport bus;

@@ -188,9 +188,11 @@ TEST(ViewState, GroundTruthOverlay) {
   ground_truth_t g{};
   g.frame = 5;
   g.num_robots = 1;
-  g.robot_ids[0] = 1;
+  g.robot_ids = {1};
+  g.robots.resize(1);
   g.robots[0].x = 2.0;
   g.num_landmarks = 2;
+  g.landmarks.resize(2);
   g.landmarks[0].id = 0, g.landmarks[0].x = 1.0;
   g.landmarks[1].id = 1, g.landmarks[1].moving = true;
   ASSERT_TRUE(v.on_truth(g));

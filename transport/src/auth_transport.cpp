@@ -77,6 +77,8 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
   return true;  // another channel (a tool's, a test's): any sender of the team
 }
 
+static_assert(kMaxRobotSenders == contract::kMaxRobots);
+
 // ---- ReplayGuard --------------------------------------------------------------------
 
 int ReplayGuard::slot_of(std::int16_t id) {
@@ -90,7 +92,6 @@ int ReplayGuard::slot_of(std::int16_t id) {
 }
 
 Verdict ReplayGuard::check(const Sender& s) {
-  static_assert(contract::kMaxRobots + 3 < 12);
   const int slot = slot_of(s.id);
   if (slot < 0) return Verdict::kWrongSender;
   if (s.counter == 0) return Verdict::kReplayed;  // counters start at 1

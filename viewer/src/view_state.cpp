@@ -154,7 +154,8 @@ bool ViewState::on_status(const node_status_t& m, double now_s) {
 bool ViewState::on_truth(const ground_truth_t& m) {
   ++messages_;
   const double b = limits_.world_bound_m;
-  if (m.num_robots < 0 || m.num_robots > 8 || m.num_landmarks < 0 || m.num_landmarks > 256 || m.frame < 0)
+  if (m.num_robots > contract::kMaxRobots || !contract::count_fits(m.robot_ids, m.num_robots) ||
+      !contract::count_fits(m.robots, m.num_robots) || !contract::count_fits(m.landmarks, m.num_landmarks) || m.frame < 0)
     return bad("GROUND_TRUTH counts or frame");
   for (int k = 0; k < m.num_robots; ++k) {
     const pose2_t& p = m.robots[k];

@@ -4,10 +4,12 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <type_traits>
 
+#include "elaslam/global_landmark_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
@@ -16,10 +18,16 @@
 
 namespace elaslam::contract {
 
-constexpr int kMaxObsPerFrame = 64;           // sensor_frame_t.obs (a variable-length array: a bound, not a size)
-constexpr int kMaxRobots = 8;                 // ground_truth_t.robot_ids / robots, run_info_t.robot_ids
-constexpr int kMaxLandmarksPerMessage = 256;  // ground_truth_t.landmarks
-constexpr int kMaxCount = 32767;              // the most any int16_t count field can say
+constexpr int kMaxObsPerFrame = 64;  // sensor_frame_t.obs (a variable-length array: a bound, not a size)
+constexpr int kMaxCount = 32767;     // the most any int16_t count field can say
+/// Robot ids 1..kMaxRobots: global_landmark_t.contributors holds one bit per robot in
+/// an int16_t. A team's own members are configuration (limits.team); this is the
+/// ceiling the messages can express.
+constexpr int kMaxRobots = 16;
+/// The world's landmarks in one ground_truth_t (its int16_t count).
+constexpr int kMaxWorldLandmarks = kMaxCount;
+/// The largest max_landmark_id a robot or main_robot accepts (ids 0 .. 2^20 - 1).
+constexpr int kMaxLandmarkIdLimit = 1 << 20;
 
 // Messages that repair state fit one datagram (lmap_snapshot_t, global_map_t chunks):
 // at most this many bytes encoded (LCM's payload, fingerprint included). With LCM's
@@ -29,10 +37,9 @@ constexpr int kMaxCount = 32767;              // the most any int16_t count fiel
 // bytes of a typical tunnelled link for names of up to 100.
 constexpr int kMaxChunkBytes = 1200;
 
-static_assert(std::extent_v<decltype(ground_truth_t::robot_ids)> == kMaxRobots);
-static_assert(std::extent_v<decltype(ground_truth_t::robots)> == kMaxRobots);
-static_assert(std::extent_v<decltype(run_info_t::robot_ids)> == kMaxRobots);
-static_assert(std::extent_v<decltype(ground_truth_t::landmarks)> == kMaxLandmarksPerMessage);
+static_assert(std::is_same_v<decltype(global_landmark_t::contributors), std::int16_t> && kMaxRobots == 16,
+              "one contributor bit per robot id");
+static_assert(std::is_same_v<decltype(ground_truth_t::num_landmarks), std::int16_t>);
 
 /// Set a variable-length array and its count together (the arrays of sensor_frame_t,
 /// lmap_snapshot_t and global_map_t): resize (no allocation within the capacity

@@ -56,15 +56,18 @@ struct MessageLimits {
   /// known start may be exact).
   double cov_floor = 1e-8;
   double cov_ceiling = 1e4;
-  /// Bit r-1 set when robot r is in the team (limits.team, "1,2,3"; absent: 1..8).
-  int team_mask = 0xff;
+  /// Bit r-1 set when robot r is in the team (limits.team, "1,2,3"; absent: every
+  /// id 1..contract::kMaxRobots).
+  int team_mask = kAllRobots;
+  static constexpr int kAllRobots = 0xffff;
 
-  bool in_team(int robot_id) const { return robot_id >= 1 && robot_id <= 8 && ((team_mask >> (robot_id - 1)) & 1); }
+  bool in_team(int robot_id) const { return robot_id >= 1 && robot_id <= 16 && ((team_mask >> (robot_id - 1)) & 1); }
 };
 
 /// Read the optional `limits:` map of a robot or main section.
 void parse(config::Reader& r, MessageLimits* o);
-/// "1,2,3" -> bits; false with `why` when not a list of distinct ids in [1, 8].
+/// "1,2,3" -> bits; false with `why` when not a list of distinct ids in
+/// [1, contract::kMaxRobots].
 bool parse_team(const std::string& text, int* mask, std::string* why);
 std::string team_text(int mask);
 

@@ -80,7 +80,7 @@ struct GlobalEntry {
 
 /// Incoming map change (mirrors landmark_event_t; validated by the caller).
 struct GlobalEvent {
-  int robot_id = 0;        // 1..8
+  int robot_id = 0;        // 1..kMaxTeamRobots
   std::int64_t seq = 0;
   int frame = 0;
   int kind = 0;            // landmark_event_t::ADD / UPDATE / MOVING / RETURN

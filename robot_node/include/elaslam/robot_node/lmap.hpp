@@ -49,6 +49,10 @@ struct LMapEntry {
   int moving_frame = -1;         // frame of the newest finding or notice that it moves (any status)
   bool was_moving = false;       // it has been MOVING before: re-adding it is a RETURN
   bool reported_moving = false;  // this robot's MOVING event went out and no ADD / RETURN since
+  /// STATIC, but evicted from the full filter (Robot::make_room): `position` and
+  /// `cov` hold its last filter estimate, which the robot's snapshots keep listing.
+  /// Any status change clears it.
+  bool archived = false;
   int times_moving = 0;          // how often it has been found (or told) moving
   // A candidate's whitened innovations summed over its consistent sightings: white
   // for a static landmark (|sum|^2 / n is chi-square, 2 dof), drifting for a slow
@@ -105,6 +109,10 @@ class LMap {
   bool candidate_inconsistent(int id);
   /// Unseen too long: it left the filter; its streak starts over.
   void drop_candidate(int id);
+  /// A STATIC landmark evicted from the filter keeps its last estimate here (archived).
+  void archive(int id, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov);
+  /// An archived landmark back in the filter: STATIC as before.
+  void unarchive(int id) { at(id).archived = false; }
   /// CANDIDATE -> STATIC. Returns true when it comes back after moving (a RETURN).
   bool confirm(int id, int frame);
   /// The candidate drift test's sum: adds one whitened innovation.

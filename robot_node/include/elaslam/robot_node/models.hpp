@@ -24,6 +24,9 @@ struct OdometryNoise {
   double var_rot_per_m = 0.0;     // [rad^2/m]
 };
 
+/// d2 = r^T C^-1 r for a 2x2 symmetric C; +inf when C is not positive definite.
+double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C);
+
 /// Motion f(R, u) (eq 3): the pose R_WB composed with the odometry increment u
 /// (expressed in B at the start of the step). F_x = df/dR, F_u = df/du (eq 6).
 Pose2 motion(const Pose2& pose, const Pose2& increment, Eigen::Matrix3d* F_x = nullptr,

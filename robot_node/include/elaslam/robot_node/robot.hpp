@@ -65,6 +65,8 @@ struct FrameSummary {
   int num_candidates = 0; // observations of landmarks not (yet) in the filter
   int filter_faults = 0;  // filter operations refused by its health checks (filter_full included)
   int filter_full = 0;    // landmarks not added: every slot of the filter taken (a capacity limit)
+  int evicted = 0;        // landmarks that left the full filter to make room (make_room)
+  int restored = 0;       // evicted landmarks seen again and back in the filter
   int events_dropped = 0; // events beyond the fixed event buffer (should stay 0)
   bool inconsistent = false;  // the consistency monitor's verdict after this frame
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
@@ -90,6 +92,8 @@ struct TeamCounters {
 class Robot {
  public:
   Robot(const RobotOptions& options, int robot_id);
+  /// The most events one frame can emit: the event buffers are reserved for it.
+  static std::size_t event_capacity(const RobotOptions& o);
 
   /// Forget everything; the next frame initialises the filter at its odometer reading.
   void reset();
@@ -156,6 +160,15 @@ class Robot {
   void check_missing(FrameSummary* s);
   bool expected_in_view(int id, const Pose2& pose) const;
   void mark_moving(int id, const RangeBearing* seen, FrameSummary* s);
+  /// A free slot in the filter: true when there is one or one was made by evicting
+  /// the held landmark farthest from the robot beyond sensor_range that was not
+  /// seen this frame (a STATIC one is archived, a candidate dropped); false when
+  /// every held landmark is in range (the add then fails with kFull, counted).
+  bool make_room(FrameSummary* s);
+  /// Archived landmarks seen in this frame back into the filter (modes ela and
+  /// consensus): each re-enters at its observation and is tested against its
+  /// archived estimate; one that disagrees has moved while out of the filter.
+  void restore_archived(const FrameInput& in, FrameSummary* s);
   void record_sighting(int id, const RangeBearing& z);
   void emit(EventKind kind, int id);
   // The operations that change which landmarks are held, or that every filter must
@@ -182,6 +195,7 @@ class Robot {
   TeamChannel team_;
   TeamCounters team_counters_;
   double team_gate_threshold_ = 0.0;  // chi2 quantile, 2 dof, of team_map_gate_probability
+  double restore_threshold_ = 0.0;    // chi2 quantile, 2 dof, of drift_gate_probability (restore_archived)
   int trouble_frame_ = -1;  // last frame all of whose judged landmarks failed, or found inconsistent
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   ElaGate gate_;  // this frame's verdicts and gate records

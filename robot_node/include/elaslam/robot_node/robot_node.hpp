@@ -45,6 +45,8 @@ struct RobotNodeCounters {
   RefusalCounts refused;              // refused messages per reason (their sum is rejected_inputs)
   std::int64_t odometry_reanchors = 0;  // odometer origin changes taken (a confirmed jump)
   std::int64_t filter_full = 0;       // landmarks not added because every filter slot was taken
+  std::int64_t evictions = 0;         // landmarks that left the full filter to make room (Robot::make_room)
+  std::int64_t restored = 0;          // evicted landmarks seen again and back in the filter
   std::int64_t inconsistent_frames = 0;  // frames the consistency monitor found the filter inconsistent
   std::int64_t recoveries = 0;           // of those, pose covariance widened (consistency_recover)
   std::int64_t team_map_chunks = 0;      // TEAM_MAP_<r> chunks applied (robot.team_map.fuse)

@@ -21,6 +21,9 @@ void to_message(const SensorFrame& f, std::int64_t utime, elaslam::sensor_frame_
 /// GROUND_TRUTH: true robot poses (in the order of the scenario's robots) and true
 /// landmark positions with the moving flags, for the world's current frame.
 elaslam::ground_truth_t to_message(const World& w, std::int64_t utime);
+/// The same into `m`, reusing its arrays (no allocation once they have held the
+/// world's robots and landmarks).
+void to_message(const World& w, std::int64_t utime, elaslam::ground_truth_t* m);
 
 /// RUN_INFO of a simulated run: the scenario's facts and its effective configuration.
 /// `effective_yaml` is the config file's scenario section as read; the values a

@@ -15,7 +15,7 @@
 
 namespace elaslam::sim {
 
-/// Stream ids. Per-robot streams add the robot id (1..8).
+/// Stream ids. Per-robot streams add the robot id (1..16, below the next stream).
 namespace stream {
 constexpr std::uint64_t kLayout = 1;       // random layout positions
 constexpr std::uint64_t kMovingSet = 2;    // permutation that picks the moving landmarks

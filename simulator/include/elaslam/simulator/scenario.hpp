@@ -60,7 +60,7 @@ struct LandmarkOptions {
 /// A robot driving a semicircle (180 degrees of arc) at constant speed; it stops
 /// at the end of the semicircle if it gets there before the run ends.
 struct RobotPathOptions {
-  int id = 1;                     // 1..8
+  int id = 1;                     // 1..contract::kMaxRobots
   double center_x_m = 0.0;        // circle centre, world frame W [m]
   double center_y_m = 0.0;
   double radius_m = 6.0;          // [m]

@@ -59,6 +59,13 @@ struct RobotMetrics {
   double error_rms = 0.0;         // [m]
   double final_uncertainty = 0.0; // mean(diag(P)) at the last frame (eq 19)
   int frames = 0;                 // frames with an estimate
+  // The bounded filter (Robot::make_room), from the robot's counters: in-process runs
+  // only (node_counters true; evaluate, reading a log, has no such counters).
+  bool node_counters = false;
+  std::int64_t filter_full = 0;   // landmarks not added: every slot held something in range
+  std::int64_t evictions = 0;     // landmarks that left the full filter to make room
+  std::int64_t restored = 0;      // evicted landmarks seen again and back in the filter
+  int final_landmarks = 0;        // landmarks in the filter at the end (candidates included)
 };
 
 struct RunMetrics {

@@ -3,7 +3,7 @@
 //
 //   offset  size  field
 //   0       4     magic "ELA1"
-//   4       2     sender id (int16, big-endian): a robot's id 1..8, kSenderMain,
+//   4       2     sender id (int16, big-endian): a robot's id 1..16, kSenderMain,
 //                 kSenderSimulator, kSenderTool
 //   6       8     sender incarnation (int64, big-endian): the sender's start time [us
 //                 since the epoch], so a restart is newer
@@ -49,6 +49,8 @@ constexpr std::size_t kTrailerBytes = kHeaderBytes + kMacBytes;  // 54
 constexpr char kMagic[kMagicBytes] = {'E', 'L', 'A', '1'};
 
 /// Sender ids: robots use their robot id (1 .. contract::kMaxRobots); the other roles these.
+/// Robot sender ids 1..kMaxRobotSenders (contract::kMaxRobots; auth_transport.cpp checks).
+constexpr int kMaxRobotSenders = 16;
 constexpr std::int16_t kSenderMain = 100;
 constexpr std::int16_t kSenderSimulator = 101;
 constexpr std::int16_t kSenderTool = 102;  // a tool (monitor, a test's publisher): no team channel
@@ -108,7 +110,7 @@ class ReplayGuard {
     std::array<Window, kIncarnations> windows;
   };
   static int slot_of(std::int16_t id);
-  std::array<Slot, 12> slots_{};  // robots 1..8, main, simulator, tool (and 0 unused)
+  std::array<Slot, kMaxRobotSenders + 4> slots_{};  // robots 1..16, main, simulator, tool (and 0 unused)
 };
 
 /// Seals outgoing and opens incoming messages of one process with the team key.

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "elaslam/candidate_list_t.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
@@ -32,7 +33,7 @@ struct ViewLimits {
 
 class ViewState {
  public:
-  static constexpr int kMaxRobots = 64;
+  static constexpr int kMaxRobots = contract::kMaxRobots;
   explicit ViewState(const ViewLimits& limits = {});
 
   // Each returns false, counts the message as bad and changes nothing when the
