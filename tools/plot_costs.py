@@ -9,8 +9,8 @@ EKF.json is `build/bin/bench_ekf --benchmark_format=json` (or --benchmark_out=..
 
   cost_ekf_frame.png     robot frame time against landmarks in the filter (16-1,024),
                          default and Joseph forms, and the dense textbook EKF
-  cost_main_frame.png    main_robot's time per team frame against robots (at 1,024
-                         landmarks) and against global landmarks (16 robots), with
+  cost_main_frame.png    main_robot's time per team frame against robots (1-16, at 1,024
+                         landmarks) and against global landmarks (72-4,096, 16 robots), with
                          the GLOBAL_MAP bytes per frame on a second axis
 
 Exit status 1 (naming what is missing) when a file is absent or holds none of the
@@ -114,7 +114,7 @@ def plot_ekf(rows, out):
 
 def plot_main(rows, out):
     s = series(rows, "BM_MainFrame", "robots")
-    by_robots = [(x, t, b) for x, t, b in s if "landmarks:1024" in b.get("run_name", b.get("name", ""))]
+    by_robots = [(x, t, b) for x, t, b in s if re.search(r"landmarks:1024\b", b.get("run_name", b.get("name", "")))]
     by_landmarks = [(int(re.search(r"landmarks:(\d+)", b.get("run_name", b.get("name", ""))).group(1)), t, b)
                     for x, t, b in s if x == 16]
     by_landmarks.sort()
