@@ -96,6 +96,18 @@ std::vector<std::string> check_shared_config(const std::string& path) {
     if (rid && mid && rid.IsScalar() && mid.IsScalar() && mid.as<long long>() < rid.as<long long>())
       problems.push_back("main.max_landmark_id (" + mid.as<std::string>() + ") is smaller than robot.filter.max_landmark_id (" +
                          rid.as<std::string>() + "): main_robot would refuse every event about the ids between");
+    // The simulator's fullest frame must fit the robots' (a section may leave either
+    // out: contract::kMaxObsPerFrame).
+    const YAML::Node scenario = root["scenario"];
+    const YAML::Node sim_obs = scenario && scenario["sensor"] ? scenario["sensor"]["max_observations"] : YAML::Node();
+    const YAML::Node rob_obs = robot["filter"] ? robot["filter"]["max_observations"] : YAML::Node();
+    const auto count = [](const YAML::Node& n) {
+      return n && n.IsScalar() ? n.as<long long>() : static_cast<long long>(contract::kMaxObsPerFrame);
+    };
+    if ((sim_obs || rob_obs) && count(sim_obs) > count(rob_obs))
+      problems.push_back("scenario.sensor.max_observations (" + std::to_string(count(sim_obs)) +
+                         ") exceeds robot.filter.max_observations (" + std::to_string(count(rob_obs)) +
+                         "): the robots would refuse the simulator's fullest frames");
     const auto team = [](const YAML::Node& section) {
       int mask = MessageLimits::kAllRobots;
       std::string why;

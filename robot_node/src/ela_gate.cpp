@@ -95,10 +95,9 @@ Eigen::Matrix2d neighbour_weight(const EkfSlam& ekf, const InView& j) {
 }
 
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active) {
-  constexpr int kMax = contract::kMaxObsPerFrame;
-  n = std::min(n, kMax);  // a frame holds at most kMaxObsPerFrame observations (the message bound)
-  std::array<Eigen::Matrix2d, kMax> info;   // b_j, the weight of neighbour j
-  std::array<std::uint8_t, kMax> use{};     // j shapes the ELA (active, not i)
+  // The reference computation (tests, benchmarks): scratch of its own, per call.
+  std::vector<Eigen::Matrix2d> info(static_cast<std::size_t>(std::max(n, 0)));  // b_j, the weight of neighbour j
+  std::vector<std::uint8_t> use(static_cast<std::size_t>(std::max(n, 0)), 0);    // j shapes the ELA (active, not i)
   const Eigen::Matrix2d Rt0 = rotation(ekf.pose().theta).transpose();
   // Mean: the predictions p_ij = m_j + R^T (l_i - l_j), fused with weights
   // W_j = (sum_k b_k)^-1 b_j, which sum to I.
@@ -130,7 +129,7 @@ double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const 
   const Eigen::Matrix2d Rt = rotation(pose.theta).transpose();
   const double var_th = ekf.pose_cov()(StateLayout::kTheta, StateLayout::kTheta);
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
-  std::array<Eigen::Matrix2d, kMax> A;  // A_j = W_j R^T
+  std::vector<Eigen::Matrix2d> A(info.size());  // A_j = W_j R^T
   for (int j = 0; j < n; ++j)
     if (use[static_cast<std::size_t>(j)]) A[static_cast<std::size_t>(j)] = fused_cov * info[static_cast<std::size_t>(j)] * Rt;
   Eigen::Matrix2d cov = view[i].M;
@@ -168,7 +167,7 @@ ElaGate::ElaGate(const RobotOptions& options)
       drift_threshold_(chi2_quantile(options.drift_gate_probability, 2)),
       candidate_drift_(options.candidate_drift_test),
       solver_(options.ela_gate_probability) {
-  constexpr auto n = static_cast<std::size_t>(contract::kMaxObsPerFrame);
+  const auto n = static_cast<std::size_t>(options.max_observations);
   view_.reserve(n);
   prior_.reserve(n);
   Hx_.resize(n);

@@ -12,7 +12,7 @@ namespace elaslam {
 // MOVING and the UPDATE of a landmark it evicts (make_room), every mapped landmark
 // can go missing.
 std::size_t Robot::event_capacity(const RobotOptions& o) {
-  return static_cast<std::size_t>(3 * kMaxObservations + o.ekf.capacity + 8);
+  return static_cast<std::size_t>(3 * o.max_observations + o.ekf.capacity + 8);
 }
 
 const char* to_string(EventKind k) {
@@ -37,7 +37,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   team_gate_threshold_ = options.team_map_gate_probability < 1.0 ? chi2_quantile(options.team_map_gate_probability, 2)
                                                                   : std::numeric_limits<double>::infinity();
   restore_threshold_ = chi2_quantile(options.drift_gate_probability, 2);
-  updated_.reserve(kMaxObservations);
+  updated_.reserve(static_cast<std::size_t>(options.max_observations));
   events_.reserve(event_capacity(options));
 }
 

@@ -51,7 +51,7 @@ Eigen::Matrix2d get_cov2(const double (&src)[2][2]) {
 }  // namespace
 
 RobotNode::RobotNode(const RobotOptions& options, int robot_id)
-    : options_(options), robot_id_(robot_id), robot_(options, robot_id) {
+    : options_(options), robot_id_(robot_id), robot_(options, robot_id), input_(options.max_observations) {
   events_.reserve(Robot::event_capacity(options));
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
@@ -82,7 +82,9 @@ std::string RobotNode::validate(const sensor_frame_t& m, Refusal* reason) const 
   r = Refusal::kMalformed;
   if (m.robot_id != robot_id_) return contract::got("robot_id is not this robot's", m.robot_id);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
-  if (m.num_obs < 0 || m.num_obs > kMaxObservations) return contract::got(contract::count_outside("num_obs", kMaxObservations), m.num_obs);
+  if (m.num_obs < 0 || m.num_obs > options_.max_observations)
+    return contract::got(contract::count_outside("num_obs (robot.filter.max_observations)", options_.max_observations),
+                         m.num_obs);
   if (!contract::count_fits(m.obs, m.num_obs)) return contract::got("num_obs larger than the obs array", m.num_obs);
   if (!finite(m.odom_x) || !finite(m.odom_y) || !finite(m.odom_theta)) return "odometer reading is not finite";
   for (double v : {m.odom_var_trans_per_m, m.odom_var_rot_per_rad, m.odom_var_rot_per_m})
@@ -171,7 +173,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     seen = 1;
   }
   // Clear the marks; a refused count may exceed the array (the obs are variable-length).
-  const int marked = contract::bounded(msg.num_obs, static_cast<int>(std::min<std::size_t>(msg.obs.size(), kMaxObservations)));
+  const int marked = contract::bounded(msg.num_obs, static_cast<int>(std::min<std::size_t>(msg.obs.size(), static_cast<std::size_t>(options_.max_observations))));
   for (int k = 0; k < marked; ++k) {
     const int id = msg.obs[static_cast<std::size_t>(k)].landmark_id;
     if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;

@@ -30,6 +30,7 @@ void parse(config::Reader& r, RobotOptions* o) {
   parse_mode(mode, &o->mode);
   r.section("filter", [&](config::Reader& f) {
     f.read("capacity", &o->ekf.capacity, 1, 1024);
+    f.read_optional("max_observations", &o->max_observations, 1, contract::kMaxObsPerFrameLimit);
     f.read("max_landmark_id", &o->ekf.max_landmark_id, 1, contract::kMaxLandmarkIdLimit);
     f.read("range_sigma_m", &o->ekf.range_sigma, 1e-6, 100.0);
     double bearing_deg = rad2deg(o->ekf.bearing_sigma);

@@ -26,6 +26,7 @@ void parse_sensor(config::Reader& r, SensorOptions* s) {
   r.read("range_sigma_m", &s->range_sigma_m, 0.0, 100.0);
   r.read("bearing_sigma_deg", &s->bearing_sigma_deg, 0.0, 90.0);
   r.read("detection_probability", &s->detection_probability, 0.0, 1.0);
+  r.read_optional("max_observations", &s->max_observations, 1, contract::kMaxObsPerFrameLimit);
 }
 
 void parse_odometry(config::Reader& r, OdometryOptions* o) {

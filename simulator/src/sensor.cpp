@@ -42,7 +42,7 @@ int Sensor::observe(const Pose2& T_WB, const std::vector<Eigen::Vector2d>& p_Lin
     c.obs.bearing_rad = wrap_angle(z.bearing_rad + sigma_b * n_b);
     candidates_.push_back(c);
   }
-  constexpr std::size_t kCap = contract::kMaxObsPerFrame;
+  const auto kCap = static_cast<std::size_t>(options_.max_observations);
   *truncated = 0;
   if (candidates_.size() > kCap) {
     std::nth_element(candidates_.begin(), candidates_.begin() + kCap, candidates_.end(),
@@ -55,6 +55,7 @@ int Sensor::observe(const Pose2& T_WB, const std::vector<Eigen::Vector2d>& p_Lin
   }
   std::sort(candidates_.begin(), candidates_.end(),
             [](const Candidate& a, const Candidate& b) { return a.obs.landmark_id < b.obs.landmark_id; });
+  if (out->size() < candidates_.size()) out->resize(candidates_.size());
   for (std::size_t k = 0; k < candidates_.size(); ++k) (*out)[k] = candidates_[k].obs;
   return static_cast<int>(candidates_.size());
 }

@@ -30,7 +30,7 @@ class SimNode {
         truth_channel_(channels::ground_truth(shell.suffix())) {
     for (std::size_t i = 0; i < o.robots.size(); ++i) {  // built once: no allocation in a frame's burst
       sensor_channels_.push_back(channels::sensor(o.robots[i].id, shell.suffix()));
-      sensor_msgs_[i].obs.reserve(contract::kMaxObsPerFrame);
+      sensor_msgs_[i].obs.reserve(static_cast<std::size_t>(o.sensor.max_observations));
     }
   }
 
@@ -158,7 +158,8 @@ void SimNode::note_truncation(int k) {
   if (k - alerted_frame_ < kAlertFrames) return;
   alerted_frame_ = k;
   shell_.say("FAULT: frame " + std::to_string(k) + ": " + std::to_string(now) + " observation(s) beyond the " +
-             std::to_string(contract::kMaxObsPerFrame) + " a sensor frame carries left out (" + std::to_string(n) +
+             std::to_string(o_.sensor.max_observations) + " a sensor frame carries (scenario.sensor.max_observations) left out (" +
+             std::to_string(n) +
              " so far; the nearest are kept)");
 }
 

@@ -32,6 +32,7 @@ World::World(const ScenarioOptions& o) : options_(o) {
     sensors_.emplace_back(o.sensor, static_cast<int>(n), Rng(seed, stream::kSensorNoise + id),
                           Rng(seed, stream::kDetection + id));
     frames_.emplace_back();
+    frames_.back().obs.resize(static_cast<std::size_t>(o.sensor.max_observations));
   }
   sense();
 }

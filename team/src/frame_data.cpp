@@ -120,7 +120,7 @@ std::string check_logged(const sensor_frame_t& s, const MessageLimits& l, Refusa
   *reason = Refusal::kMalformed;
   if (s.robot_id < 1 || s.robot_id > contract::kMaxRobots) return contract::got(contract::outside("robot_id", 1, contract::kMaxRobots), s.robot_id);
   if (s.frame < 0) return contract::got("frame is negative", s.frame);
-  if (!contract::count_fits(s.obs, s.num_obs) || s.num_obs > contract::kMaxObsPerFrame)
+  if (!contract::count_fits(s.obs, s.num_obs) || s.num_obs > contract::kMaxObsPerFrameLimit)
     return contract::got("num_obs does not match the array", s.num_obs);
   *reason = Refusal::kImplausible;
   return check_position(s.odom_x, s.odom_y, l, "odometer position");

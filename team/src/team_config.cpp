@@ -10,6 +10,10 @@ std::string check_team(const TeamConfig& c) {
     return "robot.ela.sensor_range_m (" + std::to_string(c.robot.sensor_range) +
            ") must equal scenario.sensor.fov_diameter_m / 2 (" + std::to_string(D2) +
            "): the robots must know their own field of view";
+  if (c.scenario.sensor.max_observations > c.robot.max_observations)
+    return "scenario.sensor.max_observations (" + std::to_string(c.scenario.sensor.max_observations) +
+           ") exceeds robot.filter.max_observations (" + std::to_string(c.robot.max_observations) +
+           "): the robots would refuse the fullest frames";
   if (c.scenario.landmarks.count > c.robot.ekf.max_landmark_id)
     return "scenario.landmarks.count exceeds robot.filter.max_landmark_id";
   if (c.scenario.landmarks.count > c.main.max_landmark_id) return "scenario.landmarks.count exceeds main.max_landmark_id";

@@ -90,7 +90,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     EXPECT_GT(fused, 30);
     std::int64_t evictions = 0;
     for (const auto& r : robots) evictions += r.counters().evictions;
-    if (capacity > 0) EXPECT_GT(evictions, 5);
+    if (capacity > 0) {
+      EXPECT_GT(evictions, 5);
+    }
     if (mode == Mode::kEla || mode == Mode::kConsensus) {
       EXPECT_GT(t.events[landmark_event_t::MOVING], 10);
       EXPECT_GT(t.events[landmark_event_t::RETURN], 0);

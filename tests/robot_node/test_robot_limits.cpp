@@ -174,6 +174,25 @@ TEST_F(SmallFilter, AFullFilterRaisesTheCapacityFaultAndOneAlert) {
 
 // A loaded state is checked like a message: a denormal covariance or a position
 // beyond the world bound is refused with the field named, never loaded.
+// A frame carries at most robot.filter.max_observations (4 here): one with more is
+// refused naming the key, counted, and the next frame is processed.
+TEST(RobotObservationCap, AFrameWithMoreObservationsThanConfiguredIsRefused) {
+  RobotOptions o = options();
+  o.max_observations = 4;
+  RobotNode node(o, 2);
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  const Pose2 at{0.0, 0.0, 0.0};
+  std::string why;
+  EXPECT_EQ(node.on_sensor(to_msg(test::frame_from(0, at, at, lms, {0, 1, 2, 3, 4, 5}), 2), 0, &why),
+            RobotNode::Verdict::kInvalid);
+  EXPECT_NE(why.find("robot.filter.max_observations"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().rejected_inputs, 1);
+  EXPECT_EQ(node.on_sensor(to_msg(test::frame_from(0, at, at, lms, {0, 1, 2, 3}), 2), 0, &why),
+            RobotNode::Verdict::kProcessed)
+      << why;
+  EXPECT_EQ(node.robot().filter().num_landmarks(), 4);
+}
+
 TEST_F(RobotLimits, AbsurdStateFilesAreRefused) {
   run(0, 6);
   const nlohmann::json good = nlohmann::json::parse(save_robot_state(node_));

@@ -2,6 +2,7 @@
 // under dynamism, notices between robots, determinism.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <limits>
 
 #include "../robot_node/scene.hpp"
@@ -151,6 +152,40 @@ TEST(TeamRun, TheLargeWorldRunsWithBoundedFiltersAndLosesNothing) {
   EXPECT_LT(largest, 0.05);  // measured 0.020 m
   EXPECT_EQ(a.final_moving, b.final_moving);
   EXPECT_NEAR(a.metrics.landmark_error_mean, b.metrics.landmark_error_mean, 0.002);  // measured 0.0002 m
+}
+
+// Observations per frame are configuration on both sides, checked against each
+// other: a simulator that may send more than the robots take is refused at start-up,
+// naming both keys (load_team_config; the live nodes' check_shared_config).
+TEST(TeamConfig, TheSimulatorsFullestFrameMustFitTheRobots) {
+  const std::string path = ::testing::TempDir() + "/obs_cap.yaml";
+  const auto write = [&](const std::string& sim, const std::string& robot) {
+    // paper.yaml's two max_observations keys, scenario.sensor's first, robot.filter's second.
+    std::string text;
+    std::ifstream in(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+    int seen = 0;
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("    max_observations: 64", 0) == 0) line = "    max_observations: " + (seen++ == 0 ? sim : robot);
+      text += line + "\n";
+    }
+    ASSERT_EQ(seen, 2);
+    std::ofstream(path) << text;
+  };
+  write("100", "64");
+  try {
+    load_team_config(path);
+    ADD_FAILURE() << "accepted 100 observations against the robots' 64";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("scenario.sensor.max_observations (100) exceeds robot.filter.max_observations (64)"),
+              std::string::npos)
+        << e.what();
+  }
+  ASSERT_EQ(check_shared_config(path).size(), 1u);
+  write("100", "128");
+  const TeamConfig c = load_team_config(path);
+  EXPECT_EQ(c.scenario.sensor.max_observations, 100);
+  EXPECT_EQ(c.robot.max_observations, 128);
+  EXPECT_TRUE(check_shared_config(path).empty());
 }
 
 // metrics.json says what ran: provenance, and the effective config with every

@@ -18,7 +18,12 @@
 
 namespace elaslam::contract {
 
-constexpr int kMaxObsPerFrame = 64;  // sensor_frame_t.obs (a variable-length array: a bound, not a size)
+/// Observations per frame: a config value on both sides (scenario.sensor.max_observations,
+/// robot.filter.max_observations, the second at least the first: checked at start-up),
+/// this by default and at most kMaxObsPerFrameLimit (sensor_frame_t.obs is
+/// variable-length; the gate's cost per frame grows as its square).
+constexpr int kMaxObsPerFrame = 64;
+constexpr int kMaxObsPerFrameLimit = 1024;
 constexpr int kMaxCount = 32767;     // the most any int16_t count field can say
 /// Robot ids 1..kMaxRobots: global_landmark_t.contributors holds one bit per robot in
 /// an int16_t. A team's own members are configuration (limits.team); this is the

@@ -23,8 +23,6 @@
 
 namespace elaslam {
 
-constexpr int kMaxObservations = contract::kMaxObsPerFrame;  // per frame, as in sensor_frame_t
-
 struct Observation {
   int landmark_id = -1;
   RangeBearing z;
@@ -32,6 +30,8 @@ struct Observation {
 
 /// One sensor frame, already validated (see RobotNode for the checks).
 struct FrameInput {
+  /// Room for `capacity` observations (RobotOptions::max_observations), allocated here.
+  explicit FrameInput(int capacity = contract::kMaxObsPerFrame) : obs(static_cast<std::size_t>(capacity)) {}
   int frame = 0;
   Pose2 odometer;        // cumulative odometer reading, odometry frame O (= W at start)
   OdometryNoise noise;   // odometry noise model of this robot
@@ -40,7 +40,7 @@ struct FrameInput {
   /// is unknown within options.max_step_m / max_turn per frame.
   bool reanchor = false;
   int num_obs = 0;
-  std::array<Observation, kMaxObservations> obs{};
+  std::vector<Observation> obs;  // first num_obs valid; never resized after construction
 };
 
 /// Values match landmark_event_t's constants.

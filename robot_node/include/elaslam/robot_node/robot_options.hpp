@@ -4,6 +4,7 @@
 #include <string>
 
 #include "elaslam/common/config.hpp"
+#include "elaslam/common/contract.hpp"
 #include "elaslam/common/limits.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 
@@ -17,6 +18,9 @@ bool parse_mode(const std::string& s, Mode* m);
 struct RobotOptions {
   Mode mode = Mode::kEla;
   EkfOptions ekf;
+  /// Observations a SENSOR frame may carry (robot.filter.max_observations; a frame
+  /// with more is refused). Sizes the frame buffers at start-up.
+  int max_observations = contract::kMaxObsPerFrame;
   double initial_sigma_xy = 0.001;     // [m]   prior std dev of the known initial position
   double initial_sigma_theta = 0.001;  // [rad] prior std dev of the known initial heading
 

@@ -15,7 +15,7 @@ namespace elaslam::sim {
 /// SENSOR_<robot_id>: odometer reading, noise model and observations.
 elaslam::sensor_frame_t to_message(const SensorFrame& f, std::int64_t utime);
 /// The same into `m`, reusing its observation array (no allocation once it has
-/// held kMaxObsPerFrame observations): a frame source's per-frame path.
+/// held sensor.max_observations observations): a frame source's per-frame path.
 void to_message(const SensorFrame& f, std::int64_t utime, elaslam::sensor_frame_t* m);
 
 /// GROUND_TRUTH: true robot poses (in the order of the scenario's robots) and true

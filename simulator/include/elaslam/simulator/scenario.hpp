@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "elaslam/common/config.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace elaslam::sim {
 
@@ -29,6 +30,8 @@ struct SensorOptions {
   double bearing_sigma_deg = 1.0;       // [deg] standard deviation of the bearing noise
   double detection_probability = 1.0;   // probability that a landmark in view is reported
 
+  /// Observations a frame carries at most (the nearest are kept; the rest counted).
+  int max_observations = contract::kMaxObsPerFrame;
   double max_range_m() const { return 0.5 * fov_diameter_m; }
 };
 

@@ -21,7 +21,9 @@ struct Observation {
   double bearing_rad = 0.0;      // [rad] noisy, robot frame B, in [-pi, pi)
 };
 
-using ObservationArray = std::array<Observation, contract::kMaxObsPerFrame>;
+/// A frame's observations: first num_obs valid (World sizes it for
+/// sensor.max_observations once; observe() grows it only when it is smaller).
+using ObservationArray = std::vector<Observation>;
 
 /// Noise-free range and bearing of p_LinW seen from T_WB.
 Observation true_observation(const Pose2& T_WB, const Eigen::Vector2d& p_LinW, std::int32_t id);
@@ -32,9 +34,9 @@ class Sensor {
   /// noise and detection are this robot's own streams.
   Sensor(const SensorOptions& options, int num_landmarks, Rng noise, Rng detection);
 
-  /// Observe every landmark in view from T_WB. Writes at most kMaxObsPerFrame
-  /// observations sorted by landmark id and returns their number; when more are
-  /// in view the nearest are kept and *truncated counts the rest.
+  /// Observe every landmark in view from T_WB. Writes at most
+  /// options.max_observations observations sorted by landmark id and returns their
+  /// number; when more are in view the nearest are kept and *truncated counts the rest.
   /// For every landmark, in id order, it draws two normals and one uniform whether
   /// or not the landmark is in view, so the draws of one landmark do not depend on
   /// where the others are (moving landmarks do not perturb the static ones' noise).

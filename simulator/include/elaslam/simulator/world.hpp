@@ -30,7 +30,7 @@ struct SensorFrame {
 };
 
 struct WorldCounters {
-  std::int64_t truncated_obs = 0;        // observations dropped by the 64-per-frame cap
+  std::int64_t truncated_obs = 0;        // observations dropped by sensor.max_observations
   std::int64_t frames_truncated = 0;     // sensor frames that hit the cap
   std::int64_t border_reflections = 0;   // landmark steps that bounced off a world border
 };
