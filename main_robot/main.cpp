@@ -109,7 +109,8 @@ int run(const Args& a) {
                cfg.path.c_str(), cfg.origin.c_str(), transport::describe_url(a.transport.lcm_url).c_str());
   transport::install_stop_handlers();
   using Clock = transport::NodeShell::Clock;
-  shell.every(std::chrono::microseconds(static_cast<std::int64_t>(1e6 / o.publish_rate_hz)), [&] { ports.publish_map(); });
+  const auto map_period_us = static_cast<std::int64_t>(1e6 / o.publish_rate_hz);
+  shell.every(std::chrono::microseconds(map_period_us), [&] { ports.publish_map_if_quiet(map_period_us); });
   shell.every(std::chrono::seconds(1), [&] { ports.publish_status(); });
   const auto save_period = std::chrono::milliseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1000));
   auto next_save = Clock::now();

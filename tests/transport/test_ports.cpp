@@ -169,13 +169,19 @@ landmark_event_t event(int robot, std::int64_t seq, int frame, int kind, int id)
 
 pose_estimate_t pose(int robot, int frame) { return test::pose_msg(robot, frame, 0.0); }
 
-TEST(MainPorts, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
+/// main_robot on its ports over an in-process bus, and an observer of the team's
+/// channels that also publishes as the robots.
+class MainOnBus : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(ports.open()); }
   InProcessTransport bus;
-  NodeShell shell(bus, ShellOptions("main_robot", "", nullptr));
+  NodeShell shell{bus, ShellOptions("main_robot", "", nullptr)};
   MainNode node{GlobalMapOptions{}};
-  MainPorts<NodeShell> ports(shell, node);
-  ASSERT_TRUE(ports.open());
-  Observer obs(bus, "");
+  MainPorts<NodeShell> ports{shell, node};
+  Observer obs{bus, ""};
+};
+
+TEST_F(MainOnBus, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
   NodeShell& robots = obs.shell();
   robots.publish(channels::lmap_event(), event(1, 1, 0, landmark_event_t::ADD, 4));
   robots.publish(channels::pose(1), pose(1, 0));  // the only robot seen so far: frame 0 is done
@@ -196,6 +202,23 @@ TEST(MainPorts, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
   EXPECT_EQ(obs.seen, expected);
   EXPECT_EQ(node.counters().events, 3);
   EXPECT_EQ(node.counters().notices_sent, 1);
+}
+
+// main_robot's timer sends GLOBAL_MAP only when no map went out in its period: a
+// finished frame's map makes the next tick quiet (no second map per frame); with
+// nothing sent for a period, or never, the tick sends one.
+TEST_F(MainOnBus, TheTimersMapGoesOutOnlyWhenNoFramesMapDid) {
+  constexpr std::int64_t kHour = 3'600'000'000;
+  ports.publish_map_if_quiet(kHour);  // nothing went out yet: the tick sends the map
+  bus.dispatch_all();
+  obs.shell().publish(channels::pose(1), pose(1, 0));  // frame 0 finished: its map
+  bus.dispatch_all();
+  ports.publish_map_if_quiet(kHour);  // within the period of that map: quiet
+  bus.dispatch_all();
+  ports.publish_map_if_quiet(0);  // a period of nothing: the tick sends one
+  bus.dispatch_all();
+  const std::vector<std::string> expected = {"GLOBAL_MAP -1", "POSE_1 0", "GLOBAL_MAP 0", "GLOBAL_MAP 0"};
+  EXPECT_EQ(obs.seen, expected);
 }
 
 TEST(Ports, TheChannelSuffixIsInEveryName) {

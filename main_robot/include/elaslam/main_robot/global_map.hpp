@@ -31,7 +31,7 @@ enum class Fusion { kInformation, kCovarianceIntersection };
 struct GlobalMapOptions {
   int max_landmark_id = 256;    // ids accepted: 0 <= id < max_landmark_id
   Fusion fusion = Fusion::kInformation;
-  double publish_rate_hz = 10.0;       // process only: GLOBAL_MAP rate
+  double publish_rate_hz = 10.0;       // process only: GLOBAL_MAP at least this often (MainPorts::publish_map_if_quiet)
   double state_save_interval_s = 1.0;  // process only: at most one save per interval
   int resync_interval_frames = 5;      // ask a robot with an unrepaired gap again after this many of its frames
   // What a message may say (issue 15, docs/security.md): bounds, the team.

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -185,7 +186,8 @@ class MainPorts {
   /// With main.team_map_period_frames, every robot heard from also gets its team
   /// map (TEAM_MAP_<r>) when one is due for `frame`.
   void publish_map(int frame = -1) {
-    const int n = node_.make_global_map(shell_.now_utime(), frame);
+    last_map_utime_ = shell_.now_utime();
+    const int n = node_.make_global_map(last_map_utime_, frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
     if (!node_.team_map_due(frame)) return;
     for (int r = 1; r <= kMaxTeamRobots; ++r) {
@@ -193,6 +195,15 @@ class MainPorts {
       const int m = node_.make_team_map(r, shell_.now_utime(), frame);
       for (int i = 0; i < m; ++i) shell_.publish(team_map_[static_cast<std::size_t>(r - 1)], node_.map_chunk(i));
     }
+  }
+  /// The timer's GLOBAL_MAP (main.publish_rate_hz): only when no map went out in the
+  /// last `period_us`. While the team's frames finish, each finished frame publishes
+  /// its map and the timer adds none (it used to add a second one every period: twice
+  /// the map traffic at 10 Hz, docs/benchmarks.md "Scale"); when they stall (a robot
+  /// down, POSEs lost) the timer keeps the map going out.
+  void publish_map_if_quiet(std::int64_t period_us) {
+    if (last_map_utime_ != kNever && shell_.now_utime() - last_map_utime_ < period_us) return;
+    publish_map();
   }
   void publish_status() {
     node_status_t m = node_.status_msg(shell_.now_utime());
@@ -225,8 +236,10 @@ class MainPorts {
     if (!alert.empty()) shell_.say(alert);
   }
 
+  static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::min();
   Shell& shell_;
   MainNode& node_;
+  std::int64_t last_map_utime_ = kNever;  // when the last GLOBAL_MAP went out
   const std::string map_, notice_, status_, resync_;  // channel names, built once
   std::array<std::string, kMaxTeamRobots> team_map_;  // TEAM_MAP_<r>
 };
