@@ -12,7 +12,7 @@
 
 namespace elaslam {
 
-static_assert(MessageLimits::kAllRobots == (1 << contract::kMaxRobots) - 1, "limits.team's default: every robot id");
+static_assert(MessageLimits::kRobotIds == contract::kMaxRobots, "limits.team's ids are the messages' robot ids");
 
 const char* to_string(Refusal r) {
   switch (r) {

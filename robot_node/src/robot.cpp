@@ -344,12 +344,9 @@ bool Robot::make_room(FrameSummary* s) {
   }
   if (victim < 0) return false;
   if (lmap_[victim].status == LandmarkStatus::kStatic) {
-    const Eigen::Vector2d p = ekf_.landmark(victim);
-    const Eigen::Matrix2d C = ekf_.landmark_cov(victim);
-    emit_at(EventKind::kUpdate, victim, p, C);
-    lmap_.reported(victim, last_frame_);
+    emit(EventKind::kUpdate, victim);
+    lmap_.archive(victim, ekf_.landmark(victim), ekf_.landmark_cov(victim));
     mirror_remove(victim);
-    lmap_.archive(victim, p, C);
   } else {
     mirror_remove(victim);
     lmap_.drop_candidate(victim);

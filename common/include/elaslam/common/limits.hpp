@@ -58,10 +58,13 @@ struct MessageLimits {
   double cov_ceiling = 1e4;
   /// Bit r-1 set when robot r is in the team (limits.team, "1,2,3"; absent: every
   /// id 1..contract::kMaxRobots).
+  static constexpr int kRobotIds = 16;  // = contract::kMaxRobots (limits.cpp checks)
+  static constexpr int kAllRobots = (1 << kRobotIds) - 1;
   int team_mask = kAllRobots;
-  static constexpr int kAllRobots = 0xffff;
 
-  bool in_team(int robot_id) const { return robot_id >= 1 && robot_id <= 16 && ((team_mask >> (robot_id - 1)) & 1); }
+  bool in_team(int robot_id) const {
+    return robot_id >= 1 && robot_id <= kRobotIds && ((team_mask >> (robot_id - 1)) & 1);
+  }
 };
 
 /// Read the optional `limits:` map of a robot or main section.
