@@ -4,13 +4,14 @@
 # evaluated log, sensor-to-pose latency (p50/p99/max over every robot) and
 # sensor-to-global-map latency (the GLOBAL_MAP that includes the frame).
 #   tools/latency.sh [--config FILE] [--rates "10 30 100"] [--seconds S] [--mode M]
-#                    [--no-realtime] [--out DIR] [--build-dir DIR]
+#                    [--no-realtime] [--channel-groups] [--out DIR] [--build-dir DIR]
 # Each rate runs S seconds (default 30). As root the team runs with real-time
 # scheduling (run_team.sh --realtime) unless --no-realtime. Pose latency is sensor
 # publish to the robot's POSE publish (the POSE utime); "at logger" adds the hop to
 # lcm-logger's receipt. --out DIR (default results/latency_<time>) gets each rate's
 # run (F<rate>/) and output (F<rate>.txt). --build-dir DIR (default
-# $ELASLAM_BUILD_DIR, else build/) goes to run_team.sh.
+# $ELASLAM_BUILD_DIR, else build/) and --channel-groups (one LCM port per channel
+# group) go to run_team.sh.
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
@@ -21,6 +22,7 @@ MODE=ela
 RT=(--realtime)
 OUT="$ROOT/results/latency_$(date +%Y%m%d_%H%M%S)"
 BUILD_ARGS=()
+GROUPED=()
 usage_error() { echo "latency.sh: $1 (see --help)" >&2; exit 2; }
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -30,6 +32,7 @@ while [ $# -gt 0 ]; do
     --seconds) SECONDS_PER_RUN="$2"; shift 2 ;;
     --mode) MODE="$2"; shift 2 ;;
     --no-realtime) RT=(); shift ;;
+    --channel-groups) GROUPED=(--channel-groups); shift ;;
     --out) OUT="$2"; shift 2 ;;
     --build-dir) BUILD_ARGS=(--build-dir "$2"); shift 2 ;;
     -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
@@ -48,7 +51,7 @@ printf '%-8s %-8s %-30s %-30s %-30s %s\n' "F [Hz]" frames "pose latency p50/p99/
   "map latency p50/p99/max [us]" "frames dropped"
 for f in $RATES; do
   frames=$(awk -v f="$f" -v s="$SECONDS_PER_RUN" 'BEGIN { printf "%d", f * s }')
-  "$ROOT/tools/run_team.sh" --no-progress --no-baseline --config "$CONFIG" --mode "$MODE" --rate "$f" --frames "$frames" "${RT[@]}" "${BUILD_ARGS[@]}" --out "$OUT/F$f" >"$OUT/F$f.txt" 2>&1 ||
+  "$ROOT/tools/run_team.sh" --no-progress --no-baseline --config "$CONFIG" --mode "$MODE" --rate "$f" --frames "$frames" "${RT[@]}" "${GROUPED[@]}" "${BUILD_ARGS[@]}" --out "$OUT/F$f" >"$OUT/F$f.txt" 2>&1 ||
     { echo "latency.sh: run at $f Hz failed, see $OUT/F$f.txt" >&2; exit 1; }
   "$ROOT/.venv/bin/python" - "$OUT/F$f/metrics.json" "$f" "$frames" <<'PY'
 import json, sys

@@ -4,6 +4,7 @@
 #
 #   tools/replay_team.sh LOG [--config FILE] [--mode M] [--speed S] [--view [PORT]]
 #                            [--out DIR] [--port P] [--build-dir DIR] [--robots "1 2 3"]
+#                            [--channel-groups]
 #
 # - Starts lcm-logger (DIR/run.lcmlog), main_robot and one robot_node per robot of
 #   the log (its SENSOR_<r> channels, or --robots), waits until each has announced
@@ -17,6 +18,10 @@
 # - As root the team runs in a private network namespace (tools/netns_run.sh; LCM
 #   port P, default 7667) and the viewer's page is served on the host's loopback.
 #   Not as root: LCM_DEFAULT_URL (multicast on loopback must be enabled, README).
+# - --channel-groups (or the config's team.channel_groups: true): the nodes open one
+#   LCM port per channel group (tools/lcm_groups.sh); the log is played by one
+#   lcm-logplayer per group (started together: each keeps the log's timing) and
+#   recorded by one lcm-logger per group, merged by log_merge into DIR/run.lcmlog.
 # - To watch a recorded run as it was (no nodes): `viewer` and
 #   `lcm-logplayer run.lcmlog` on the same LCM URL (docs/tools.md).
 # Exit status: 0 done, 1 a node or the replay failed, 2 bad arguments, 130 interrupted.
@@ -24,7 +29,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
-LOG="" MODE="" SPEED=1 VIEW_PORT="" VIEW_NS="" OUT="" PORT=7667 ROBOTS="" INSIDE=0
+LOG="" MODE="" SPEED=1 VIEW_PORT="" VIEW_NS="" OUT="" PORT=7667 ROBOTS="" INSIDE=0 GROUPED=0
 die() { echo "replay_team.sh: $*" >&2; exit 2; }
 usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 while [ $# -gt 0 ]; do
@@ -41,7 +46,8 @@ while [ $# -gt 0 ]; do
     --port) [[ "$2" =~ ^[0-9]+$ ]] && [ "$2" -ge 1 ] && [ "$2" -le 65535 ] || die "--port must be in [1, 65535], got '$2'"
             PORT="$2"; shift 2 ;;
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
-    --robots) [[ "$2" =~ ^[1-8]( [1-8])*$ ]] || die "--robots must be robot ids 1-8 separated by spaces, got '$2'"
+    --robots) [[ "$2" =~ ^([1-9]|1[0-6])( ([1-9]|1[0-6]))*$ ]] ||
+                die "--robots must be robot ids 1-16 separated by spaces, got '$2'"
               ROBOTS="$2"; shift 2 ;;
     --view) VIEW_PORT=8765; shift
             if [ $# -gt 0 ] && [[ "$1" =~ ^[0-9]+$ ]]; then
@@ -49,6 +55,7 @@ while [ $# -gt 0 ]; do
               VIEW_PORT="$1"; shift
             fi ;;
     --view-ns) VIEW_NS="$2"; shift 2 ;;  # internal
+    --channel-groups) GROUPED=1; shift ;;
     --inside) INSIDE=1; shift ;;         # internal: inside the namespace
     -h|--help) usage 0 ;;
     -*) die "unknown argument '$1' (see --help)" ;;
@@ -61,7 +68,7 @@ done
 LOG="$(cd "$(dirname "$LOG")" && pwd)/$(basename "$LOG")"
 CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
 BIN="$BUILD_DIR/bin"
-for p in main_robot robot_node evaluate log_info ${VIEW_PORT:+viewer}; do
+for p in main_robot robot_node evaluate log_info log_merge ${VIEW_PORT:+viewer}; do
   [ -x "$BIN/$p" ] || die "no $BIN/$p (build it: cmake --build $BUILD_DIR --target $p)"
 done
 command -v lcm-logplayer >/dev/null && command -v lcm-logger >/dev/null || die "needs lcm-logplayer and lcm-logger (liblcm-bin)"
@@ -80,7 +87,7 @@ fi
 if [ "$INSIDE" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; then
   rc=0
   "$ROOT/tools/netns_run.sh" --port "$PORT" -- "$0" "$LOG" --inside --config "$CONFIG" ${MODE:+--mode "$MODE"} \
-    --speed "$SPEED" --out "$OUT" --build-dir "$BUILD_DIR" --robots "$ROBOTS" \
+    --speed "$SPEED" --out "$OUT" --build-dir "$BUILD_DIR" --robots "$ROBOTS" $([ "$GROUPED" -eq 1 ] && echo --channel-groups) \
     ${VIEW_PORT:+--view "$VIEW_PORT" --view-ns "/proc/$$/ns/net"} || rc=$?
   exit $rc
 fi
@@ -94,13 +101,32 @@ cleanup() {
 trap cleanup EXIT
 trap 'echo "replay_team.sh: interrupted" >&2; exit 130' INT TERM
 read -r -a R <<<"$ROBOTS"
-lcm-logger -f -q "$OUT/run.lcmlog" >"$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
-"$BIN/main_robot" --config "$CONFIG" >"$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
+# shellcheck source=tools/lcm_groups.sh
+. "$ROOT/tools/lcm_groups.sh"
+# Channel groups as the nodes will open them (the config may ask for them).
+G_ARGS=()
+[ "$GROUPED" -eq 0 ] || G_ARGS=(--channel-groups)
+"$BIN/main_robot" --config "$CONFIG" "${G_ARGS[@]}" --check >"$OUT/logs/check.log" 2>&1 ||
+  { cat "$OUT/logs/check.log" >&2; echo "replay_team.sh: the configuration is not valid" >&2; exit 2; }
+GROUPED=$(lcm_groups_in_check "$OUT/logs/check.log")
+[ "$GROUPED" -eq 0 ] || G_ARGS=(--channel-groups)
+if [ "$GROUPED" -eq 0 ]; then
+  lcm-logger -f -q "$OUT/run.lcmlog" >"$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
+else
+  mkdir -p "$OUT/groups"
+  for g in $(lcm_team_groups "${R[@]}"); do
+    lcm-logger -f -q --lcm-url="$(lcm_group_url "$g")" "$OUT/groups/g$g.lcmlog" >"$OUT/logs/logger_g$g.log" 2>&1 &
+    PIDS+=($!)
+  done
+fi
+"$BIN/main_robot" --config "$CONFIG" "${G_ARGS[@]}" >"$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
 for r in "${R[@]}"; do
-  "$BIN/robot_node" --config "$CONFIG" --robot "$r" ${MODE:+--mode "$MODE"} >"$OUT/logs/robot_node_$r.log" 2>&1 & PIDS+=($!)
+  "$BIN/robot_node" --config "$CONFIG" --robot "$r" ${MODE:+--mode "$MODE"} "${G_ARGS[@]}" >"$OUT/logs/robot_node_$r.log" 2>&1 &
+  PIDS+=($!)
 done
 if [ -n "$VIEW_PORT" ]; then
-  "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} >"$OUT/logs/viewer.log" 2>&1 &
+  "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} "${G_ARGS[@]}" \
+    >"$OUT/logs/viewer.log" 2>&1 &
   VIEWER_PID=$!
   for _ in $(seq 50); do grep -q '^viewer: http' "$OUT/logs/viewer.log" 2>/dev/null && break; sleep 0.1; done
   url=$(sed -n 's/^viewer: //p' "$OUT/logs/viewer.log")
@@ -110,8 +136,20 @@ fi
 "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-nodes $((${#R[@]} + 1)) --timeout 30 ||
   { echo "replay_team.sh: the nodes did not all start (logs in $OUT/logs)" >&2; exit 1; }
 echo "replay_team.sh: robots ${R[*]}, main_robot; playing $LOG at ${SPEED}x" >&2
-lcm-logplayer -s "$SPEED" -e '^(SENSOR_[0-9]+|GROUND_TRUTH|RUN_INFO)$' "$LOG" >"$OUT/logs/logplayer.log" 2>&1 ||
-  { echo "replay_team.sh: lcm-logplayer failed (log: $OUT/logs/logplayer.log)" >&2; exit 1; }
+if [ "$GROUPED" -eq 0 ]; then
+  lcm-logplayer -s "$SPEED" -e '^(SENSOR_[0-9]+|GROUND_TRUTH|RUN_INFO)$' "$LOG" >"$OUT/logs/logplayer.log" 2>&1 ||
+    { echo "replay_team.sh: lcm-logplayer failed (log: $OUT/logs/logplayer.log)" >&2; exit 1; }
+else  # one player per group, started together (each sleeps through the others' events)
+  PLAYERS=()
+  for ch in RUN_INFO GROUND_TRUTH "${R[@]/#/SENSOR_}"; do
+    lcm-logplayer -s "$SPEED" -e "^$ch\$" --lcm-url="$(lcm_group_url "$(lcm_group_of_input "$ch")")" "$LOG" \
+      >"$OUT/logs/logplayer_$ch.log" 2>&1 &
+    PLAYERS+=($!)
+  done
+  for p in "${PLAYERS[@]}"; do
+    wait "$p" || { echo "replay_team.sh: an lcm-logplayer failed (logs: $OUT/logs/logplayer_*.log)" >&2; exit 1; }
+  done
+fi
 sleep 0.5  # the last frame's messages reach the logger
 rc=0
 for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
@@ -119,6 +157,10 @@ for i in "${!PIDS[@]}"; do
   wait "${PIDS[$i]}" || { echo "replay_team.sh: a node exited with an error (logs in $OUT/logs)" >&2; rc=1; }
 done
 PIDS=()
+if [ "$GROUPED" -eq 1 ]; then
+  "$BIN/log_merge" -f "$OUT/run.lcmlog" "$OUT"/groups/g*.lcmlog >"$OUT/logs/log_merge.log" 2>&1 ||
+    { cat "$OUT/logs/log_merge.log" >&2; echo "replay_team.sh: merging the groups' recordings failed" >&2; exit 1; }
+fi
 "$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" ${MODE:+--mode "$MODE"} || rc=1
 echo "replay_team.sh: results in $OUT (metrics.json, run.lcmlog, logs/)"
 if [ -n "$VIEWER_PID" ] && [ "${ELASLAM_VIEW_HOLD:-0}" = 1 ] && { exec 3</dev/tty; } 2>/dev/null; then

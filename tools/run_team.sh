@@ -8,7 +8,7 @@
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
 #                     [--loss P [--loss-scope radio|all]]
 #                     [--kill-robot R --kill-at-frame F [--restart-after S]]
-#                     [--robot-state] [--key-file FILE | --auth] [--view [PORT]]
+#                     [--robot-state] [--key-file FILE | --auth] [--view [PORT]] [--channel-groups]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
 #   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
@@ -66,6 +66,11 @@
 #   (simulator, main_robot, each robot_node, the progress line) the team key FILE;
 #   --auth makes a new key in DIR/team.key (tools/make_team_key.sh) and uses it.
 #   Without either, the config's team.key_file decides (the repo's configs have none).
+# - --channel-groups (or the config's team.channel_groups: true): every process opens
+#   one LCM port per channel group, ports P to P+19 (docs/decisions.md "Channel
+#   groups"), so that each is woken only by what it reads. The recording is then one
+#   lcm-logger per group in use (DIR/groups/), merged by log_merge into DIR/run.lcmlog
+#   after the run.
 # - --view [PORT] (default 8765; 0: any free port): the live viewer (docs/tools.md) with the team; its
 #   URL, http://127.0.0.1:PORT/, is printed at the start. It listens on the host's
 #   loopback even when the team runs in a private namespace (viewer --http-netns).
@@ -95,6 +100,7 @@ KEY_FILE=""      # --key-file, or DIR/team.key with --auth
 AUTH=0
 VIEW_PORT=""     # --view [PORT]
 VIEW_NS=""       # internal: the network namespace the viewer's HTTP socket goes in
+GROUPED=0        # --channel-groups, or the config's team.channel_groups
 FRAMES_ARG=""    # --frames, when given (to check --kill-at-frame against)
 SIM_ARGS=()      # overrides for the simulator (and run_scenario)
 EVAL_ARGS=()     # the same facts, for the record when a log lacks RUN_INFO
@@ -135,6 +141,7 @@ while [ $# -gt 0 ]; do
     --robot-state) ROBOT_STATE=1; shift ;;
     --key-file) KEY_FILE="$2"; shift 2 ;;
     --auth) AUTH=1; shift ;;
+    --channel-groups) GROUPED=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
     --realtime) REALTIME=1; shift ;;
     --no-progress) PROGRESS=0; shift ;;
@@ -180,6 +187,8 @@ if [ "$AUTH" -eq 1 ]; then  # a new key for this run (the nested run inside the 
   KEY_FILE="$OUT/team.key"
 fi
 KEY_ARGS=(${KEY_FILE:+--key-file "$KEY_FILE"})
+# Given to every process: its transport (the key, the channel groups).
+[ "$GROUPED" -eq 0 ] || KEY_ARGS+=(--channel-groups)
 # --view holds the page after the run only for someone at a terminal (the outermost
 # run's stdin; a nested run's is /dev/null).
 [ "$INSIDE" -eq 1 ] || { [ -t 0 ] && export ELASLAM_VIEW_HOLD=1; } || export ELASLAM_VIEW_HOLD=0
@@ -194,7 +203,7 @@ interrupted() {
 }
 trap interrupted INT TERM
 
-TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor)
+TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor log_merge)
 [ -z "$VIEW_PORT" ] || TARGETS+=(viewer)
 if [ "$INSIDE" -eq 0 ]; then
   first=0
@@ -216,8 +225,20 @@ fi
 BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
 BIN="$BUILD_DIR/bin"
 # The whole configuration with the overrides, checked by the simulator before anything starts.
-"$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" ${KEY_FILE:+--key-file "$KEY_FILE"} --check >"$OUT/logs/check.log" 2>&1 ||
+# As root the team will run in a namespace of its own on --port (netns_run.sh, --hosts):
+# checked with that URL, not the caller's.
+CHECK_ENV=()
+if [ "$INSIDE" -eq 0 ] && { [ "$HOSTS" -eq 1 ] || { [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; }; }; then
+  CHECK_ENV=(env "LCM_DEFAULT_URL=udpm://239.255.76.67:$PORT?ttl=0")
+fi
+"${CHECK_ENV[@]}" "$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" "${KEY_ARGS[@]}" --check >"$OUT/logs/check.log" 2>&1 ||
   { sed 's/^/  /' "$OUT/logs/check.log" >&2; die "the configuration with these arguments is not valid"; }
+# Channel groups as the nodes will open them (the config may ask for them).
+if [ "$GROUPED" -eq 0 ] && grep -q "channel groups on" "$OUT/logs/check.log"; then
+  GROUPED=1
+  KEY_ARGS+=(--channel-groups)
+fi
+[ "$GROUPED" -eq 0 ] || [ $((PORT + 19)) -le 65535 ] || die "--channel-groups uses ports $PORT..$((PORT + 19)): past 65535"
 
 # The robots' mode (the override, else the config's robot.mode) as robot_node reads
 # it: its --check validates the robot section and says "valid, mode M".
@@ -343,7 +364,16 @@ rt() { [ "$REALTIME" -eq 1 ] && echo chrt -f "$1"; return 0; }
 
 launch() {  # $1: how to run each role (a function printing the prefix)
   local where="$1"
-  start logger $($where log) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
+  if [ "$GROUPED" -eq 0 ]; then
+    start logger $($where log) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
+  else  # one recorder per group in use: the team-wide ones and the team's robots' own
+    mkdir -p "$OUT/groups"
+    local g
+    for g in $(lcm_team_groups "${ROBOTS[@]}"); do
+      start "logger_g$g" $($where log) $(rt 50) $(logger_nice) -- lcm-logger -f -q --lcm-url="$(lcm_group_url "$g")" \
+        "$OUT/groups/g$g.lcmlog"
+    done
+  fi
   start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json" "${KEY_ARGS[@]}"
   local state=()
   for r in "${ROBOTS[@]}"; do
@@ -352,7 +382,7 @@ launch() {  # $1: how to run each role (a function printing the prefix)
       "${state[@]}" "${KEY_ARGS[@]}"
   done
   if [ -n "$KILL_ROBOT" ]; then  # from the logger's host: it hears every pose
-    $($where log) "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-frame "POSE_$KILL_ROBOT" \
+    $($where log) env "LCM_DEFAULT_URL=$(pose_url)" "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-frame "POSE_$KILL_ROBOT" \
       "$KILL_FRAME" --timeout 86400 >"$OUT/logs/kill_watch.log" 2>&1 &
     WATCH_PID=$!
   fi
@@ -470,6 +500,10 @@ stop_all() {
 }
 
 same_host() { :; }                       # every role here, no prefix
+# The team's LCM URL as every process opens it, and its channel groups' (lcm_groups.sh).
+# shellcheck source=tools/lcm_groups.sh
+. "$ROOT/tools/lcm_groups.sh"
+pose_url() { if [ "$GROUPED" -eq 1 ]; then lcm_group_url "$LCM_GROUP_OUTPUTS"; else lcm_base_url; fi; }
 own_host() { echo ip netns exec "${HOST_NS[$1]}" env "LCM_DEFAULT_URL=$URL"; }
 
 if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; then
@@ -523,13 +557,23 @@ else
   echo "  sudo ip link set lo multicast on && sudo ip route add 224.0.0.0/4 dev lo" >&2
   launch same_host
 fi
-echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator, lcm-logger; logs in $OUT/logs" >&2
+if [ "$GROUPED" -eq 1 ]; then
+  echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator; channel groups on LCM ports" \
+    "$(lcm_group_url 0 | sed 's/.*:\([0-9]*\).*/\1/')-$(lcm_group_url 19 | sed 's/.*:\([0-9]*\).*/\1/'), one lcm-logger per group;" \
+    "logs in $OUT/logs" >&2
+else
+  echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator, lcm-logger; logs in $OUT/logs" >&2
+fi
 
 status=0
 supervise || status=1
 stop_all || status=1
 [ -z "$LOSS" ] || loss_report
 [ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
+if [ "$GROUPED" -eq 1 ]; then  # the groups' recordings into one log, in receive order
+  "$BIN/log_merge" -f "$OUT/run.lcmlog" "$OUT"/groups/g*.lcmlog >"$OUT/logs/log_merge.log" 2>&1 ||
+    { cat "$OUT/logs/log_merge.log" >&2; echo "run_team.sh: merging the groups' recordings failed" >&2; exit 1; }
+fi
 echo "run_team.sh: recorded $OUT/run.lcmlog"
 # A keyed team's recording is read as its nodes read the wire: what they would refuse
 # (injected by someone without the key, also recorded) is counted, not evaluated.

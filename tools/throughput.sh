@@ -8,10 +8,11 @@
 #   3. robot_node resident memory (VmRSS) sampled during the lockstep run.
 #
 #   tools/throughput.sh [--config FILE] [--frames N] [--rates "100 200 500 1000 2000"]
-#                       [--mode M] [--build-dir DIR]
+#                       [--mode M] [--channel-groups] [--build-dir DIR]
 #
 # Defaults: config/paper.yaml, 5000 frames per run, rates 100 200 500 1000 2000 Hz,
-# mode ela, the programs of DIR/bin (default $ELASLAM_BUILD_DIR, else build/; the
+# mode ela, one LCM port for every channel (--channel-groups: one port per channel
+# group, grouped_lcm_transport.hpp), the programs of DIR/bin (default $ELASLAM_BUILD_DIR, else build/; the
 # script runs tools/setup.sh and builds them first). Not as root: exits 77 (no
 # namespace).
 set -euo pipefail
@@ -22,6 +23,7 @@ CONFIG="$ROOT/config/paper.yaml"
 FRAMES=5000
 RATES="100 200 500 1000 2000"
 MODE=ela
+GROUPED=()
 INSIDE=0
 PHASE=""
 usage_error() { echo "throughput.sh: $1 (see --help)" >&2; exit 2; }
@@ -33,6 +35,7 @@ while [ $# -gt 0 ]; do
     --rates) RATES="$2"; shift 2 ;;
     --mode) MODE="$2"; shift 2 ;;
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
+    --channel-groups) GROUPED=(--channel-groups); shift ;;
     --inside) INSIDE=1; PHASE="$2"; shift 2 ;;  # internal: one run, inside the namespace
     -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) usage_error "unknown argument '$1'" ;;
@@ -50,12 +53,12 @@ if [ "$INSIDE" -eq 0 ]; then
   "$ROOT/tools/setup.sh" >/dev/null
   cmake --build "$BUILD_DIR" --target simulator robot_node main_robot -j "$(nproc)" >/dev/null
   echo "# throughput of the live team: $(nproc) CPUs, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)"
-  echo "# config $CONFIG, mode $MODE, $FRAMES frames per run"
+  echo "# config $CONFIG, mode $MODE, $FRAMES frames per run${GROUPED:+, channel groups}"
   "$ROOT/tools/netns_run.sh" --port 7690 -- "$0" --inside lockstep --config "$CONFIG" --frames "$FRAMES" --mode "$MODE" \
-    --build-dir "$BUILD_DIR"
+    --build-dir "$BUILD_DIR" "${GROUPED[@]}"
   for f in $RATES; do
     "$ROOT/tools/netns_run.sh" --port 7690 -- "$0" --inside "$f" --config "$CONFIG" --frames "$FRAMES" --mode "$MODE" \
-      --build-dir "$BUILD_DIR"
+      --build-dir "$BUILD_DIR" "${GROUPED[@]}"
   done
   exit 0
 fi
@@ -63,13 +66,13 @@ fi
 LOGS="$(mktemp -d)"
 trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$LOGS"' EXIT
 ROBOTS=($("$BIN/simulator" --config "$CONFIG" --list-robots))
-"$BIN/main_robot" --config "$CONFIG" 2>"$LOGS/main.log" &
+"$BIN/main_robot" --config "$CONFIG" "${GROUPED[@]}" 2>"$LOGS/main.log" &
 PIDS=()
 for r in "${ROBOTS[@]}"; do
-  "$BIN/robot_node" --config "$CONFIG" --robot "$r" --mode "$MODE" 2>"$LOGS/robot$r.log" &
+  "$BIN/robot_node" --config "$CONFIG" --robot "$r" --mode "$MODE" "${GROUPED[@]}" 2>"$LOGS/robot$r.log" &
   PIDS+=($!)
 done
-SIM=(--config "$CONFIG" --frames "$FRAMES" --wait-for-nodes $((${#ROBOTS[@]} + 1)))
+SIM=(--config "$CONFIG" "${GROUPED[@]}" --frames "$FRAMES" --wait-for-nodes $((${#ROBOTS[@]} + 1)))
 if [ "$PHASE" = lockstep ]; then
   SIM+=(--lockstep --rate 100000 --lockstep-timeout-ms 1000)  # deadlines always past: as fast as the team answers
 else

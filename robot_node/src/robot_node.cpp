@@ -521,8 +521,8 @@ bool RobotNode::on_resync(const resync_request_t& msg, std::int64_t now_utime) {
   return true;
 }
 
-bool RobotNode::on_own_channel_pose(const pose_estimate_t& msg) {
-  if (msg.incarnation == incarnation_) return false;  // this process's own POSE, looped back
+bool RobotNode::on_own_channel(std::int64_t incarnation) {
+  if (incarnation == incarnation_) return false;  // this process's own message, looped back
   ++counters_.foreign_poses;
   const bool fresh = last_frame_ > duplicate_until_frame_;
   duplicate_until_frame_ = std::max(last_frame_, 0) + 50;

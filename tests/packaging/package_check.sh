@@ -30,10 +30,10 @@ note() { echo "-- $*"; }
 
 # ---- the expected layout (docs/deployment.md), per package --------------------------
 # Optional parts follow what this build has: programs whose targets exist
-# (log_info, monitor, viewer), tools/spy.sh, the lcm-spy jar (needs a JDK).
+# (log_info, log_merge, monitor, viewer), tools/spy.sh, the lcm-spy jar (needs a JDK).
 tool_programs() {
   local t
-  for t in run_scenario evaluate sweep run_dataset mrclam_import mrclam_stats log_info monitor viewer; do
+  for t in run_scenario evaluate sweep run_dataset mrclam_import mrclam_stats log_info log_merge monitor viewer; do
     [ -x "$BUILD/bin/$t" ] && echo "$t"
   done
   return 0
@@ -175,6 +175,7 @@ etc_check() { # ETC_DIR
   tail -n "$n" "$yaml" | cmp -s - "$SRC/config/paper.yaml" || fail "$yaml: does not end with config/paper.yaml"
   grep -qx 'LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608' "$env" || fail "$env: LCM_DEFAULT_URL"
   grep -q "^  key_file: .*/team.key$" "$yaml" || fail "$yaml: no team.key_file (authentication on by default)"
+  grep -qx "  channel_groups: true" "$yaml" || fail "$yaml: no team.channel_groups: true (on in a deployment)"
   ! grep -v '^#' "$env" | grep -v '^$' | grep -v '^[A-Z_][A-Z0-9_]*=' || fail "$env: a line that is not KEY=VALUE"
 }
 

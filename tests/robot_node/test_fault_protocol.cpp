@@ -285,14 +285,10 @@ TEST(Incarnations, ARobotSeesASecondSenderOfItsPose) {
   const TeamConfig cfg = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
   RobotNode r(cfg.robot, 2);
   r.set_incarnation(7);
-  pose_estimate_t p{};
-  p.robot_id = 2;
-  p.incarnation = 7;
-  EXPECT_FALSE(r.on_own_channel_pose(p));  // its own, looped back
+  EXPECT_FALSE(r.on_own_channel(7));  // its own, looped back
   EXPECT_EQ(r.status_msg(0).fault_flags, 0);
-  p.incarnation = 8;
-  EXPECT_TRUE(r.on_own_channel_pose(p));
-  EXPECT_FALSE(r.on_own_channel_pose(p));  // said once, not every frame
+  EXPECT_TRUE(r.on_own_channel(8));
+  EXPECT_FALSE(r.on_own_channel(8));  // said once, not every frame
   EXPECT_TRUE(r.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
 }
 

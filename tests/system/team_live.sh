@@ -9,10 +9,13 @@
 # With --team-map (test system_team_map): config/paper.yaml with the team map on
 # (robot.team_map.fuse, main.team_map_period_frames 10): TEAM_MAP_<r> over LCM, held
 # by each robot until its next frame, gives the in-process run's poses too.
-#   tests/system/team_live.sh BUILD_DIR [--hosts | --team-map]
+# With --channel-groups (test system_team_groups): run_team.sh --channel-groups, one
+# LCM port per channel group and one lcm-logger per group, merged (log_merge): the
+# same poses, and the merged recording is as complete.
+#   tests/system/team_live.sh BUILD_DIR [--hosts | --team-map | --channel-groups]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-BUILD="$(cd "${1:?usage: team_live.sh BUILD_DIR [--hosts | --team-map]}" && pwd)"
+BUILD="$(cd "${1:?usage: team_live.sh BUILD_DIR [--hosts | --team-map | --channel-groups]}" && pwd)"
 HOSTS="${2:-}"
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
@@ -34,6 +37,15 @@ if [ "$HOSTS" = --hosts ]; then
   "$ROOT/tools/run_team.sh" --inside --hosts --port 7699 --build-dir "$BUILD" --out "$OUT/live" "${ARGS[@]}" \
     > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
   grep "hosts on a bridge" "$OUT/live.txt"
+elif [ "$HOSTS" = --channel-groups ]; then
+  "$ROOT/tools/netns_run.sh" --port 7800 -- "$ROOT/tools/run_team.sh" --inside --channel-groups --build-dir "$BUILD" \
+    --out "$OUT/live" "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
+  # Every process opened the groups; one recorder per group in use (4 + 3 robots).
+  for p in simulator main_robot robot_node_1 robot_node_2 robot_node_3; do
+    grep -q "LCM in channel groups" "$OUT/live/logs/$p.log" || { echo "$p: not in channel groups"; exit 1; }
+  done
+  [ "$(ls "$OUT/live/groups" | wc -l)" -eq 7 ] || { ls "$OUT/live/groups"; exit 1; }
+  cat "$OUT/live/logs/log_merge.log"
 else
   "$ROOT/tools/netns_run.sh" --port 7693 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT/live" \
     "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }

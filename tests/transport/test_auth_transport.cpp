@@ -430,6 +430,41 @@ TEST_F(KeyFile, TheConfigNamesTheKeyAndKeyFileOverridesIt) {
   EXPECT_EQ(origin, "--key-file");
 }
 
+// team.channel_groups (grouped_lcm_transport.hpp): off unless the config or
+// --channel-groups turns it on; a bad value, or a URL without room for the groups'
+// ports, is a configuration error (exit 2 at start), said with its reason.
+TEST_F(KeyFile, ChannelGroupsComeFromTheConfigOrTheFlag) {
+  write(dir + "/on.yaml", "team:\n  channel_groups: true\n", 0600);
+  write(dir + "/both.yaml", "team:\n  key_file: /k\n  channel_groups: false\n", 0600);
+  write(dir + "/none.yaml", "robot: {}\n", 0600);
+  write(dir + "/bad.yaml", "team:\n  channel_groups: 7\n", 0600);
+  EXPECT_TRUE(read_team_section(dir + "/on.yaml").channel_groups);
+  EXPECT_FALSE(read_team_section(dir + "/both.yaml").channel_groups);
+  EXPECT_EQ(read_team_section(dir + "/both.yaml").key_file, "/k");
+  EXPECT_FALSE(read_team_section(dir + "/none.yaml").channel_groups);
+  EXPECT_FALSE(read_team_section("").channel_groups);
+  EXPECT_THROW(read_team_section(dir + "/bad.yaml"), config::ConfigError);
+
+  TransportArgs args;
+  args.lcm_url = "udpm://239.255.76.67:7700?ttl=0";
+  bool on = true;
+  EXPECT_TRUE(channel_groups_on(args, dir + "/none.yaml", "test", &on));
+  EXPECT_FALSE(on);
+  EXPECT_TRUE(channel_groups_on(args, dir + "/on.yaml", "test", &on));
+  EXPECT_TRUE(on);
+  args.channel_groups = true;  // --channel-groups
+  EXPECT_TRUE(channel_groups_on(args, dir + "/both.yaml", "test", &on));
+  EXPECT_TRUE(on);
+  EXPECT_FALSE(channel_groups_on(args, dir + "/bad.yaml", "test", &on));  // the team: section is wrong
+  args.lcm_url = "memq://";
+  EXPECT_FALSE(channel_groups_on(args, dir + "/none.yaml", "test", &on));  // groups need udpm://
+  args.lcm_url = "udpm://239.255.76.67:65530";
+  EXPECT_FALSE(channel_groups_on(args, dir + "/none.yaml", "test", &on));  // ports past 65535
+  args.channel_groups = false;
+  EXPECT_TRUE(channel_groups_on(args, dir + "/none.yaml", "test", &on));  // off: the URL is LCM's business
+  EXPECT_FALSE(on);
+}
+
 TEST_F(KeyFile, ASystemdCredentialIsTakenWhateverItsModeBits) {
   // systemd's copy (LoadCredential=) is the service's only, by an ACL that shows as
   // group bits, and root's shown as nobody under PrivateUsers=.

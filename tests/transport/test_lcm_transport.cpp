@@ -5,6 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "elaslam/common/channels.hpp"
+#include "elaslam/common/contract.hpp"
+#include "elaslam/transport/grouped_lcm_transport.hpp"
 #include "elaslam/transport/lcm_transport.hpp"
 
 namespace elaslam::transport {
@@ -64,6 +67,86 @@ TEST(LcmTransport, ABadUrlGivesATransportThatSaysSo) {
   EXPECT_EQ(t.subscribe("A", &record, &log, 5), 0);
   EXPECT_FALSE(pub(t, "A", "1"));
   EXPECT_LT(t.handle_timeout(0), 0);
+}
+
+// Channel groups (grouped_lcm_transport.hpp): which channel goes on which port. The
+// live behaviour (isolation between ports) is system_channel_groups.
+
+TEST(ChannelGroups, EveryChannelHasTheGroupOfItsReaders) {
+  using namespace channels;
+  static_assert(kMaxGroupRobotId == contract::kMaxRobots);
+  for (const std::string& sfx : {std::string(), std::string("_SIM2")}) {
+    EXPECT_EQ(channel_group(dynamic_notice(sfx), sfx), kGroupTeam);
+    EXPECT_EQ(channel_group(lmap_resync(sfx), sfx), kGroupTeam);
+    EXPECT_EQ(channel_group(status_main(sfx), sfx), kGroupTeam);
+    EXPECT_EQ(channel_group(status_sim(sfx), sfx), kGroupTeam);
+    EXPECT_EQ(channel_group(status_robot(7, sfx), sfx), kGroupTeam);
+    EXPECT_EQ(channel_group(run_info(sfx), sfx), kGroupTeam);
+    EXPECT_EQ(channel_group(lmap_event(sfx), sfx), kGroupOutputs);
+    EXPECT_EQ(channel_group(lmap_snapshot(sfx), sfx), kGroupOutputs);
+    EXPECT_EQ(channel_group(pose(1, sfx), sfx), kGroupOutputs);
+    EXPECT_EQ(channel_group(pose(16, sfx), sfx), kGroupOutputs);
+    EXPECT_EQ(channel_group(global_map(sfx), sfx), kGroupMap);
+    EXPECT_EQ(channel_group(ground_truth(sfx), sfx), kGroupObservers);
+    EXPECT_EQ(channel_group(candidates(3, sfx), sfx), kGroupObservers);
+    for (int r = 1; r <= kMaxGroupRobotId; ++r) {
+      EXPECT_EQ(channel_group(sensor(r, sfx), sfx), kGroupRobot + r);
+      EXPECT_EQ(channel_group(team_map(r, sfx), sfx), kGroupRobot + r);
+    }
+    EXPECT_EQ(channel_group(sensor(17, sfx), sfx), kGroupTeam);  // no node accepts robot 17
+    EXPECT_EQ(channel_group("SOMETHING_ELSE" + sfx, sfx), kGroupTeam);
+  }
+  EXPECT_EQ(channels::channel_group("SENSOR_1", "_SIM2"), kGroupTeam);  // another team's name: not ours
+  EXPECT_EQ(kGroupRobot + kMaxGroupRobotId, kChannelGroups - 1);
+}
+
+TEST(ChannelGroups, GroupUrlMovesOnlyThePort) {
+  std::string why;
+  EXPECT_EQ(group_url("udpm://239.255.76.67:7700?ttl=0&recv_buf_size=8388608", 5, &why),
+            "udpm://239.255.76.67:7705?ttl=0&recv_buf_size=8388608");
+  EXPECT_EQ(why, "");
+  EXPECT_EQ(group_url("", 0, &why), "udpm://239.255.76.67:7667?ttl=0");  // LCM's default
+  EXPECT_EQ(group_url("udpm://239.255.76.68?ttl=1", 2, &why), "udpm://239.255.76.68:7669?ttl=1");
+  EXPECT_EQ(group_url("udpm://239.255.76.67:7667", 20, &why), "udpm://239.255.76.67:7687");
+  // Refused, each with the reason.
+  EXPECT_EQ(group_url("memq://", 0, &why), "");
+  EXPECT_NE(why.find("udpm://"), std::string::npos) << why;
+  EXPECT_EQ(group_url("udpm://239.255.76.67:65530", 0, &why), "");
+  EXPECT_NE(why.find("past 65535"), std::string::npos) << why;
+  EXPECT_EQ(group_url("udpm://239.255.76.67:7x7", 0, &why), "");
+  EXPECT_NE(why.find("not a port"), std::string::npos) << why;
+  EXPECT_EQ(group_url("udpm://:7667", 0, &why), "");
+  EXPECT_NE(why.find("no multicast address"), std::string::npos) << why;
+}
+
+TEST(ChannelGroups, APatternJoinsTheGroupsOfTheChannelsItMatches) {
+  using namespace channels;
+  const auto bit = [](int g) { return 1u << g; };
+  EXPECT_EQ(groups_of_pattern(sensor(2), ""), bit(kGroupRobot + 2));
+  EXPECT_EQ(groups_of_pattern(any_pose(), ""), bit(kGroupOutputs));
+  EXPECT_EQ(groups_of_pattern(any_pose("_B"), "_B"), bit(kGroupOutputs));
+  EXPECT_EQ(groups_of_pattern(global_map(), ""), bit(kGroupMap));
+  EXPECT_EQ(groups_of_pattern("STATUS_(ROBOT_[0-9]+|MAIN)", ""), bit(kGroupTeam));
+  EXPECT_EQ(groups_of_pattern("(LMAP_EVENT|GLOBAL_MAP)", ""), bit(kGroupOutputs) | bit(kGroupMap));
+  std::uint32_t all = 0;
+  for (int g = 0; g < kChannelGroups; ++g) all |= bit(g);
+  EXPECT_EQ(groups_of_pattern(".*", ""), all);  // a recorder: every group
+  EXPECT_EQ(groups_of_pattern(any_sensor(), ""), all & ~0xfu);  // every robot's group, nothing else
+  // Names the system does not have go where unknown channels are published.
+  EXPECT_EQ(groups_of_pattern("EXAMPLE", ""), bit(kGroupTeam));
+  EXPECT_EQ(groups_of_pattern("((", ""), bit(kGroupTeam));  // not a std::regex: LCM decides
+}
+
+TEST(ChannelGroups, ATransportThatCannotHaveGroupsSaysWhy) {
+  GroupedLcmTransport memq("memq://", "");
+  EXPECT_FALSE(memq.good());
+  EXPECT_NE(memq.error().find("udpm://"), std::string::npos) << memq.error();
+  std::vector<std::string> log;
+  EXPECT_EQ(memq.subscribe("A", &record, &log, 5), 0);
+  EXPECT_FALSE(pub(memq, "A", "1"));
+  EXPECT_LT(memq.handle_timeout(0), 0);
+  EXPECT_TRUE(memq.channel_groups());
+  EXPECT_FALSE(LcmTransport("memq://").channel_groups());
 }
 
 }  // namespace

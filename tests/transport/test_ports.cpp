@@ -3,6 +3,8 @@
 // channel suffix, and the simulator's lockstep waits.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <atomic>
 #include <cstdio>
 #include <string>
@@ -127,6 +129,58 @@ TEST_F(RobotOnBus, EveryProcessedFrameIsTimedByStage) {
     EXPECT_LE(h->max(), h == &st.receive ? 50000 + loop : loop);
   }
   EXPECT_GE(st.receive.quantile(0.5), 50000);
+}
+
+/// An in-process bus that says it is in channel groups (grouped_lcm_transport.hpp):
+/// what a node subscribes to is then what wakes it. Records the patterns.
+class GroupedBus final : public transport::Transport {
+ public:
+  explicit GroupedBus(InProcessTransport& bus) : bus_(bus) {}
+  bool good() const override { return true; }
+  const char* kind() const override { return "in-process (channel groups)"; }
+  bool publish(const std::string& channel, const void* data, std::size_t size) override {
+    return bus_.publish(channel, data, size);
+  }
+  int subscribe(const std::string& pattern, transport::RawHandler handler, void* context, int queue) override {
+    patterns.push_back(pattern);
+    return bus_.subscribe(pattern, handler, context, queue);
+  }
+  void unsubscribe(int id) override { bus_.unsubscribe(id); }
+  int handle_timeout(int timeout_ms) override { return bus_.handle_timeout(timeout_ms); }
+  bool channel_groups() const override { return true; }
+  std::vector<std::string> patterns;
+
+ private:
+  InProcessTransport& bus_;
+};
+
+// In channel groups a robot does not read its own POSE channel (that would wake it for
+// every robot's POSE): a second sender with its id shows on its STATUS channel instead.
+TEST(RobotPorts, InChannelGroupsASecondSenderShowsOnTheRobotsStatus) {
+  InProcessTransport bus;
+  GroupedBus grouped(bus);
+  NodeShell shell(grouped, ShellOptions("robot_node 1", "", nullptr));
+  RobotNode node(load_robot_options(kConfig), 1);
+  node.set_incarnation(100);
+  RobotPorts<NodeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  EXPECT_EQ(std::count(grouped.patterns.begin(), grouped.patterns.end(), channels::status_robot(1)), 1);
+  EXPECT_EQ(std::count(grouped.patterns.begin(), grouped.patterns.end(), channels::pose(1)), 0);
+
+  NodeShell other(bus, ShellOptions("robot_node 1 (second)", "", nullptr));
+  pose_estimate_t pose{};
+  pose.robot_id = 1;
+  pose.incarnation = 200;
+  other.publish(channels::pose(1), pose);  // not read: no fault from a POSE
+  ports.publish_status();                  // its own STATUS, looped back: no fault
+  bus.dispatch_all();
+  EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER, 0);
+  node_status_t st = node.status_msg(0);
+  st.incarnation = 200;  // the second process's STATUS
+  other.publish(channels::status_robot(1), st);
+  bus.dispatch_all();
+  EXPECT_NE(node.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER, 0);
+  EXPECT_EQ(node.counters().foreign_poses, 1);
 }
 
 TEST(RobotPorts, BadInputIsCountedByTheNodeAndLoggedByTheShell) {

@@ -56,4 +56,6 @@ void LcmTransport::unsubscribe(int id) {
 
 int LcmTransport::handle_timeout(int timeout_ms) { return impl_->lc.handleTimeout(timeout_ms); }
 
+int LcmTransport::fileno() { return impl_->lc.getFileno(); }
+
 }  // namespace elaslam::transport

@@ -9,8 +9,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include "elaslam/common/channels.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/transport/auth_transport.hpp"
+#include "elaslam/transport/grouped_lcm_transport.hpp"
 #include "elaslam/transport/lcm_transport.hpp"
 #include "elaslam/transport/team_key.hpp"
 
@@ -53,6 +55,24 @@ void add_transport_options(CLI::App& app, TransportArgs* args) {
           "[A-Za-z0-9_]*", "channel suffix"));
   app.add_option("--key-file", args->key_file,
                  "team key file: authenticate every message (default: the config's team.key_file; none: off)");
+  app.add_flag("--channel-groups", args->channel_groups,
+               "one UDP port per channel group, from the URL's port up (default: the config's team.channel_groups)");
+}
+
+TeamSection read_team_section(const std::string& config_path) {
+  TeamSection t;
+  if (config_path.empty()) return t;
+  config::Document doc = config::Document::from_file(config_path);
+  doc.section(
+      "team",
+      [&](config::Reader& r) {
+        r.read_optional("key_file", &t.key_file);
+        r.read_optional("channel_groups", &t.channel_groups);
+      },
+      true);
+  doc.allow_sections();
+  doc.finish();
+  return t;
 }
 
 std::string team_key_file(const TransportArgs& args, const std::string& config_path, std::string* origin) {
@@ -63,11 +83,7 @@ std::string team_key_file(const TransportArgs& args, const std::string& config_p
     return args.key_file;
   }
   if (config_path.empty()) return "";
-  config::Document doc = config::Document::from_file(config_path);
-  std::string path;
-  doc.section("team", [&](config::Reader& r) { r.read_optional("key_file", &path); }, true);
-  doc.allow_sections();
-  doc.finish();
+  const std::string path = read_team_section(config_path).key_file;
   *origin = "team.key_file in " + config_path;
   const char* creds = std::getenv("CREDENTIALS_DIRECTORY");
   if (path.empty() || creds == nullptr || *creds == '\0') return path;
@@ -95,7 +111,21 @@ std::string describe_url(const std::string& url) {
   return url.empty() ? used + " (LCM_DEFAULT_URL)" : used;
 }
 
-std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& who) {
+std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& who, bool channel_groups,
+                                    const std::string& suffix) {
+  if (channel_groups) {
+    auto g = std::make_unique<GroupedLcmTransport>(effective_url(url), suffix);
+    if (g->good()) {
+      std::string why;
+      std::fprintf(stderr, "%s: LCM in channel groups: %s up to %s\n", who.c_str(),
+                   group_url(effective_url(url), 0, &why).c_str(),
+                   group_url(effective_url(url), channels::kChannelGroups - 1, &why).c_str());
+      return g;
+    }
+    std::fprintf(stderr, "%s: cannot open LCM in channel groups: %s (see tools/netns_run.sh)\n", who.c_str(),
+                 g->error().c_str());
+    return nullptr;
+  }
   auto t = std::make_unique<LcmTransport>(effective_url(url));
   if (t->good()) return t;
   std::fprintf(stderr,
@@ -121,6 +151,22 @@ bool configured_team_key(const TransportArgs& args, const std::string& config_pa
   return true;
 }
 
+bool channel_groups_on(const TransportArgs& args, const std::string& config_path, const std::string& who, bool* on) {
+  try {
+    const bool configured = read_team_section(config_path).channel_groups;  // checked also under the flag
+    *on = args.channel_groups || configured;
+  } catch (const config::ConfigError& e) {
+    std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
+    return false;
+  }
+  std::string why;
+  if (*on && group_url(effective_url(args.lcm_url), 0, &why).empty()) {  // restarting will not help
+    std::fprintf(stderr, "%s: %s\n", who.c_str(), why.c_str());
+    return false;
+  }
+  return true;
+}
+
 int check_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who) {
   TeamKey key;
   std::string path, origin;
@@ -130,6 +176,16 @@ int check_team_key(const TransportArgs& args, const std::string& config_path, co
   else
     std::printf("%s: authentication on, team key %s (%s): readable and valid\n", who.c_str(), path.c_str(),
                 origin.c_str());
+  bool groups = false;
+  if (!channel_groups_on(args, config_path, who, &groups)) return 2;
+  if (!groups) {
+    std::printf("%s: channel groups off: every channel on the LCM URL's port\n", who.c_str());
+    return 0;
+  }
+  std::string why;
+  const std::string url = effective_url(args.lcm_url);
+  std::printf("%s: channel groups on: %s up to %s\n", who.c_str(), group_url(url, 0, &why).c_str(),
+              group_url(url, channels::kChannelGroups - 1, &why).c_str());
   return 0;
 }
 
@@ -141,7 +197,12 @@ std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string
     *exit_code = 2;
     return nullptr;
   }
-  auto lcm = open_lcm(args.lcm_url, who);
+  bool groups = false;
+  if (!channel_groups_on(args, config_path, who, &groups)) {
+    *exit_code = 2;
+    return nullptr;
+  }
+  auto lcm = open_lcm(args.lcm_url, who, groups, args.channel_suffix);
   if (!lcm) {
     *exit_code = 1;
     return nullptr;

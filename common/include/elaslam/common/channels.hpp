@@ -78,4 +78,38 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
   return false;
 }
 
+/// Channel groups (team.channel_groups, docs/decisions.md "Channel groups"): every
+/// group has a UDP port of its own, the base port + its number, so that a process is
+/// woken only by the groups it reads. By reader:
+/// - kGroupTeam: DYNAMIC_NOTICE, LMAP_RESYNC, STATUS_*, RUN_INFO and any other name
+///   (everyone; rare messages);
+/// - kGroupOutputs: LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r> (main_robot; a lockstep
+///   simulator). One port, so one socket: a robot's events of a frame reach main_robot
+///   before its POSE of that frame, which is when main_robot sends the frame's map;
+/// - kGroupMap: GLOBAL_MAP (the robots);
+/// - kGroupObservers: GROUND_TRUTH, CANDIDATES_<r> (the viewer and recorders only);
+/// - kGroupRobot + r: SENSOR_<r>, TEAM_MAP_<r> (robot r alone).
+/// Recorders and the viewer join every group. A robot watches for a second sender
+/// with its id on its STATUS_ROBOT_<r> then, not on its POSE_<r> (robot_node.hpp).
+inline constexpr int kGroupTeam = 0, kGroupOutputs = 1, kGroupMap = 2, kGroupObservers = 3, kGroupRobot = 3;
+inline constexpr int kMaxGroupRobotId = 16;  // = contract::kMaxRobots (grouped_lcm_transport.cpp checks)
+inline constexpr int kChannelGroups = kGroupRobot + kMaxGroupRobotId + 1;
+
+/// The group of `channel` (with the team's `suffix`); robot ids above
+/// kMaxGroupRobotId, which no node accepts, fall in kGroupTeam.
+inline int channel_group(std::string_view channel, std::string_view suffix = "") {
+  for (std::string_view p : {kSensorPrefix, kTeamMapPrefix}) {
+    const int r = robot_of(channel, p, suffix);
+    if (r > 0) return r <= kMaxGroupRobotId ? kGroupRobot + r : kGroupTeam;
+  }
+  if (robot_of(channel, kPosePrefix, suffix) > 0) return kGroupOutputs;
+  if (robot_of(channel, kCandidatesPrefix, suffix) > 0) return kGroupObservers;
+  if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return kGroupTeam;
+  const std::string_view base = channel.substr(0, channel.size() - suffix.size());
+  if (base == kLmapEvent || base == kLmapSnapshot) return kGroupOutputs;
+  if (base == kGlobalMap) return kGroupMap;
+  if (base == kGroundTruth) return kGroupObservers;
+  return kGroupTeam;
+}
+
 }  // namespace elaslam::channels

@@ -41,7 +41,7 @@ struct RobotNodeCounters {
   std::int64_t notices_deferred = 0;  // notices for a frame this robot had not processed yet: held until it has
   std::int64_t notices_repaired = 0;  // moving landmarks learnt from GLOBAL_MAP whose notice never came
   std::int64_t resyncs_answered = 0;  // snapshots sent on main_robot's request
-  std::int64_t foreign_poses = 0;     // POSE_<r> messages of another incarnation: a second sender with this id
+  std::int64_t foreign_poses = 0;     // own POSE_<r> (or STATUS_ROBOT_<r>) messages of another incarnation: a second sender with this id
   RefusalCounts refused;              // refused messages per reason (their sum is rejected_inputs)
   std::int64_t odometry_reanchors = 0;  // odometer origin changes taken (a confirmed jump)
   std::int64_t filter_full = 0;       // landmarks not added because every filter slot was taken
@@ -91,10 +91,11 @@ class RobotNode {
   /// ready (snapshot_chunk()), at most one per processed frame.
   bool on_resync(const resync_request_t& msg, std::int64_t now_utime);
 
-  /// A POSE_<r> message seen on this robot's own channel. Returns true when it is
+  /// A message of `incarnation` seen on one of this robot's own output channels (its
+  /// POSE_<r>, or its STATUS_ROBOT_<r> in channel groups). Returns true when it is
   /// another sender's (another incarnation): two processes run as this robot; the
   /// STATUS fault flag stays set for 50 frames after the last one.
-  bool on_own_channel_pose(const pose_estimate_t& msg);
+  bool on_own_channel(std::int64_t incarnation);
 
   void count_decode_error() { ++counters_.decode_errors; }
   void count_queue_drops(std::int64_t n) { counters_.queue_drops += n; }
@@ -215,7 +216,7 @@ struct RobotQueues {
   int notice = 1000;
   int global_map = 1000;  // chunks: several per publication
   int resync = 100;
-  int own_pose = 100;     // this robot's own POSE channel: a second sender with this id
+  int own_pose = 100;     // this robot's own POSE (or STATUS) channel: a second sender with this id
   int team_map = 1000;    // TEAM_MAP_<r> chunks (robot.team_map.fuse)
 };
 
@@ -271,8 +272,16 @@ class RobotPorts {
     const int resync = shell_.template subscribe<resync_request_t>(
         channels::lmap_resync(shell_.suffix()), [this](const resync_request_t& m, const std::string&) { on_resync(m); },
         queues.resync);
-    const int own = shell_.template subscribe<pose_estimate_t>(
-        pose_, [this](const pose_estimate_t& m, const std::string&) { on_own_pose(m); }, queues.own_pose);
+    // A second sender with this id shows on this robot's own POSE, every frame; in
+    // channel groups on its STATUS, about once a second, as reading POSE_<r> would
+    // wake this robot for every robot's POSE (channels.hpp).
+    const int own = shell_.transport().channel_groups()
+                        ? shell_.template subscribe<node_status_t>(
+                              status_, [this](const node_status_t& m, const std::string&) { on_own(status_, m.incarnation); },
+                              queues.own_pose)
+                        : shell_.template subscribe<pose_estimate_t>(
+                              pose_, [this](const pose_estimate_t& m, const std::string&) { on_own(pose_, m.incarnation); },
+                              queues.own_pose);
     int team = 1;
     if (node_.robot().options().team_map_fuse)
       team = shell_.template subscribe<global_map_t>(
@@ -338,9 +347,9 @@ class RobotPorts {
     if (node_.on_resync(msg, shell_.now_utime())) publish_snapshot();
   }
 
-  void on_own_pose(const pose_estimate_t& msg) {
-    if (node_.on_own_channel_pose(msg))  // loudly, not rate-limited: an operator must see it
-      shell_.say("FAULT: another process publishes " + pose_ + " (incarnation " + std::to_string(msg.incarnation) +
+  void on_own(const std::string& channel, std::int64_t incarnation) {
+    if (node_.on_own_channel(incarnation))  // loudly, not rate-limited: an operator must see it
+      shell_.say("FAULT: another process publishes " + channel + " (incarnation " + std::to_string(incarnation) +
                  ", this one " + std::to_string(node_.incarnation()) + "): two robots with one id");
   }
 

@@ -181,6 +181,7 @@ class AuthenticatedTransport final : public Transport {
   void unsubscribe(int id) override;
   int handle_timeout(int timeout_ms) override;
   TransportRefusals refusals() const override;
+  bool channel_groups() const override { return inner_->channel_groups(); }
 
   const AuthCounters& counters() const { return auth_.counters(); }
   const Authenticator& authenticator() const { return auth_; }

@@ -24,6 +24,10 @@ class LcmTransport final : public Transport {
   void unsubscribe(int id) override;
   int handle_timeout(int timeout_ms) override;
 
+  /// The descriptor that is readable when a message waits (LCM's getFileno; for udpm://
+  /// it opens the receive socket): for a caller that polls several transports.
+  int fileno();
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -31,10 +31,22 @@ struct TransportArgs {
   std::string lcm_url;         // "" : $LCM_DEFAULT_URL, else LCM's default
   std::string channel_suffix;  // e.g. "_SIM2": two teams on one LCM network
   std::string key_file;        // --key-file: the team key, over the config's team.key_file
+  bool channel_groups = false;  // --channel-groups: one port per channel group, or the config's team.channel_groups
 };
 
+/// The config's team: section (all optional): the team key file and channel groups.
+struct TeamSection {
+  std::string key_file;         // "" : authentication off
+  bool channel_groups = false;  // grouped_lcm_transport.hpp
+};
+
+/// The team: section of the config at `config_path` ("" : none, the defaults). Throws
+/// config::ConfigError when it is not valid.
+TeamSection read_team_section(const std::string& config_path);
+
 /// --lcm-url, --channel-suffix (letters, digits and '_': the suffix becomes part of
-/// subscription patterns, where other characters would mean something) and --key-file.
+/// subscription patterns, where other characters would mean something), --key-file and
+/// --channel-groups.
 void add_transport_options(CLI::App& app, TransportArgs* args);
 
 /// The team key file: --key-file, else team.key_file of the config at `config_path`
@@ -52,23 +64,35 @@ std::string team_key_file(const TransportArgs& args, const std::string& config_p
 bool configured_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who,
                          TeamKey* key, std::string* path, std::string* origin);
 
-/// --check's part for authentication: prints whether it is on and with which key file,
-/// on stdout; 0, or 2 (said why on stderr) when the key would stop the process at start.
+/// Whether the process opens LCM in channel groups: --channel-groups, else the
+/// config's team.channel_groups. False, after printing why to stderr as `who`, when
+/// the team: section is not valid or, with groups on, the LCM URL leaves them no
+/// ports (not udpm://, or past port 65535): a configuration error.
+bool channel_groups_on(const TransportArgs& args, const std::string& config_path, const std::string& who, bool* on);
+
+/// --check's part for the transport: prints on stdout whether authentication is on
+/// and with which key file, and whether channel groups are on and on which ports; 0,
+/// or 2 (said why on stderr) when the key or the groups would stop the process at
+/// start.
 int check_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who);
 
 /// The URL for start-up lines: the given one, else $LCM_DEFAULT_URL (so marked), else
 /// LCM's default.
 std::string describe_url(const std::string& url);
 
-/// The LCM transport for `url`; nullptr, after printing why to stderr as `who`, when
-/// it cannot be opened.
-std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& who);
+/// The LCM transport for `url` (with `channel_groups`: one port per group of the
+/// channels with `suffix`, grouped_lcm_transport.hpp); nullptr, after printing why to
+/// stderr as `who`, when it cannot be opened.
+std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& who, bool channel_groups = false,
+                                    const std::string& suffix = "");
 
-/// The process's transport: LCM at args.lcm_url, wrapped in an AuthenticatedTransport
+/// The process's transport: LCM at args.lcm_url (in channel groups with
+/// --channel-groups or the config's team.channel_groups), wrapped in an AuthenticatedTransport
 /// (auth_transport.hpp) as `sender_id` with a new incarnation (the wall clock) when a
 /// team key is configured (team_key_file). nullptr, after printing why to stderr as
 /// `who`, when it cannot be opened; *exit_code is then 2 for a configuration error
-/// (the key file or the team: section: restarting will not help) and 1 for LCM.
+/// (the key file, the team: section, a URL without room for the channel groups:
+/// restarting will not help) and 1 for LCM.
 /// Refused messages are said on `log` at a bounded rate (nullptr: counted only).
 std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
                                     const std::string& who, int* exit_code, std::FILE* log = stderr);

@@ -66,6 +66,11 @@ class Transport {
   /// Messages received but refused before any subscriber saw them (message
   /// authentication: auth_transport.hpp); none for a transport that refuses none.
   virtual TransportRefusals refusals() const { return {}; }
+
+  /// True when a subscription costs the process the wake-ups of its channel group only
+  /// (grouped_lcm_transport.hpp), so that a node should not subscribe to a busy channel
+  /// it can do without; false when every process receives every channel anyway.
+  virtual bool channel_groups() const { return false; }
 };
 
 }  // namespace elaslam::transport
