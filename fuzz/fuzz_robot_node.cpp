@@ -1,7 +1,7 @@
 // libFuzzer target: every message handler of robot_node, as the process runs them
 // (RobotPorts on a NodeShell: decode into the preallocated message, validate, apply,
 // publish what the node answers), on robot 1 with config/paper.yaml (a smaller filter: options()). An input is a
-// burst of SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MAP, LMAP_RESYNC, POSE_1 and TEAM_MAP_1 messages (the team map on)
+// burst of SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, POSE_1 and TEAM_MAP_1 messages (the team map on)
 // (fuzz_input.hpp). The node is made anew per input: a crash reproduces from its input alone.
 // After each input the node's status and state must still be producible.
 #include <cstdint>
@@ -33,7 +33,7 @@ const RobotOptions& options() {
   return o;
 }
 
-const std::string kChannels[] = {channels::sensor(1), channels::dynamic_notice(), channels::global_map(),
+const std::string kChannels[] = {channels::sensor(1), channels::dynamic_notice(), channels::global_moving(),
                                  channels::lmap_resync(), channels::pose(1), channels::team_map(1)};
 
 }  // namespace

@@ -6,7 +6,7 @@ and state files.
 
     fuzz/make_corpus.py --log RUN.lcmlog [--robot-state FILE] [--main-state FILE] [--out fuzz/corpus]
 
-Writes OUT/fuzz_robot_node/ (robot 1's inputs: SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MAP,
+Writes OUT/fuzz_robot_node/ (robot 1's inputs: SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MOVING,
 LMAP_RESYNC, POSE_1), OUT/fuzz_main_robot/ (LMAP_EVENT, LMAP_SNAPSHOT, POSE_1, POSE_2,
 POSE_3, POSE_7), OUT/fuzz_viewer/ (RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE,
 STATUS_ROBOT_1, CANDIDATES_1, GROUND_TRUTH), each a few windows of consecutive frames from the first frame on;
@@ -24,7 +24,7 @@ _here = os.path.dirname(os.path.realpath(__file__))
 sys.path.insert(0, os.path.join(_here, "..", "tools"))
 from elaslam_tool import add_version, need, parse_args, run_in_venv  # noqa: E402
 
-ROBOT = ["SENSOR_1", "DYNAMIC_NOTICE", "GLOBAL_MAP", "LMAP_RESYNC", "POSE_1"]
+ROBOT = ["SENSOR_1", "DYNAMIC_NOTICE", "GLOBAL_MOVING", "LMAP_RESYNC", "POSE_1"]
 MAIN = ["LMAP_EVENT", "LMAP_SNAPSHOT", "POSE_1", "POSE_2", "POSE_3", "POSE_7"]
 VIEWER = ["RUN_INFO", "POSE_1", "POSE_2", "POSE_3", "GLOBAL_MAP", "DYNAMIC_NOTICE", "STATUS_ROBOT_1", "CANDIDATES_1",
           "GROUND_TRUTH"]

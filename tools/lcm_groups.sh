@@ -1,8 +1,8 @@
 # Sourced by tools/run_team.sh and tools/replay_team.sh: channel groups in shell
 # (team.channel_groups; grouped_lcm_transport.hpp, channels.hpp). Each group of
 # channels has its own port, the team's base port + the group's number:
-#   0 team-wide (DYNAMIC_NOTICE, LMAP_RESYNC, STATUS_*, RUN_INFO), 1 the robots'
-#   outputs (LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r>), 2 GLOBAL_MAP, 3 observers
+#   0 team-wide (DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO), 1 the
+#   robots' outputs (LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r>), 2 GLOBAL_MAP, 3 observers
 #   (GROUND_TRUTH, CANDIDATES_<r>), 3+r robot r's inputs (SENSOR_<r>, TEAM_MAP_<r>).
 # lcm-logger and lcm-logplayer open one URL each: one per group.
 #

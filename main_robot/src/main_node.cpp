@@ -345,6 +345,10 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
   return n;
 }
 
+int MainNode::make_moving_set(std::int64_t now_utime, int frame) {
+  return make_map_chunks(now_utime, frame, 0, /*moving_only=*/true);
+}
+
 int MainNode::make_team_map(int robot_id, std::int64_t now_utime, int frame) {
   if (robot_id < 1 || robot_id > kMaxTeamRobots) return 0;
   const int n = make_map_chunks(now_utime, frame, robot_id);
@@ -355,7 +359,8 @@ int MainNode::make_team_map(int robot_id, std::int64_t now_utime, int frame) {
 // GLOBAL_MAP (exclude_robot 0): the fused map and the moving set. TEAM_MAP_<r>
 // (exclude_robot r): per STATIC landmark, the fusion of the other robots' estimates
 // (those r alone holds are left out), and no moving set (GLOBAL_MAP carries it).
-int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot) {
+// GLOBAL_MOVING (moving_only): the moving set alone.
+int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot, bool moving_only) {
   static_ids_.clear();
   moving_ids_.clear();
   const int own_bit = exclude_robot > 0 ? 1 << (exclude_robot - 1) : 0;
@@ -364,7 +369,8 @@ int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_rob
   for (int id = 0; id < map_.max_landmark_id(); ++id) {
     const GlobalEntry& g = map_.entry(id);
     // A team map holds only what another robot's usable estimate gives.
-    if (g.status == GlobalStatus::kStatic && (exclude_robot == 0 || map_.fused_without(id, exclude_robot, &p, &C)))
+    if (g.status == GlobalStatus::kStatic && !moving_only &&
+        (exclude_robot == 0 || map_.fused_without(id, exclude_robot, &p, &C)))
       static_ids_.push_back(id);
     else if (g.status == GlobalStatus::kMoving && exclude_robot == 0) moving_ids_.push_back(id);
   }
@@ -373,8 +379,10 @@ int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_rob
   // Equal: the pool fits the largest map. Were it ever short, the map would go out
   // cut: a capacity fault, flagged in STATUS_MAIN, never silent.
   const int n = static_cast<int>(std::min(spans_.size(), chunks_.size()));
-  capacity_fault_ = spans_.size() > chunks_.size();
-  if (capacity_fault_) ++counters_.capacity_faults;
+  if (!moving_only) {  // the moving set alone always fits: the pool holds the whole map
+    capacity_fault_ = spans_.size() > chunks_.size();
+    if (capacity_fault_) ++counters_.capacity_faults;
+  }
   const int stamp = frame >= 0 ? frame : (completed_frame_ >= 0 ? completed_frame_ : map_.newest_frame());
   for (int k = 0; k < n; ++k) {
     const ChunkSpan& sp = spans_[static_cast<std::size_t>(k)];

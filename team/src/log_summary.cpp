@@ -122,6 +122,7 @@ ChannelClass classify(const std::string& ch) {
   if (ch == channels::lmap_snapshot()) return {Kind::kLmapSnapshot, -1, "lmap_snapshot_t"};
   if (ch == channels::lmap_resync()) return {Kind::kOther, -1, "resync_request_t"};
   if (ch == channels::global_map()) return {Kind::kGlobalMap, -1, "global_map_t"};
+  if (ch == channels::global_moving()) return {Kind::kOther, -1, "global_map_t"};
   if (ch == channels::dynamic_notice()) return {Kind::kDynamicNotice, -1, "dynamic_notice_t"};
   if (ch == channels::run_info()) return {Kind::kRunInfo, -1, "run_info_t"};
   return {};

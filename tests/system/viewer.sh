@@ -87,7 +87,11 @@ for _ in $(seq 200); do
   kill -0 "$TEAM" 2>/dev/null || break
   sleep 0.1
 done
-wait "$TEAM" || { echo "viewer: FAIL run_team.sh --view failed"; tail -n 20 "$OUT/team.txt"; rc=1; }
+wait "$TEAM" || {
+  echo "viewer: FAIL run_team.sh --view failed"; tail -n 20 "$OUT/team.txt"
+  for f in "$OUT"/team/logs/*.log; do [ -f "$f" ] && { echo "--- $f"; tail -n 5 "$f"; }; done  # where it stopped
+  rc=1
+}
 grep -q "the viewer: http://127.0.0.1:$VPORT/" "$OUT/team.txt" || { echo "viewer: FAIL run_team.sh printed no viewer URL"; rc=1; }
 first="${frames[0]:-none}" last="${frames[${#frames[@]}-1]:-none}"
 echo "viewer: run_team.sh --view: ${#frames[@]} looks from the host, first (frame robots) $first, last $last"

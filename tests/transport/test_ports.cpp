@@ -183,6 +183,26 @@ TEST(RobotPorts, InChannelGroupsASecondSenderShowsOnTheRobotsStatus) {
   EXPECT_EQ(node.counters().foreign_poses, 1);
 }
 
+// A robot reads the global map's moving lists from GLOBAL_MOVING, not from GLOBAL_MAP
+// (tens of kB a frame in a large world): a lost notice is repaired from the former;
+// the same lists in a GLOBAL_MAP change nothing.
+TEST_F(RobotOnBus, ALostNoticeIsRepairedFromGlobalMovingAlone) {
+  for (const auto& f : robot1_frames(3)) send(f);
+  global_map_t m{};
+  m.num_chunks = 1;
+  m.id_end = 256;
+  contract::set_count(&m.moving_ids, &m.num_moving, 1);
+  m.moving_ids[0] = 7;
+  m.moving_frames.assign(1, 2);
+  m.moving_by.assign(1, 2);  // robot 2 found it moving; robot 1 never got the notice
+  obs.shell().publish(channels::global_map(), m);
+  bus.dispatch_all();
+  EXPECT_EQ(node.counters().notices_repaired, 0);
+  obs.shell().publish(channels::global_moving(), m);
+  bus.dispatch_all();
+  EXPECT_EQ(node.counters().notices_repaired, 1);
+}
+
 TEST(RobotPorts, BadInputIsCountedByTheNodeAndLoggedByTheShell) {
   InProcessTransport bus;
   std::FILE* log = std::tmpfile();
@@ -256,6 +276,42 @@ TEST_F(MainOnBus, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
   EXPECT_EQ(obs.seen, expected);
   EXPECT_EQ(node.counters().events, 3);
   EXPECT_EQ(node.counters().notices_sent, 1);
+}
+
+// Every GLOBAL_MAP publication is followed by GLOBAL_MOVING: its moving lists alone
+// (no landmarks), the same stamps, over the whole id range: what the robots read.
+TEST_F(MainOnBus, EveryGlobalMapIsFollowedByItsMovingListsAlone) {
+  std::vector<global_map_t> maps, moving;
+  obs.shell().subscribe<global_map_t>(
+      channels::global_map(), [&](const global_map_t& m, const std::string&) { maps.push_back(m); },
+      transport::kUnboundedQueue);
+  obs.shell().subscribe<global_map_t>(
+      channels::global_moving(), [&](const global_map_t& m, const std::string&) { moving.push_back(m); },
+      transport::kUnboundedQueue);
+  NodeShell& robots = obs.shell();
+  for (int id : {4, 6, 9}) robots.publish(channels::lmap_event(), event(1, id, 0, landmark_event_t::ADD, id));
+  robots.publish(channels::lmap_event(), event(1, 10, 0, landmark_event_t::MOVING, 6));
+  robots.publish(channels::pose(1), pose(1, 0));
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 1u);
+  ASSERT_EQ(moving.size(), 1u);
+  const global_map_t &g = maps[0], &m = moving[0];
+  EXPECT_EQ(g.num_landmarks, 2);  // 4 and 9
+  EXPECT_EQ(m.num_landmarks, 0);
+  EXPECT_EQ(m.moving_ids, g.moving_ids);
+  EXPECT_EQ(m.moving_ids, std::vector<std::int32_t>{6});
+  EXPECT_EQ(m.moving_frames, g.moving_frames);
+  EXPECT_EQ(m.moving_by, g.moving_by);
+  EXPECT_EQ(m.moving_by, std::vector<std::int16_t>{1});
+  EXPECT_EQ(m.frame, g.frame);
+  EXPECT_EQ(m.version, g.version);
+  EXPECT_EQ(m.incarnation, g.incarnation);
+  EXPECT_EQ(m.utime, g.utime);
+  EXPECT_EQ(m.chunk, 0);
+  EXPECT_EQ(m.num_chunks, 1);
+  EXPECT_EQ(m.id_begin, 0);
+  EXPECT_EQ(m.id_end, node.map().max_landmark_id());
+  EXPECT_EQ(node.counters().maps_published, 1);  // a moving set is not another map
 }
 
 // main_robot's timer sends GLOBAL_MAP only when no map went out in its period: a

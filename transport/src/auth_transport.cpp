@@ -66,7 +66,7 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
   if (base == kLmapEvent || base == kLmapSnapshot)
     return is_robot(id) && size >= kRobotIdOffset + 2 &&
            static_cast<std::int16_t>(get_be(payload + kRobotIdOffset, 2)) == id;
-  if (base == kGlobalMap || base == kDynamicNotice || base == kStatusMain || base == kLmapResync ||
+  if (base == kGlobalMap || base == kGlobalMoving || base == kDynamicNotice || base == kStatusMain || base == kLmapResync ||
       robot_of(base, kTeamMapPrefix) > 0)
     return id == kSenderMain;
   if (base == kGroundTruth || base == kRunInfo || base == kStatusSim || robot_of(base, kSensorPrefix) > 0)

@@ -25,7 +25,7 @@ std::vector<std::string> known_channels(const std::string& suffix) {
   std::vector<std::string> names;
   for (std::string_view n :
        {channels::kGroundTruth, channels::kLmapEvent, channels::kLmapSnapshot, channels::kLmapResync,
-        channels::kGlobalMap, channels::kDynamicNotice, channels::kStatusMain, channels::kStatusSim, channels::kRunInfo})
+        channels::kGlobalMap, channels::kGlobalMoving, channels::kDynamicNotice, channels::kStatusMain, channels::kStatusSim, channels::kRunInfo})
     names.push_back(std::string(n) + suffix);
   for (int r = 1; r <= channels::kMaxGroupRobotId; ++r)
     for (std::string_view p : {channels::kSensorPrefix, channels::kPosePrefix, channels::kStatusRobotPrefix,

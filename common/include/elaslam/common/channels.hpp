@@ -15,6 +15,7 @@ inline constexpr std::string_view kSensorPrefix = "SENSOR_", kPosePrefix = "POSE
                                   kLmapResync = "LMAP_RESYNC", kGlobalMap = "GLOBAL_MAP",
                                   kDynamicNotice = "DYNAMIC_NOTICE", kStatusMain = "STATUS_MAIN",
                                   kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO", kTeamMapPrefix = "TEAM_MAP_",
+                                  kGlobalMoving = "GLOBAL_MOVING",
                                   kCandidatesPrefix = "CANDIDATES_";
 
 inline std::string sensor(int robot_id, const std::string& suffix = "") {
@@ -61,6 +62,9 @@ inline std::string lmap_event(const std::string& suffix = "") { return std::stri
 inline std::string lmap_snapshot(const std::string& suffix = "") { return std::string(kLmapSnapshot) + suffix; }
 inline std::string lmap_resync(const std::string& suffix = "") { return std::string(kLmapResync) + suffix; }
 inline std::string global_map(const std::string& suffix = "") { return std::string(kGlobalMap) + suffix; }
+/// GLOBAL_MAP's moving lists alone (global_map_t without landmarks), sent with every
+/// GLOBAL_MAP: what a robot reads of the global map (they repair lost notices).
+inline std::string global_moving(const std::string& suffix = "") { return std::string(kGlobalMoving) + suffix; }
 inline std::string dynamic_notice(const std::string& suffix = "") { return std::string(kDynamicNotice) + suffix; }
 inline std::string status_main(const std::string& suffix = "") { return std::string(kStatusMain) + suffix; }
 inline std::string status_sim(const std::string& suffix = "") { return std::string(kStatusSim) + suffix; }
@@ -72,8 +76,8 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
     if (robot_of(channel, p, suffix) > 0) return true;
   if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
   const std::string_view base = channel.substr(0, channel.size() - suffix.size());
-  for (std::string_view n : {kGroundTruth, kLmapEvent, kLmapSnapshot, kLmapResync, kGlobalMap, kDynamicNotice,
-                             kStatusMain, kStatusSim, kRunInfo})
+  for (std::string_view n : {kGroundTruth, kLmapEvent, kLmapSnapshot, kLmapResync, kGlobalMap, kGlobalMoving,
+                             kDynamicNotice, kStatusMain, kStatusSim, kRunInfo})
     if (base == n) return true;
   return false;
 }
@@ -81,12 +85,12 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
 /// Channel groups (team.channel_groups, docs/decisions.md "Channel groups"): every
 /// group has a UDP port of its own, the base port + its number, so that a process is
 /// woken only by the groups it reads. By reader:
-/// - kGroupTeam: DYNAMIC_NOTICE, LMAP_RESYNC, STATUS_*, RUN_INFO and any other name
-///   (everyone; rare messages);
+/// - kGroupTeam: DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO and
+///   any other name (everyone; small messages);
 /// - kGroupOutputs: LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r> (main_robot; a lockstep
 ///   simulator). One port, so one socket: a robot's events of a frame reach main_robot
 ///   before its POSE of that frame, which is when main_robot sends the frame's map;
-/// - kGroupMap: GLOBAL_MAP (the robots);
+/// - kGroupMap: GLOBAL_MAP (the viewer; the robots read GLOBAL_MOVING);
 /// - kGroupObservers: GROUND_TRUTH, CANDIDATES_<r> (the viewer and recorders only);
 /// - kGroupRobot + r: SENSOR_<r>, TEAM_MAP_<r> (robot r alone).
 /// Recorders and the viewer join every group. A robot watches for a second sender

@@ -70,6 +70,11 @@ class MainNode {
   /// with `frame` (default: the newest frame every robot has finished, or before any
   /// POSE was seen, the newest frame of any event). Returns the chunk count.
   int make_global_map(std::int64_t now_utime, int frame = -1);
+  /// GLOBAL_MOVING: the global map's moving lists alone (chunks of global_map_t
+  /// without landmarks, cut by id as GLOBAL_MAP's), stamped as make_global_map
+  /// stamps, in the same chunk pool. What a robot reads of the global map: a few
+  /// hundred bytes where GLOBAL_MAP is tens of kB. Returns the chunk count.
+  int make_moving_set(std::int64_t now_utime, int frame = -1);
   /// Robot r's team map (TEAM_MAP_<r>, main.team_map_period_frames): the global map
   /// without r's own information (GlobalMap::fused_without), in the same chunk pool
   /// (map_chunk; the last make_* call fills it). Returns the chunk count.
@@ -114,7 +119,7 @@ class MainNode {
   int finished_frame(int robot_id, int frame);
   /// A refused message: counted per reason, `why` (when given) says why; returns false.
   bool refused(Refusal reason, const std::string& problem, std::string* why);
-  int make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot);
+  int make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot, bool moving_only = false);
   GlobalMap map_;
   int team_map_frame_ = -1;  // frame of the last team maps
   MainCounters counters_;
@@ -162,6 +167,7 @@ class MainPorts {
       : shell_(shell),
         node_(node),
         map_(channels::global_map(shell.suffix())),
+        moving_(channels::global_moving(shell.suffix())),
         notice_(channels::dynamic_notice(shell.suffix())),
         status_(channels::status_main(shell.suffix())),
         resync_(channels::lmap_resync(shell.suffix())) {
@@ -189,6 +195,8 @@ class MainPorts {
     last_map_utime_ = shell_.now_utime();
     const int n = node_.make_global_map(last_map_utime_, frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
+    const int k = node_.make_moving_set(last_map_utime_, frame);
+    for (int i = 0; i < k; ++i) shell_.publish(moving_, node_.map_chunk(i));
     if (!node_.team_map_due(frame)) return;
     for (int r = 1; r <= kMaxTeamRobots; ++r) {
       if (!node_.robot_seen(r)) continue;
@@ -240,7 +248,7 @@ class MainPorts {
   Shell& shell_;
   MainNode& node_;
   std::int64_t last_map_utime_ = kNever;  // when the last GLOBAL_MAP went out
-  const std::string map_, notice_, status_, resync_;  // channel names, built once
+  const std::string map_, moving_, notice_, status_, resync_;  // channel names, built once
   std::array<std::string, kMaxTeamRobots> team_map_;  // TEAM_MAP_<r>
 };
 

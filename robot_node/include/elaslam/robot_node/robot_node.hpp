@@ -214,7 +214,7 @@ class RobotNode {
 struct RobotQueues {
   int sensor = 200;
   int notice = 1000;
-  int global_map = 1000;  // chunks: several per publication
+  int global_map = 1000;  // GLOBAL_MOVING chunks (one per publication unless the moving set is large)
   int resync = 100;
   int own_pose = 100;     // this robot's own POSE (or STATUS) channel: a second sender with this id
   int team_map = 1000;    // TEAM_MAP_<r> chunks (robot.team_map.fuse)
@@ -266,8 +266,10 @@ class RobotPorts {
     const int notice = shell_.template subscribe<dynamic_notice_t>(
         channels::dynamic_notice(shell_.suffix()), [this](const dynamic_notice_t& m, const std::string&) { on_notice(m); },
         queues.notice);
+    // The global map's moving lists (they repair lost notices), in GLOBAL_MOVING: the
+    // whole GLOBAL_MAP is tens of kB a frame a robot would decode for them.
     const int map = shell_.template subscribe<global_map_t>(
-        channels::global_map(shell_.suffix()), [this](const global_map_t& m, const std::string&) { on_map(m); },
+        channels::global_moving(shell_.suffix()), [this](const global_map_t& m, const std::string&) { on_map(m); },
         queues.global_map);
     const int resync = shell_.template subscribe<resync_request_t>(
         channels::lmap_resync(shell_.suffix()), [this](const resync_request_t& m, const std::string&) { on_resync(m); },
