@@ -342,6 +342,7 @@ int MainNode::finished_frame(int robot_id, int frame) {
 int MainNode::make_global_map(std::int64_t now_utime, int frame) {
   const int n = make_map_chunks(now_utime, frame, 0);
   ++counters_.maps_published;
+  counters_.map_chunks += n;
   return n;
 }
 

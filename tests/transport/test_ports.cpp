@@ -312,6 +312,7 @@ TEST_F(MainOnBus, EveryGlobalMapIsFollowedByItsMovingListsAlone) {
   EXPECT_EQ(m.id_begin, 0);
   EXPECT_EQ(m.id_end, node.map().max_landmark_id());
   EXPECT_EQ(node.counters().maps_published, 1);  // a moving set is not another map
+  EXPECT_EQ(node.counters().map_chunks, 1);
 }
 
 // main_robot's timer sends GLOBAL_MAP only when no map went out in its period: a

@@ -32,6 +32,7 @@ struct MainCounters {
   std::int64_t decode_errors = 0;    // counted by the I/O shell
   std::int64_t notices_sent = 0;
   std::int64_t maps_published = 0;
+  std::int64_t map_chunks = 0;           // GLOBAL_MAP chunks of those publications
   std::int64_t team_maps_published = 0;  // TEAM_MAP_<r> publications (all chunks of one count once)
   std::int64_t resyncs_requested = 0;    // LMAP_RESYNC requests sent
   std::int64_t restarts = 0;             // robots seen with a new incarnation
