@@ -26,12 +26,6 @@ std::uint64_t get_be(const std::uint8_t* p, int bytes) {
 }
 
 /// `channel` without `suffix`; false when it does not end with it.
-bool strip_suffix(std::string_view channel, std::string_view suffix, std::string_view* base) {
-  if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
-  *base = channel.substr(0, channel.size() - suffix.size());
-  return true;
-}
-
 bool is_robot(std::int16_t id) { return id >= 1 && id <= contract::kMaxRobots; }
 
 // The robot_id field of landmark_event_t and lmap_snapshot_t: after the 8-byte
@@ -61,7 +55,7 @@ std::int64_t AuthCounters::refused() const {
 bool sender_may_publish(std::int16_t id, const std::string& channel, const std::string& suffix,
                         const std::uint8_t* payload, std::size_t size) {
   std::string_view base;
-  if (!strip_suffix(channel, suffix, &base)) return true;  // not a team channel
+  if (!channels::strip_suffix(channel, suffix, &base)) return true;  // not a team channel
   using namespace channels;
   if (base == kLmapEvent || base == kLmapSnapshot)
     return is_robot(id) && size >= kRobotIdOffset + 2 &&

@@ -23,13 +23,9 @@ constexpr const char* kDefaultUrl = "udpm://239.255.76.67:7667?ttl=0";  // LCM 1
 /// a subscription pattern is matched against to find its groups.
 std::vector<std::string> known_channels(const std::string& suffix) {
   std::vector<std::string> names;
-  for (std::string_view n :
-       {channels::kGroundTruth, channels::kLmapEvent, channels::kLmapSnapshot, channels::kLmapResync,
-        channels::kGlobalMap, channels::kGlobalMoving, channels::kDynamicNotice, channels::kStatusMain, channels::kStatusSim, channels::kRunInfo})
-    names.push_back(std::string(n) + suffix);
+  for (std::string_view n : channels::kTeamNames) names.push_back(std::string(n) + suffix);
   for (int r = 1; r <= channels::kMaxGroupRobotId; ++r)
-    for (std::string_view p : {channels::kSensorPrefix, channels::kPosePrefix, channels::kStatusRobotPrefix,
-                               channels::kTeamMapPrefix, channels::kCandidatesPrefix})
+    for (std::string_view p : channels::kRobotPrefixes)
       names.push_back(std::string(p) + std::to_string(r) + suffix);
   return names;
 }

@@ -70,14 +70,26 @@ inline std::string status_main(const std::string& suffix = "") { return std::str
 inline std::string status_sim(const std::string& suffix = "") { return std::string(kStatusSim) + suffix; }
 inline std::string run_info(const std::string& suffix = "") { return std::string(kRunInfo) + suffix; }
 
+/// The team's channel names without a robot id, and the prefixes of the per-robot ones.
+inline constexpr std::string_view kTeamNames[] = {kGroundTruth, kLmapEvent,     kLmapSnapshot, kLmapResync, kGlobalMap,
+                                                  kGlobalMoving, kDynamicNotice, kStatusMain,   kStatusSim,  kRunInfo};
+inline constexpr std::string_view kRobotPrefixes[] = {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix,
+                                                      kCandidatesPrefix};
+
+/// `channel` without `suffix` in *base; false when it does not end with `suffix`.
+inline bool strip_suffix(std::string_view channel, std::string_view suffix, std::string_view* base) {
+  if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
+  *base = channel.substr(0, channel.size() - suffix.size());
+  return true;
+}
+
 /// Is `channel` one of the team's channels with `suffix` (DESIGN.md section 3)?
 inline bool is_team_channel(std::string_view channel, std::string_view suffix = "") {
-  for (std::string_view p : {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix, kCandidatesPrefix})
+  for (std::string_view p : kRobotPrefixes)
     if (robot_of(channel, p, suffix) > 0) return true;
-  if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return false;
-  const std::string_view base = channel.substr(0, channel.size() - suffix.size());
-  for (std::string_view n : {kGroundTruth, kLmapEvent, kLmapSnapshot, kLmapResync, kGlobalMap, kGlobalMoving,
-                             kDynamicNotice, kStatusMain, kStatusSim, kRunInfo})
+  std::string_view base;
+  if (!strip_suffix(channel, suffix, &base)) return false;
+  for (std::string_view n : kTeamNames)
     if (base == n) return true;
   return false;
 }
@@ -108,8 +120,8 @@ inline int channel_group(std::string_view channel, std::string_view suffix = "")
   }
   if (robot_of(channel, kPosePrefix, suffix) > 0) return kGroupOutputs;
   if (robot_of(channel, kCandidatesPrefix, suffix) > 0) return kGroupObservers;
-  if (channel.size() < suffix.size() || channel.substr(channel.size() - suffix.size()) != suffix) return kGroupTeam;
-  const std::string_view base = channel.substr(0, channel.size() - suffix.size());
+  std::string_view base;
+  if (!strip_suffix(channel, suffix, &base)) return kGroupTeam;
   if (base == kLmapEvent || base == kLmapSnapshot) return kGroupOutputs;
   if (base == kGlobalMap) return kGroupMap;
   if (base == kGroundTruth) return kGroupObservers;
