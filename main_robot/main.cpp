@@ -2,7 +2,7 @@
 //   main_robot [--config FILE] [--state PATH] [--lcm-url URL] [--channel-suffix S]
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
 // the installed default (common/cli.hpp).
-// Subscribes LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r>; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
+// Subscribes LMAP_EVENT(S), LMAP_SNAPSHOT, POSE_<r>; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
 // STATUS_MAIN. A thin shell: MainNode on the node shell (MainPorts, main_node.hpp),
 // exactly as the in-process team run runs it. The map is saved to --state atomically
 // (write, then rename) on change at a bounded rate and at shutdown, and reloaded at start.
@@ -71,11 +71,13 @@ bool resume(const std::string& path, GlobalMap* map) {
 void final_line(const MainNode& node) {
   const auto& c = node.counters();
   std::fprintf(stderr, "main_robot: events=%lld snapshots=%lld duplicates=%lld gaps=%lld rejected=%lld "
-               "decode_errors=%lld notices=%lld static=%d moving=%d version=%lld maps=%lld map_chunks=%lld\n",
+               "decode_errors=%lld notices=%lld static=%d moving=%d version=%lld maps=%lld map_chunks=%lld "
+               "moving_sets=%lld\n",
                (long long)c.events, (long long)c.snapshots, (long long)c.duplicates, (long long)c.gaps,
                (long long)c.rejected_inputs, (long long)c.decode_errors, (long long)c.notices_sent,
                node.map().count(GlobalStatus::kStatic), node.map().count(GlobalStatus::kMoving),
-               (long long)node.map().version(), (long long)c.maps_published, (long long)c.map_chunks);
+               (long long)node.map().version(), (long long)c.maps_published, (long long)c.map_chunks,
+               (long long)c.moving_sets);
 }
 
 int run(const Args& a) {
@@ -143,6 +145,8 @@ int main(int argc, char** argv) {
     app.add_option("--state", a.state, "file to persist the global map in (reloaded at start)");
     elaslam::transport::add_transport_options(app, &a.transport);
     app.add_option("--event-queue", a.queues.event, "LMAP_EVENT subscription queue capacity")
+        ->check(cli::range(1, 1000000));
+    app.add_option("--events-queue", a.queues.events, "LMAP_EVENTS subscription queue capacity")
         ->check(cli::range(1, 1000000));
     app.add_flag("--check", a.check, "check the configuration, print where it came from and exit (0: valid)");
     if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;

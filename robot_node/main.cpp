@@ -2,7 +2,7 @@
 //   robot_node [--config FILE] --robot R [--mode M] [--state PATH] [--lcm-url URL] [--channel-suffix S]
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
 // the installed default (common/cli.hpp).
-// Subscribes SENSOR_<R>, DYNAMIC_NOTICE; publishes POSE_<R>, LMAP_EVENT,
+// Subscribes SENSOR_<R>, DYNAMIC_NOTICE; publishes POSE_<R>, LMAP_EVENTS (or LMAP_EVENT),
 // LMAP_SNAPSHOT, STATUS_ROBOT_<R>. A thin shell: RobotNode on the node shell
 // (RobotPorts, robot_node.hpp), exactly as the in-process team run runs it.
 // With --state the node's whole state (robot_state.hpp) is saved atomically after

@@ -88,7 +88,7 @@ def main() -> int:
     T = load_types(args.build_dir)
 
     types = [(r"SENSOR_\d+", T.sensor_frame_t), (r"POSE_\d+", T.pose_estimate_t), (r"GROUND_TRUTH", T.ground_truth_t),
-             (r"LMAP_EVENT", T.landmark_event_t), (r"LMAP_SNAPSHOT", T.lmap_snapshot_t), (r"GLOBAL_MAP", T.global_map_t),
+             (r"LMAP_EVENT", T.landmark_event_t), (r"LMAP_EVENTS", T.lmap_events_t), (r"LMAP_SNAPSHOT", T.lmap_snapshot_t), (r"GLOBAL_MAP", T.global_map_t),
              (r"GLOBAL_MOVING", T.global_map_t),
              (r"DYNAMIC_NOTICE", T.dynamic_notice_t), (r"STATUS_.*", T.node_status_t)]
     if hasattr(T, "run_info_t"):

@@ -12,7 +12,7 @@ generated Python types (BUILD/lcmgen/python) to read the recordings.
 
 Targets (every fault row; docs/faults.md): final global map's static landmarks
 within 2 of the lossless run's, its landmark error within 1.2x, every truly moving
-landmark whose latest word from the robots is MOVING (LMAP_EVENT: no later ADD or
+landmark whose latest word from the robots is MOVING (LMAP_EVENT(S): no later ADD or
 RETURN of it by any robot) absent from the last GLOBAL_MAP's static landmarks (but
 for those reported in the last --repair-window frames, 20 by default: "pending",
 their repair may be under way when the run ends); a kill row also: robot R's mean pose error within 1.5x. (A landmark a robot flagged and
@@ -54,15 +54,16 @@ def read_recording(path, types, kill_robot, restart_time):
     word = {}  # id -> (frame, kind): the robots' latest word on the landmark
     pose_channel = f"POSE_{kill_robot}"
     for ev in lcm.EventLog(path, "r"):
-        if ev.channel == "LMAP_EVENT":
+        if ev.channel in ("LMAP_EVENT", "LMAP_EVENTS"):  # one event, or a frame's events
             try:
-                m = E.decode(ev.data)
+                events = [E.decode(ev.data)] if ev.channel == "LMAP_EVENT" else types.lmap_events_t.decode(ev.data).events
             except Exception:  # noqa: BLE001 (counted by evaluate's decode_errors)
                 continue
-            if m.kind == E.MOVING:
-                moving.add(m.landmark_id)
-            if m.kind in (E.ADD, E.MOVING, E.RETURN) and m.frame >= word.get(m.landmark_id, (-1, 0))[0]:
-                word[m.landmark_id] = (m.frame, m.kind)
+            for m in events:
+                if m.kind == E.MOVING:
+                    moving.add(m.landmark_id)
+                if m.kind in (E.ADD, E.MOVING, E.RETURN) and m.frame >= word.get(m.landmark_id, (-1, 0))[0]:
+                    word[m.landmark_id] = (m.frame, m.kind)
         elif ev.channel == "GLOBAL_MAP":
             try:
                 m = types.global_map_t.decode(ev.data)

@@ -26,7 +26,7 @@
 #   global map's static landmarks and its landmark error (metrics.json
 #   final_map.static, landmark_error.mean_euclidean), both relative to the lossless
 #   run of the seed, the truly moving landmarks that robots reported MOVING
-#   (LMAP_EVENT) and how many of them are absent from the last GLOBAL_MAP's static
+#   (LMAP_EVENT(S)) and how many of them are absent from the last GLOBAL_MAP's static
 #   landmarks, per-robot mean pose error, frames dropped, and pass/fail against the
 #   targets: static landmarks within 2 of the lossless run's, error within 1.2x,
 #   every moving landmark the robots detected deleted from the map; for the kill run

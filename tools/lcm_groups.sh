@@ -2,7 +2,7 @@
 # (team.channel_groups; grouped_lcm_transport.hpp, channels.hpp). Each group of
 # channels has its own port, the team's base port + the group's number:
 #   0 team-wide (DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO), 1 the
-#   robots' outputs (LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r>), 2 GLOBAL_MAP, 3 observers
+#   robots' outputs (LMAP_EVENT(S), LMAP_SNAPSHOT, POSE_<r>), 2 GLOBAL_MAP, 3 observers
 #   (GROUND_TRUTH, CANDIDATES_<r>), 3+r robot r's inputs (SENSOR_<r>, TEAM_MAP_<r>).
 # lcm-logger and lcm-logplayer open one URL each: one per group.
 #
@@ -11,7 +11,7 @@
 #   lcm_team_groups R...         the groups a team of robots R... uses, one per line
 #   lcm_groups_in_check LOG      0/1: a node's --check output says channel groups are on
 #   lcm_group_of_input CHANNEL   the group of a recorded input (SENSOR_<r>, GROUND_TRUTH, RUN_INFO)
-LCM_GROUP_OUTPUTS=1  # POSE_<r>, LMAP_EVENT, LMAP_SNAPSHOT
+LCM_GROUP_OUTPUTS=1  # POSE_<r>, LMAP_EVENT(S), LMAP_SNAPSHOT
 lcm_base_url() { echo "${URL:-${LCM_DEFAULT_URL:-udpm://239.255.76.67:7667?ttl=0}}"; }
 lcm_group_url() {
   local u port

@@ -25,6 +25,7 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   r.read_optional("max_seq_jump", &seq_jump, 1, 1 << 30);
   o->max_seq_jump = seq_jump;
   r.read_optional("team_map_period_frames", &o->team_map_period_frames, 0, 100000);
+  r.read_optional("moving_repeat_s", &o->moving_repeat_s, 0.0, 3600.0);
   parse(r, &o->limits);
 }
 

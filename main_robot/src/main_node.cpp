@@ -38,6 +38,8 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   taken_.reserve(kMaxTeamRobots * 4);
   static_ids_.reserve(max_id);
   moving_ids_.reserve(max_id);
+  moving_sent_.reserve(3 * max_id);
+  moving_now_.reserve(3 * max_id);
   // All ids counted as the larger kind of entry: a bound for any mix of the two.
   prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, options.max_landmark_id, 0, &chunk_sizes_, &chunks_);
   spans_.reserve(chunks_.size());
@@ -253,6 +255,45 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
   return true;
 }
 
+std::string MainNode::validate(const lmap_events_t& m, Refusal* reason) const {
+  Refusal dummy = Refusal::kMalformed;
+  Refusal& r = reason ? *reason : dummy;
+  if (std::string p = check_robot(m.robot_id, map_.options().limits, &r); !p.empty()) return p;
+  r = Refusal::kMalformed;
+  if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
+  if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  if (m.num_events < 1 || m.num_events > contract::kMaxBatchEvents)
+    return contract::got("num_events outside [1, " + std::to_string(contract::kMaxBatchEvents) + "]", m.num_events);
+  if (!contract::count_fits(m.events, m.num_events)) return contract::got("num_events does not match the array", m.num_events);
+  std::int64_t previous = 0;
+  for (int k = 0; k < m.num_events; ++k) {
+    const landmark_event_t& e = m.events[static_cast<std::size_t>(k)];
+    // The header speaks for every event: one robot, one incarnation, one frame.
+    if (e.robot_id != m.robot_id) return contract::got("an event's robot_id differs from the message's", e.robot_id);
+    if (e.incarnation != m.incarnation) return contract::got("an event's incarnation differs from the message's", e.incarnation);
+    if (e.frame != m.frame) return contract::got("an event's frame differs from the message's", e.frame);
+    if (e.seq <= previous) return contract::got("event seqs not ascending, seq", e.seq);
+    previous = e.seq;
+  }
+  return "";
+}
+
+bool MainNode::on_events(const lmap_events_t& m, std::string* why) {
+  Refusal reason = Refusal::kMalformed;
+  if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why);
+  bool all = true;
+  std::string first;
+  for (int k = 0; k < m.num_events; ++k) {
+    std::string w;
+    if (!on_event(m.events[static_cast<std::size_t>(k)], why ? &w : nullptr) && all) {
+      all = false;
+      first = std::move(w);
+    }
+  }
+  if (!all && why) *why = first;
+  return all;
+}
+
 bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
   Refusal reason = Refusal::kMalformed;
   if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why);
@@ -348,6 +389,26 @@ int MainNode::make_global_map(std::int64_t now_utime, int frame) {
 
 int MainNode::make_moving_set(std::int64_t now_utime, int frame) {
   return make_map_chunks(now_utime, frame, 0, /*moving_only=*/true);
+}
+
+bool MainNode::moving_set_due(int num_chunks, std::int64_t now_utime) {
+  moving_now_.clear();
+  for (int k = 0; k < num_chunks; ++k) {
+    const global_map_t& c = chunks_[static_cast<std::size_t>(k)];
+    for (int i = 0; i < c.num_moving; ++i) {
+      const auto j = static_cast<std::size_t>(i);
+      moving_now_.insert(moving_now_.end(), {c.moving_ids[j], c.moving_frames[j], c.moving_by[j]});
+    }
+  }
+  const std::int64_t repeat_us = static_cast<std::int64_t>(map_.options().moving_repeat_s * 1e6);
+  const bool due = !any_moving_sent_ || repeat_us <= 0 || moving_now_ != moving_sent_ ||
+                   now_utime - moving_sent_utime_ >= repeat_us || now_utime < moving_sent_utime_;
+  if (!due) return false;
+  moving_sent_.swap(moving_now_);
+  moving_sent_utime_ = now_utime;
+  any_moving_sent_ = true;
+  ++counters_.moving_sets;
+  return true;
 }
 
 int MainNode::make_team_map(int robot_id, std::int64_t now_utime, int frame) {

@@ -53,6 +53,9 @@ Eigen::Matrix2d get_cov2(const double (&src)[2][2]) {
 RobotNode::RobotNode(const RobotOptions& options, int robot_id)
     : options_(options), robot_id_(robot_id), robot_(options, robot_id), input_(options.max_observations) {
   events_.reserve(Robot::event_capacity(options));
+  constexpr std::size_t kBatch = contract::kMaxBatchEvents;
+  batches_.resize((Robot::event_capacity(options) + kBatch - 1) / kBatch);
+  for (auto& b : batches_) b.events.reserve(kBatch);
   id_seen_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), 0);
   notice_frame_.assign(static_cast<std::size_t>(options.ekf.max_landmark_id), -1);
   held_.reserve(kMaxHeldNotices);
@@ -164,6 +167,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   snapshot_ready_ = false;
   candidates_ready_ = false;
   events_.clear();
+  num_batches_ = 0;
   Refusal reason = Refusal::kMalformed;
   std::string problem = validate(msg, &reason);
   // Two observations of one landmark in a frame: the contract allows one.
@@ -272,6 +276,28 @@ void RobotNode::fill_events(std::int64_t now_utime) {
     events_.push_back(m);
   }
   counters_.events_sent += static_cast<std::int64_t>(events_.size());
+  // The same events in LMAP_EVENTS messages, kMaxBatchEvents at most each.
+  const std::size_t n = events_.size(), k = contract::kMaxBatchEvents;
+  num_batches_ = static_cast<int>((n + k - 1) / k);
+  for (std::size_t b = 0; b < static_cast<std::size_t>(num_batches_); ++b) {
+    lmap_events_t& m = batches_[b];
+    m.utime = now_utime;
+    m.frame = last_frame_;
+    m.robot_id = static_cast<int16_t>(robot_id_);
+    m.incarnation = incarnation_;
+    const std::size_t first = b * k, count = std::min(k, n - first);
+    contract::set_count(&m.events, &m.num_events, static_cast<int>(count));
+    std::copy_n(events_.begin() + static_cast<std::ptrdiff_t>(first), count, m.events.begin());
+  }
+}
+
+void RobotNode::stamp_events(std::int64_t utime) {
+  for (auto& e : events_) e.utime = utime;
+  for (int b = 0; b < num_batches_; ++b) {
+    lmap_events_t& m = batches_[static_cast<std::size_t>(b)];
+    m.utime = utime;
+    for (auto& e : m.events) e.utime = utime;
+  }
 }
 
 // CANDIDATES_<r>: the candidates in the filter (they are there from their first

@@ -70,6 +70,7 @@ void parse(config::Reader& r, RobotOptions* o) {
     n.read("snapshot_period_frames", &o->snapshot_period_frames, 1, 100000);
     n.read("update_period_frames", &o->update_period_frames, 1, 100000);
     n.read_optional("candidates_period_frames", &o->candidates_period_frames, 0, 100000);
+    n.read_optional("batch_events", &o->batch_events);
     n.read("max_frame_gap", &o->max_frame_gap, 1, 100000);
     n.read_optional("late_start_step_m", &o->late_start_step_m, 0.0, 100.0);
     double turn_deg = rad2deg(o->late_start_turn);

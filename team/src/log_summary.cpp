@@ -17,6 +17,7 @@
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
+#include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -100,7 +101,7 @@ namespace {
 
 
 
-enum class Kind { kOther, kSensor, kPose, kStatusRobot, kStatus, kGroundTruth, kLmapEvent, kLmapSnapshot,
+enum class Kind { kOther, kSensor, kPose, kStatusRobot, kStatus, kGroundTruth, kLmapEvent, kLmapEvents, kLmapSnapshot,
                   kGlobalMap, kDynamicNotice, kRunInfo };
 
 struct ChannelClass {
@@ -119,6 +120,7 @@ ChannelClass classify(const std::string& ch) {
   if (ch == channels::status_main() || ch == channels::status_sim()) return {Kind::kStatus, -1, "node_status_t"};
   if (ch == channels::ground_truth()) return {Kind::kGroundTruth, -1, "ground_truth_t"};
   if (ch == channels::lmap_event()) return {Kind::kLmapEvent, -1, "landmark_event_t"};
+  if (ch == channels::lmap_events()) return {Kind::kLmapEvents, -1, "lmap_events_t"};
   if (ch == channels::lmap_snapshot()) return {Kind::kLmapSnapshot, -1, "lmap_snapshot_t"};
   if (ch == channels::lmap_resync()) return {Kind::kOther, -1, "resync_request_t"};
   if (ch == channels::global_map()) return {Kind::kGlobalMap, -1, "global_map_t"};
@@ -160,6 +162,7 @@ struct Reader {
   node_status_t status{};
   ground_truth_t truth{};
   landmark_event_t event{};
+  lmap_events_t events{};
   lmap_snapshot_t snapshot{};
   global_map_t map{};
   dynamic_notice_t notice{};
@@ -223,6 +226,7 @@ struct Reader {
         return d;
       }
       case Kind::kLmapEvent: return decode(ev, &event);
+      case Kind::kLmapEvents: return decode(ev, &events);
       case Kind::kLmapSnapshot: return decode(ev, &snapshot);
       case Kind::kGlobalMap: return decode(ev, &map);
       case Kind::kDynamicNotice: return decode(ev, &notice);

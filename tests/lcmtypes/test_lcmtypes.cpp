@@ -15,6 +15,7 @@
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
+#include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/resync_request_t.hpp"
 #include "elaslam/node_status_t.hpp"
@@ -182,6 +183,36 @@ TEST(LcmTypes, SensorFramesAreSizedToTheirContent) {
   EXPECT_LE(wire, 1500);
 }
 
+// LMAP_EVENTS: a 32-byte header (fingerprint included) and 83 bytes per event, the
+// figures contract::kMaxBatchEvents is worked out from; a full message fits one
+// snapshot-sized datagram and round-trips with its events' fields, and the sender
+// binding's robot_id sits at bytes 20..21 as in landmark_event_t (auth_transport.cpp).
+TEST(LcmTypes, EventBatchesFitOneDatagram) {
+  lmap_events_t m{};
+  EXPECT_EQ(m.getEncodedSize(), contract::kEventBatchHeaderBytes);
+  contract::set_count(&m.events, &m.num_events, 1);
+  EXPECT_EQ(m.getEncodedSize(), contract::kEventBatchHeaderBytes + contract::kEventBytes);
+  contract::set_count(&m.events, &m.num_events, contract::kMaxBatchEvents);
+  EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
+  contract::set_count(&m.events, &m.num_events, contract::kMaxBatchEvents + 1);
+  EXPECT_GT(m.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxBatchEvents is the most that fits";
+  contract::set_count(&m.events, &m.num_events, 2);
+  m.robot_id = 0x0203;
+  m.frame = 9;
+  m.events[1].seq = 12;
+  m.events[1].cov[1][0] = 0.25;
+  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_GT(m.encode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  EXPECT_EQ(buf[20], 0x02);
+  EXPECT_EQ(buf[21], 0x03);
+  lmap_events_t d{};
+  ASSERT_GT(d.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  ASSERT_EQ(d.num_events, 2);
+  EXPECT_EQ(d.frame, 9);
+  EXPECT_EQ(d.events[1].seq, 12);
+  EXPECT_EQ(d.events[1].cov[1][0], 0.25);
+}
+
 // A negative count is not a message: LCM's decoder throws on it (std::vector::resize);
 // the node shell and the log readers catch that and count a decode error.
 TEST(LcmTypes, NegativeCountThrowsInDecode) {
@@ -201,6 +232,7 @@ TEST(LcmTypes, ChannelNames) {
   EXPECT_EQ(channels::pose(1), "POSE_1");
   EXPECT_EQ(channels::status_robot(2, "_B"), "STATUS_ROBOT_2_B");
   EXPECT_EQ(channels::lmap_event(), "LMAP_EVENT");
+  EXPECT_EQ(channels::lmap_events("_B"), "LMAP_EVENTS_B");
   EXPECT_EQ(channels::global_map(), "GLOBAL_MAP");
 }
 

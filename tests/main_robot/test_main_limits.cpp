@@ -48,6 +48,99 @@ lmap_snapshot_t snapshot(int robot, std::int64_t seq, int frame, std::vector<int
 
 pose_estimate_t pose(int robot, int frame) { return test::pose_msg(robot, frame); }
 
+// LMAP_EVENTS: a robot's events of a frame in one message are applied exactly as the
+// same events one by one (the map, the counters, the notices); an event that is
+// refused inside a valid message is refused alone; a message whose header does not
+// speak for its events is refused whole, counted once, and changes nothing.
+TEST(MainEventBatches, ABatchIsItsEventsOneByOne) {
+  std::vector<landmark_event_t> f0 = {add(1, 1, 3), add(1, 2, 5), add(1, 3, 7)};
+  std::vector<landmark_event_t> f1 = {test::event_msg(1, 4, landmark_event_t::UPDATE, 3, 1, 1.1, 2.0, 0.02),
+                                      test::event_msg(1, 5, landmark_event_t::MOVING, 5, 1),
+                                      add(1, 7, 9, 0.01, 1)};  // seq 6 lost: a gap, repaired by a resync
+  for (auto* f : {&f0, &f1})
+    for (auto& e : *f) e.incarnation = 42;
+  MainNode one(options()), batch(options());
+  for (const auto* f : {&f0, &f1})
+    for (const auto& e : *f) EXPECT_TRUE(one.on_event(e));
+  std::string why;
+  EXPECT_TRUE(batch.on_events(test::events_msg(f0), &why)) << why;
+  EXPECT_TRUE(batch.on_events(test::events_msg(f1), &why)) << why;
+  EXPECT_EQ(batch.counters().events, one.counters().events);
+  EXPECT_EQ(batch.counters().events, 6);
+  EXPECT_EQ(batch.counters().gaps, 1);
+  EXPECT_EQ(batch.take_notices(0).size(), one.take_notices(0).size());
+  EXPECT_EQ(batch.take_resyncs(0).size(), 1u);
+  for (int id : {3, 5, 7, 9}) {
+    EXPECT_EQ(batch.map().entry(id).status, one.map().entry(id).status) << id;
+    EXPECT_EQ(batch.map().entry(id).fused, one.map().entry(id).fused) << id;
+  }
+  EXPECT_EQ(batch.map().entry(5).status, GlobalStatus::kMoving);
+
+  // Inside a valid message, one absurd event is refused alone; the others apply.
+  std::vector<landmark_event_t> f2 = {add(1, 8, 11, 1e-320, 2), add(1, 9, 12, 0.01, 2)};
+  for (auto& e : f2) e.incarnation = 42;
+  EXPECT_FALSE(batch.on_events(test::events_msg(f2), &why));
+  EXPECT_NE(why.find("cov_floor_m2"), std::string::npos) << why;
+  EXPECT_EQ(batch.counters().refused[Refusal::kImplausible], 1);
+  EXPECT_EQ(batch.map().entry(12).status, GlobalStatus::kStatic);
+
+  // Headers that do not speak for their events: refused whole, nothing applied.
+  struct Case {
+    const char* name;
+    void (*spoil)(lmap_events_t&);
+    const char* expect;
+  };
+  const Case cases[] = {
+      {"another robot's event", [](lmap_events_t& m) { m.events[1].robot_id = 2; }, "robot_id differs"},
+      {"another incarnation", [](lmap_events_t& m) { m.events[0].incarnation = 7; }, "incarnation differs"},
+      {"another frame", [](lmap_events_t& m) { m.events[1].frame = 2; }, "frame differs"},
+      {"seqs not ascending", [](lmap_events_t& m) { m.events[1].seq = m.events[0].seq; }, "not ascending"},
+      {"empty", [](lmap_events_t& m) { m.num_events = 0, m.events.clear(); }, "num_events"},
+      {"count beyond the batch size", [](lmap_events_t& m) { m.num_events = contract::kMaxBatchEvents + 1; }, "num_events"},
+      {"count beyond the array", [](lmap_events_t& m) { m.num_events = 3; }, "does not match"},
+      {"header from outside the team", [](lmap_events_t& m) { m.robot_id = 12; for (auto& e : m.events) e.robot_id = 12; }, "limits.team"},
+  };
+  for (const Case& c : cases) {
+    std::vector<landmark_event_t> f3 = {add(1, 10, 20, 0.01, 3), add(1, 11, 21, 0.01, 3)};
+    for (auto& e : f3) e.incarnation = 42;
+    lmap_events_t m = test::events_msg(f3);
+    c.spoil(m);
+    const auto refused = batch.counters().refused.total();
+    const auto applied = batch.counters().events;
+    EXPECT_FALSE(batch.on_events(m, &why)) << c.name;
+    EXPECT_NE(why.find(c.expect), std::string::npos) << c.name << ": " << why;
+    EXPECT_EQ(batch.counters().refused.total(), refused + 1) << c.name;
+    EXPECT_EQ(batch.counters().events, applied) << c.name;
+    EXPECT_NE(batch.map().entry(20).status, GlobalStatus::kStatic) << c.name;
+  }
+}
+
+// main.moving_repeat_s: the moving set goes out when its lists change (ids, frames,
+// finders), else only once the last one sent is moving_repeat_s old; 0: always.
+TEST(MainMovingSet, ChangesGoOutAtOnceRepeatsOncePerPeriod) {
+  GlobalMapOptions o = options();
+  o.moving_repeat_s = 1.0;
+  MainNode node(o);
+  constexpr std::int64_t t0 = 1'000'000'000, ms = 1000;
+  auto due = [&](std::int64_t t) { return node.moving_set_due(node.make_moving_set(t), t); };
+  EXPECT_TRUE(due(t0)) << "the first one";
+  EXPECT_FALSE(due(t0 + 100 * ms)) << "nothing changed";
+  ASSERT_TRUE(node.on_event(add(1, 1, 4)));
+  EXPECT_FALSE(due(t0 + 200 * ms)) << "a static landmark is not in the moving lists";
+  ASSERT_TRUE(node.on_event(test::event_msg(1, 2, landmark_event_t::MOVING, 4, 1)));
+  EXPECT_TRUE(due(t0 + 300 * ms)) << "4 moving";
+  EXPECT_FALSE(due(t0 + 1299 * ms));
+  EXPECT_TRUE(due(t0 + 1300 * ms)) << "a repeat, a second after the last";
+  EXPECT_FALSE(due(t0 + 1400 * ms));
+  ASSERT_TRUE(node.on_event(test::event_msg(1, 3, landmark_event_t::RETURN, 4, 2)));
+  EXPECT_TRUE(due(t0 + 1500 * ms)) << "4 back: the lists are empty again";
+  EXPECT_TRUE(due(t0)) << "a clock stepped back: sent";
+  EXPECT_EQ(node.counters().moving_sets, 5);
+  o.moving_repeat_s = 0.0;
+  MainNode every(o);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(every.moving_set_due(every.make_moving_set(t0), t0));
+}
+
 // GIVEN an ADD whose covariance is denormal (1e-320: inverts to infinity, a NaN
 // landmark) or zero (pins the landmark)  THEN it is refused as implausible, naming
 // the floor, and the map stays empty.

@@ -118,6 +118,62 @@ TEST_F(RobotNodeInput, OutputsCarrySeqPoseAndPeriodicSnapshots) {
   EXPECT_EQ(node_.snapshot_chunk(0).id_end, node_.robot().lmap().size());  // max_landmark_id
 }
 
+// LMAP_EVENTS (robot.node.batch_events): a frame's events, cut into messages of at
+// most kMaxBatchEvents, are event_msgs() in order, field for field, under a header
+// that matches every event; the stamp reaches all of them. 40 landmarks confirmed in
+// one frame: 40 ADDs in three messages (14, 14, 12).
+TEST(RobotNodeBatches, AFramesEventsGoInMessagesOfAtMostTheBatchSize) {
+  RobotNode node(test::robot_options(Mode::kEla), 2);
+  const auto lms = test::ring(40, 3.0);
+  const Pose2 p{0.0, 0.0, 0.0};
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(k, p, p, lms, test::all_ids(40)), 2), 0), RobotNode::Verdict::kProcessed);
+    if (k < 2) {
+      EXPECT_EQ(node.num_event_batches(), 0) << "no event, no message";
+    }
+  }
+  const auto& ev = node.event_msgs();
+  ASSERT_EQ(ev.size(), 40u);
+  constexpr int kB = contract::kMaxBatchEvents;
+  ASSERT_EQ(kB, 14);
+  ASSERT_EQ(node.num_event_batches(), 3);
+  node.stamp_events(777);
+  std::size_t next = 0;
+  for (int b = 0; b < node.num_event_batches(); ++b) {
+    const lmap_events_t& m = node.event_batch(b);
+    EXPECT_EQ(m.num_events, b < 2 ? kB : 40 - 2 * kB);
+    ASSERT_EQ(m.events.size(), static_cast<std::size_t>(m.num_events));
+    EXPECT_EQ(m.robot_id, 2);
+    EXPECT_EQ(m.frame, 2);
+    EXPECT_EQ(m.incarnation, node.incarnation());
+    EXPECT_EQ(m.utime, 777);
+    for (const landmark_event_t& e : m.events) {
+      const landmark_event_t& s = ev[next++];
+      EXPECT_EQ(e.seq, s.seq);
+      EXPECT_EQ(e.kind, landmark_event_t::ADD);
+      EXPECT_EQ(e.landmark_id, s.landmark_id);
+      EXPECT_EQ(e.x, s.x);
+      EXPECT_EQ(e.y, s.y);
+      EXPECT_EQ(e.cov[0][1], s.cov[0][1]);
+      EXPECT_EQ(e.cov[1][1], s.cov[1][1]);
+      EXPECT_EQ(e.frame, m.frame);
+      EXPECT_EQ(e.robot_id, m.robot_id);
+      EXPECT_EQ(e.incarnation, m.incarnation);
+      EXPECT_EQ(e.utime, 777);
+      EXPECT_EQ(s.utime, 777);
+    }
+    // One datagram each (contract::kMaxChunkBytes), as the snapshot chunks.
+    EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
+  }
+  EXPECT_EQ(next, ev.size());
+  EXPECT_EQ(ev.back().seq, 40);
+  // The next frame's UPDATEs replace them: 40 of them, three messages again.
+  ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(3, p, p, lms, test::all_ids(40)), 2), 0), RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(node.num_event_batches(), 3);
+  EXPECT_EQ(node.event_batch(0).events.front().seq, 41);
+  EXPECT_EQ(node.event_batch(0).events.front().kind, landmark_event_t::UPDATE);
+}
+
 // CANDIDATES_<r>: the landmarks seen but not trusted yet, while there are some, and
 // one empty list when the last one was confirmed.
 TEST_F(RobotNodeInput, CandidatesAreSentWhileThereAreSomeThenOnceEmpty) {

@@ -5,7 +5,10 @@
 
 #include <cstdint>
 
+#include <vector>
+
 #include "elaslam/landmark_event_t.hpp"
+#include "elaslam/lmap_events_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 
 namespace elaslam::test {
@@ -23,6 +26,19 @@ inline landmark_event_t event_msg(int robot, std::int64_t seq, int kind, int id,
   m.x = x;
   m.y = y;
   m.cov[0][0] = m.cov[1][1] = var;
+  return m;
+}
+
+/// `events` in one LMAP_EVENTS message, its header taken from the first.
+inline lmap_events_t events_msg(const std::vector<landmark_event_t>& events) {
+  lmap_events_t m{};
+  if (!events.empty()) {
+    m.robot_id = events.front().robot_id;
+    m.frame = events.front().frame;
+    m.incarnation = events.front().incarnation;
+  }
+  m.num_events = static_cast<std::int16_t>(events.size());
+  m.events = events;
   return m;
 }
 

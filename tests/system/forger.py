@@ -5,7 +5,8 @@
 
   - LMAP_EVENT  ADD of a landmark at (100, 100) with a tiny covariance, from robot
                 ids in the team (1..3) and not (9..11), plain and with a made-up
-                trailer (magic, sender id, counter, a random MAC);
+                trailer (magic, sender id, counter, a random MAC); the same in an
+                LMAP_EVENTS batch;
   - DYNAMIC_NOTICE  a landmark "found moving" (every id in turn), plain and trailed;
   - LMAP_SNAPSHOT   a robot's map with every landmark at (100, 100);
   - POSE_<r>        a robot's pose 100 m off;
@@ -83,6 +84,13 @@ def main():
         ev = e.encode()
         send("LMAP_EVENT plain", "LMAP_EVENT", ev)
         send("LMAP_EVENT fake trailer", "LMAP_EVENT", ev + fake_trailer(e.robot_id, n))
+        # LMAP_EVENTS: the same ADD in a frame's batch, as the robots send them.
+        b = T.lmap_events_t()
+        b.utime, b.frame, b.robot_id, b.incarnation = e.utime, e.frame, e.robot_id, e.incarnation
+        b.events, b.num_events = [e], 1
+        evs = b.encode()
+        send("LMAP_EVENTS plain", "LMAP_EVENTS", evs)
+        send("LMAP_EVENTS fake trailer", "LMAP_EVENTS", evs + fake_trailer(e.robot_id, n))
         # DYNAMIC_NOTICE: every landmark in turn "moving".
         d = T.dynamic_notice_t()
         d.utime, d.frame, d.incarnation, d.seq, d.landmark_id, d.detected_by = now, n, 1, n, n % 72, 1 + n % 3
@@ -112,10 +120,11 @@ def main():
             if len(msgs) >= 2:
                 send("replay recent", ch, msgs[-2])
                 send("replay old", ch, msgs[rng.randrange(0, max(1, len(msgs) // 2))])
-        if heard.get("LMAP_EVENT"):
-            b = bytearray(heard["LMAP_EVENT"][-1])
-            b[40] ^= 0x10  # inside x
-            send("altered genuine", "LMAP_EVENT", bytes(b))
+        for ch, at in (("LMAP_EVENT", 45), ("LMAP_EVENTS", 70)):  # inside (the first event's) x
+            if heard.get(ch):
+                b = bytearray(heard[ch][-1])
+                b[at] ^= 0x10
+                send("altered genuine", ch, bytes(b))
         if heard.get("POSE_1"):
             send("genuine moved to another channel", "POSE_2", heard["POSE_1"][-1])
         # Hear the team meanwhile (the datagrams to replay).

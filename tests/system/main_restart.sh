@@ -16,7 +16,7 @@
 #      main_robot rebuilds from the robots' periodic LMAP_SNAPSHOT and the events
 #      that follow;
 #   3. (a) the last GLOBAL_MAP equals that of a main_robot that was never down and
-#      got the same robot output (the run's own LMAP_EVENT / LMAP_SNAPSHOT / POSE,
+#      got the same robot output (the run's own LMAP_EVENTS / LMAP_SNAPSHOT / POSE,
 #      replayed): same static and moving ids, positions within 1e-6 m;
 #      (b) against the uninterrupted live run: where every robot's poses are the same
 #      in both runs, the same ids and positions within TOL metres; robots that got
@@ -78,7 +78,7 @@ if [ "${1:-}" = "--inner" ]; then
 fi
 
 # --- inside a namespace: main_restart.sh --main-replay BUILD LOG OUT
-# A fresh main_robot, never interrupted, gets the robots' LMAP_EVENT, LMAP_SNAPSHOT
+# A fresh main_robot, never interrupted, gets the robots' LMAP_EVENTS, LMAP_SNAPSHOT
 # and POSE_<r> of a recorded run, in their recorded order (4x speed).
 if [ "${1:-}" = "--main-replay" ]; then
   BUILD="$2" LOG="$3" OUT="$4"
@@ -89,7 +89,7 @@ if [ "${1:-}" = "--main-replay" ]; then
   "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
   "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" wait-nodes 1 --timeout 20
   sleep 0.2
-  lcm-logplayer -s 4 -e '^(LMAP_EVENT|LMAP_SNAPSHOT|POSE_[0-9]+)$' "$LOG" > "$OUT/logs/logplayer.log" 2>&1
+  lcm-logplayer -s 4 -e '^(LMAP_EVENTS?|LMAP_SNAPSHOT|POSE_[0-9]+)$' "$LOG" > "$OUT/logs/logplayer.log" 2>&1
   sleep 0.5
   rc=0
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done

@@ -37,18 +37,21 @@ class Observer {
   Observer(InProcessTransport& bus, const std::string& suffix) : shell_(bus, ShellOptions("observer", suffix, nullptr)) {
     watch<pose_estimate_t>("POSE_[0-9]+" + suffix);
     watch<landmark_event_t>(channels::lmap_event(suffix));
+    watch<lmap_events_t>(channels::lmap_events(suffix));
     watch<lmap_snapshot_t>(channels::lmap_snapshot(suffix));
     watch<global_map_t>(channels::global_map(suffix));
     watch<dynamic_notice_t>(channels::dynamic_notice(suffix));
   }
   NodeShell& shell() { return shell_; }
   std::vector<std::string> seen;
+  int batched_events = 0;  // events carried by the LMAP_EVENTS seen
 
  private:
   template <class Msg>
   void watch(const std::string& pattern) {
     shell_.subscribe<Msg>(pattern, [this](const Msg& m, const std::string& ch) {
       seen.push_back(ch + " " + std::to_string(m.frame));
+      if constexpr (std::is_same_v<Msg, lmap_events_t>) batched_events += m.num_events;
     }, transport::kUnboundedQueue);
   }
   NodeShell shell_;
@@ -91,21 +94,55 @@ TEST_F(RobotOnBus, EachFrameGoesOutAsItsEventsThenItsPose) {
   });
   for (const auto& f : robot1_frames(12)) send(f);
   EXPECT_EQ(after_frame, 12);
-  // Per frame: its events, a snapshot every 10 frames, then the POSE (the frame's end).
-  int frame = 0, events = 0, snapshots = 0;
+  // Per frame: its events (LMAP_EVENTS, robot.node.batch_events), a snapshot every
+  // 10 frames, then the POSE (the frame's end).
+  int frame = 0, batches = 0, snapshots = 0;
   for (const std::string& s : obs.seen) {
     const std::string channel = s.substr(0, s.find(' '));
     if (channel != "POSE_1") {
       EXPECT_EQ(s, channel + " " + std::to_string(frame)) << "an output of the frame before its POSE";
-      ++(channel == "LMAP_EVENT" ? events : snapshots);
+      EXPECT_NE(channel, "LMAP_EVENT") << "events go batched";
+      ++(channel == "LMAP_EVENTS" ? batches : snapshots);
     } else {
       EXPECT_EQ(s, "POSE_1 " + std::to_string(frame++));
     }
   }
   EXPECT_EQ(frame, 12);
-  EXPECT_GT(events, 0);
+  EXPECT_GT(batches, 0);
+  EXPECT_LE(batches, 12) << "one message per frame at this scene's ~10 landmarks in view";
   EXPECT_EQ(snapshots, 2);  // frames 0 and 10
+  EXPECT_EQ(static_cast<int>(node.counters().events_sent), obs.batched_events);
+}
+
+// Without robot.node.batch_events: the same events, one LMAP_EVENT each, in the same
+// place in the frame's outputs.
+TEST(RobotOnBusSingly, WithoutBatchingEachEventGoesAlone) {
+  InProcessTransport bus;
+  NodeShell shell{bus, ShellOptions("robot_node 1", "", nullptr)};
+  RobotOptions o = load_robot_options(kConfig);
+  o.batch_events = false;
+  RobotNode node{o, 1};
+  RobotPorts<NodeShell> ports{shell, node};
+  Observer obs{bus, ""};
+  ASSERT_TRUE(ports.open());
+  for (const auto& f : robot1_frames(12)) {
+    obs.shell().publish(channels::sensor(1), f);
+    bus.dispatch_all();
+  }
+  int frame = 0, events = 0;
+  for (const std::string& s : obs.seen) {
+    const std::string channel = s.substr(0, s.find(' '));
+    EXPECT_NE(channel, "LMAP_EVENTS");
+    if (channel == "LMAP_EVENT") {
+      EXPECT_EQ(s, "LMAP_EVENT " + std::to_string(frame));
+      ++events;
+    }
+    if (channel == "POSE_1") ++frame;
+  }
+  EXPECT_EQ(frame, 12);
+  EXPECT_GT(events, 12);
   EXPECT_EQ(static_cast<int>(node.counters().events_sent), events);
+  EXPECT_EQ(obs.batched_events, 0);
 }
 
 // Where each processed frame's time went (FrameStages): one sample per stage per
@@ -278,9 +315,28 @@ TEST_F(MainOnBus, GlobalMapWhenEveryRobotFinishedAFrameAndNoticesAtOnce) {
   EXPECT_EQ(node.counters().notices_sent, 1);
 }
 
-// Every GLOBAL_MAP publication is followed by GLOBAL_MOVING: its moving lists alone
-// (no landmarks), the same stamps, over the whole id range: what the robots read.
-TEST_F(MainOnBus, EveryGlobalMapIsFollowedByItsMovingListsAlone) {
+// LMAP_EVENTS on the bus: main_robot applies a batch's events before the POSE that
+// follows it, and a refused batch is logged by the shell and counted by the node.
+TEST_F(MainOnBus, BatchedEventsAreAppliedBeforeTheFramesPose) {
+  NodeShell& robots = obs.shell();
+  lmap_events_t b = test::events_msg({event(1, 1, 0, landmark_event_t::ADD, 4), event(1, 2, 0, landmark_event_t::ADD, 6)});
+  robots.publish(channels::lmap_events(), b);
+  robots.publish(channels::pose(1), pose(1, 0));
+  b.events[1].robot_id = 2;  // a header that does not speak for its events
+  robots.publish(channels::lmap_events(), b);
+  bus.dispatch_all();
+  EXPECT_EQ(node.counters().events, 2);
+  EXPECT_EQ(node.counters().rejected_inputs, 1);
+  const std::vector<std::string> expected = {"LMAP_EVENTS 0", "POSE_1 0", "LMAP_EVENTS 0", "GLOBAL_MAP 0"};
+  EXPECT_EQ(obs.seen, expected);
+  EXPECT_EQ(node.map().count(GlobalStatus::kStatic), 2);
+}
+
+// A GLOBAL_MAP publication is followed by GLOBAL_MOVING, its moving lists alone (no
+// landmarks), the same stamps, over the whole id range (what the robots read), when
+// those lists changed since the last GLOBAL_MOVING (main.moving_repeat_s: or when
+// that one is old; MainEventBatches below).
+TEST_F(MainOnBus, AGlobalMapIsFollowedByItsMovingListsAloneWhenTheyChanged) {
   std::vector<global_map_t> maps, moving;
   obs.shell().subscribe<global_map_t>(
       channels::global_map(), [&](const global_map_t& m, const std::string&) { maps.push_back(m); },
@@ -313,6 +369,19 @@ TEST_F(MainOnBus, EveryGlobalMapIsFollowedByItsMovingListsAlone) {
   EXPECT_EQ(m.id_end, node.map().max_landmark_id());
   EXPECT_EQ(node.counters().maps_published, 1);  // a moving set is not another map
   EXPECT_EQ(node.counters().map_chunks, 1);
+  // Frame 1: the same lists, within the repeat period: the map alone.
+  robots.publish(channels::pose(1), pose(1, 1));
+  bus.dispatch_all();
+  EXPECT_EQ(maps.size(), 2u);
+  EXPECT_EQ(moving.size(), 1u);
+  // Frame 2: landmark 9 found moving too: the new lists go out with its map.
+  robots.publish(channels::lmap_event(), event(1, 11, 2, landmark_event_t::MOVING, 9));
+  robots.publish(channels::pose(1), pose(1, 2));
+  bus.dispatch_all();
+  ASSERT_EQ(moving.size(), 2u);
+  EXPECT_EQ(moving[1].moving_ids, (std::vector<std::int32_t>{6, 9}));
+  EXPECT_EQ(moving[1].frame, 2);
+  EXPECT_EQ(node.counters().moving_sets, 2);
 }
 
 // main_robot's timer sends GLOBAL_MAP only when no map went out in its period: a

@@ -28,7 +28,7 @@ std::uint64_t get_be(const std::uint8_t* p, int bytes) {
 /// `channel` without `suffix`; false when it does not end with it.
 bool is_robot(std::int16_t id) { return id >= 1 && id <= contract::kMaxRobots; }
 
-// The robot_id field of landmark_event_t and lmap_snapshot_t: after the 8-byte
+// The robot_id field of landmark_event_t, lmap_events_t and lmap_snapshot_t: after the 8-byte
 // fingerprint, int64 utime and int32 frame (LCM encodes big-endian, in field order).
 constexpr std::size_t kRobotIdOffset = 8 + 8 + 4;
 
@@ -57,7 +57,8 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
   std::string_view base;
   if (!channels::strip_suffix(channel, suffix, &base)) return true;  // not a team channel
   using namespace channels;
-  if (base == kLmapEvent || base == kLmapSnapshot)
+  // (main_robot checks every event of an LMAP_EVENTS against its header's robot_id.)
+  if (base == kLmapEvent || base == kLmapEvents || base == kLmapSnapshot)
     return is_robot(id) && size >= kRobotIdOffset + 2 &&
            static_cast<std::int16_t>(get_be(payload + kRobotIdOffset, 2)) == id;
   if (base == kGlobalMap || base == kGlobalMoving || base == kDynamicNotice || base == kStatusMain || base == kLmapResync ||

@@ -11,7 +11,8 @@ namespace elaslam::channels {
 /// names without building them (the authenticating transport, per message).
 inline constexpr std::string_view kSensorPrefix = "SENSOR_", kPosePrefix = "POSE_",
                                   kStatusRobotPrefix = "STATUS_ROBOT_", kGroundTruth = "GROUND_TRUTH",
-                                  kLmapEvent = "LMAP_EVENT", kLmapSnapshot = "LMAP_SNAPSHOT",
+                                  kLmapEvent = "LMAP_EVENT", kLmapEvents = "LMAP_EVENTS",
+                                  kLmapSnapshot = "LMAP_SNAPSHOT",
                                   kLmapResync = "LMAP_RESYNC", kGlobalMap = "GLOBAL_MAP",
                                   kDynamicNotice = "DYNAMIC_NOTICE", kStatusMain = "STATUS_MAIN",
                                   kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO", kTeamMapPrefix = "TEAM_MAP_",
@@ -59,6 +60,8 @@ inline int robot_of(std::string_view channel, std::string_view prefix, std::stri
 
 inline std::string ground_truth(const std::string& suffix = "") { return std::string(kGroundTruth) + suffix; }
 inline std::string lmap_event(const std::string& suffix = "") { return std::string(kLmapEvent) + suffix; }
+/// A robot's events of one frame in one message (lmap_events_t; robot.node.batch_events).
+inline std::string lmap_events(const std::string& suffix = "") { return std::string(kLmapEvents) + suffix; }
 inline std::string lmap_snapshot(const std::string& suffix = "") { return std::string(kLmapSnapshot) + suffix; }
 inline std::string lmap_resync(const std::string& suffix = "") { return std::string(kLmapResync) + suffix; }
 inline std::string global_map(const std::string& suffix = "") { return std::string(kGlobalMap) + suffix; }
@@ -71,8 +74,9 @@ inline std::string status_sim(const std::string& suffix = "") { return std::stri
 inline std::string run_info(const std::string& suffix = "") { return std::string(kRunInfo) + suffix; }
 
 /// The team's channel names without a robot id, and the prefixes of the per-robot ones.
-inline constexpr std::string_view kTeamNames[] = {kGroundTruth, kLmapEvent,     kLmapSnapshot, kLmapResync, kGlobalMap,
-                                                  kGlobalMoving, kDynamicNotice, kStatusMain,   kStatusSim,  kRunInfo};
+inline constexpr std::string_view kTeamNames[] = {kGroundTruth,  kLmapEvent,     kLmapEvents, kLmapSnapshot,
+                                                  kLmapResync,   kGlobalMap,     kGlobalMoving, kDynamicNotice,
+                                                  kStatusMain,   kStatusSim,     kRunInfo};
 inline constexpr std::string_view kRobotPrefixes[] = {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix,
                                                       kCandidatesPrefix};
 
@@ -99,7 +103,7 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
 /// woken only by the groups it reads. By reader:
 /// - kGroupTeam: DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO and
 ///   any other name (everyone; small messages);
-/// - kGroupOutputs: LMAP_EVENT, LMAP_SNAPSHOT, POSE_<r> (main_robot; a lockstep
+/// - kGroupOutputs: LMAP_EVENT(S), LMAP_SNAPSHOT, POSE_<r> (main_robot; a lockstep
 ///   simulator). One port, so one socket: a robot's events of a frame reach main_robot
 ///   before its POSE of that frame, which is when main_robot sends the frame's map;
 /// - kGroupMap: GLOBAL_MAP (the viewer; the robots read GLOBAL_MOVING);
@@ -122,7 +126,7 @@ inline int channel_group(std::string_view channel, std::string_view suffix = "")
   if (robot_of(channel, kCandidatesPrefix, suffix) > 0) return kGroupObservers;
   std::string_view base;
   if (!strip_suffix(channel, suffix, &base)) return kGroupTeam;
-  if (base == kLmapEvent || base == kLmapSnapshot) return kGroupOutputs;
+  if (base == kLmapEvent || base == kLmapEvents || base == kLmapSnapshot) return kGroupOutputs;
   if (base == kGlobalMap) return kGroupMap;
   if (base == kGroundTruth) return kGroupObservers;
   return kGroupTeam;

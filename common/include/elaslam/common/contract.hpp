@@ -41,6 +41,11 @@ constexpr int kMaxLandmarkIdLimit = 1 << 20;
 // 1,500-byte MTU for channel names of up to 200 characters, and under the 1,400
 // bytes of a typical tunnelled link for names of up to 100.
 constexpr int kMaxChunkBytes = 1200;
+/// Events per lmap_events_t (LMAP_EVENTS), so that one fits kMaxChunkBytes: its
+/// header encodes to 32 bytes (fingerprint included), each landmark_event_t to 83
+/// (test_lcmtypes checks both). A frame with more events sends several.
+constexpr int kEventBatchHeaderBytes = 32, kEventBytes = 83;
+constexpr int kMaxBatchEvents = (kMaxChunkBytes - kEventBatchHeaderBytes) / kEventBytes;
 
 static_assert(std::is_same_v<decltype(global_landmark_t::contributors), std::int16_t> && kMaxRobots == 16,
               "one contributor bit per robot id");

@@ -46,6 +46,11 @@ struct GlobalMapOptions {
   /// Every this many frames, each robot gets the map without its own information
   /// (TEAM_MAP_<r>, for robot.team_map.fuse; docs/decisions.md). 0: never.
   int team_map_period_frames = 0;
+  /// GLOBAL_MOVING goes out with a GLOBAL_MAP when its moving lists differ from the
+  /// last ones sent, or when those went out at least this long ago (a lost one is
+  /// repaired within it); 0: with every GLOBAL_MAP. Process and in-process alike
+  /// (MainNode::moving_set_due); docs/decisions.md "GLOBAL_MOVING".
+  double moving_repeat_s = 1.0;  // [s]
 };
 void parse(config::Reader& r, GlobalMapOptions* o);
 

@@ -15,6 +15,7 @@
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
+#include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/node_status_t.hpp"
@@ -33,6 +34,7 @@ struct MainCounters {
   std::int64_t notices_sent = 0;
   std::int64_t maps_published = 0;
   std::int64_t map_chunks = 0;           // GLOBAL_MAP chunks of those publications
+  std::int64_t moving_sets = 0;          // GLOBAL_MOVING publications (main.moving_repeat_s)
   std::int64_t team_maps_published = 0;  // TEAM_MAP_<r> publications (all chunks of one count once)
   std::int64_t resyncs_requested = 0;    // LMAP_RESYNC requests sent
   std::int64_t restarts = 0;             // robots seen with a new incarnation
@@ -49,6 +51,12 @@ class MainNode {
   /// Returns false (and counts it) when the message is invalid; `why` says why.
   bool on_event(const landmark_event_t& msg, std::string* why = nullptr);
   bool on_snapshot(const lmap_snapshot_t& msg, std::string* why = nullptr);
+  /// LMAP_EVENTS: a robot's events of one frame. A message whose header and events
+  /// disagree (robot, incarnation, frame), with seqs not ascending or a count outside
+  /// [1, contract::kMaxBatchEvents] is refused whole (counted once); else every event
+  /// goes through on_event in order, exactly as if it had come alone (each refusal
+  /// counted). False when anything was refused; `why` says the first problem.
+  bool on_events(const lmap_events_t& msg, std::string* why = nullptr);
   void count_decode_error() { ++counters_.decode_errors; }
 
   /// Notices produced since the last call, as messages (seq assigned); clears them.
@@ -76,6 +84,12 @@ class MainNode {
   /// stamps, in the same chunk pool. What a robot reads of the global map: a few
   /// hundred bytes where GLOBAL_MAP is tens of kB. Returns the chunk count.
   int make_moving_set(std::int64_t now_utime, int frame = -1);
+  /// Is the moving set just made (make_moving_set) due to go out at `now_utime`
+  /// (main.moving_repeat_s)? True when its lists (ids, frames, finders) differ from
+  /// the last set that was due, when that one is moving_repeat_s old or older, or
+  /// when the option is 0; counted (MainCounters::moving_sets). Every change goes out
+  /// at the moment it did when every map carried it; the repeats only repair.
+  bool moving_set_due(int num_chunks, std::int64_t now_utime);
   /// Robot r's team map (TEAM_MAP_<r>, main.team_map_period_frames): the global map
   /// without r's own information (GlobalMap::fused_without), in the same chunk pool
   /// (map_chunk; the last make_* call fills it). Returns the chunk count.
@@ -105,6 +119,7 @@ class MainNode {
   /// else the problem, and `reason` (when given) its kind.
   std::string validate(const landmark_event_t& msg, Refusal* reason = nullptr) const;
   std::string validate(const lmap_snapshot_t& msg, Refusal* reason = nullptr) const;
+  std::string validate(const lmap_events_t& msg, Refusal* reason = nullptr) const;  // the message, not its events
   std::string validate(const pose_estimate_t& msg, Refusal* reason = nullptr) const;
 
  private:
@@ -139,6 +154,9 @@ class MainNode {
   // GLOBAL_MAP chunks: a pool sized at construction for the largest map (no allocation).
   ChunkSizes chunk_sizes_;
   std::vector<int> static_ids_, moving_ids_;
+  std::vector<int> moving_sent_, moving_now_;  // (id, frame, by) of the last due moving set and of the one just made
+  std::int64_t moving_sent_utime_ = 0;
+  bool any_moving_sent_ = false;
   std::vector<ChunkSpan> spans_;
   std::vector<global_map_t> chunks_;
   std::vector<std::pair<int, RobotEstimate>> snap_lms_;
@@ -150,12 +168,13 @@ class MainNode {
 /// deep queue, on purpose; losses show up as seq gaps and snapshots repair them.
 struct MainQueues {
   int event = 10000;
+  int events = 1000;  // LMAP_EVENTS: one message per robot per frame
   int snapshot = 100;
   int pose = 1000;
 };
 
 /// A MainNode on the message layer (transport/node_shell.hpp): receives LMAP_EVENT,
-/// LMAP_SNAPSHOT and every robot's POSE_<r>; publishes DYNAMIC_NOTICE as soon as an
+/// LMAP_EVENTS, LMAP_SNAPSHOT and every robot's POSE_<r>; publishes DYNAMIC_NOTICE as soon as an
 /// event or snapshot produces one, GLOBAL_MAP for frame k as soon as every robot seen
 /// so far has finished k (its POSE marks the end of its frame: it publishes its events
 /// before it), and GLOBAL_MAP / STATUS_MAIN on request. The main_robot process and
@@ -181,12 +200,14 @@ class MainPorts {
     const std::string& sfx = shell_.suffix();
     const int e = shell_.template subscribe<landmark_event_t>(
         channels::lmap_event(sfx), [this](const landmark_event_t& m, const std::string&) { on_event(m); }, queues.event);
+    const int b = shell_.template subscribe<lmap_events_t>(
+        channels::lmap_events(sfx), [this](const lmap_events_t& m, const std::string&) { on_events(m); }, queues.events);
     const int s = shell_.template subscribe<lmap_snapshot_t>(
         channels::lmap_snapshot(sfx), [this](const lmap_snapshot_t& m, const std::string&) { on_snapshot(m); },
         queues.snapshot);
     const int p = shell_.template subscribe<pose_estimate_t>(
         channels::any_pose(sfx), [this](const pose_estimate_t& m, const std::string&) { on_pose(m); }, queues.pose);
-    return e > 0 && s > 0 && p > 0;
+    return e > 0 && b > 0 && s > 0 && p > 0;
   }
 
   /// GLOBAL_MAP now, stamped `frame` (default: the newest frame every robot has finished).
@@ -197,7 +218,8 @@ class MainPorts {
     const int n = node_.make_global_map(last_map_utime_, frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
     const int k = node_.make_moving_set(last_map_utime_, frame);
-    for (int i = 0; i < k; ++i) shell_.publish(moving_, node_.map_chunk(i));
+    if (node_.moving_set_due(k, last_map_utime_))
+      for (int i = 0; i < k; ++i) shell_.publish(moving_, node_.map_chunk(i));
     if (!node_.team_map_due(frame)) return;
     for (int r = 1; r <= kMaxTeamRobots; ++r) {
       if (!node_.robot_seen(r)) continue;
@@ -224,6 +246,11 @@ class MainPorts {
   void on_event(const landmark_event_t& m) {
     std::string why;
     if (!node_.on_event(m, &why)) shell_.refuse("event refused: " + why);
+    send_notices();
+  }
+  void on_events(const lmap_events_t& m) {
+    std::string why;
+    if (!node_.on_events(m, &why)) shell_.refuse("events refused: " + why);
     send_notices();
   }
   void on_snapshot(const lmap_snapshot_t& m) {

@@ -17,6 +17,7 @@
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
+#include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -103,6 +104,14 @@ class RobotNode {
   // ---- outputs of the last processed frame -----------------------------------------
   const pose_estimate_t& pose_msg() const { return pose_; }
   const std::vector<landmark_event_t>& event_msgs() const { return events_; }
+  /// The same events in messages of at most contract::kMaxBatchEvents each
+  /// (LMAP_EVENTS, robot.node.batch_events), filled from event_msgs(); none when the
+  /// frame had no event. A pool sized at construction: no allocation.
+  int num_event_batches() const { return num_batches_; }
+  const lmap_events_t& event_batch(int i) const { return batches_[static_cast<std::size_t>(i)]; }
+  /// Stamp this frame's outgoing events (singly and in batches) with `utime`: the
+  /// moment they go out.
+  void stamp_events(std::int64_t utime);
   /// True when this frame also produced a snapshot (every snapshot_period_frames).
   bool snapshot_ready() const { return snapshot_ready_; }
   /// The last snapshot, in chunks that each fit one datagram (lmap_snapshot_t).
@@ -180,6 +189,8 @@ class RobotNode {
   std::int64_t seq_ = 0;
   pose_estimate_t pose_{};
   std::vector<landmark_event_t> events_;
+  std::vector<lmap_events_t> batches_;  // events_ in LMAP_EVENTS messages; the first num_batches_ in use
+  int num_batches_ = 0;
   std::int64_t incarnation_ = 0;
   // Snapshot chunks: a pool sized at construction for the largest map (no allocation).
   ChunkSizes chunk_sizes_;
@@ -224,7 +235,8 @@ struct RobotQueues {
 /// DYNAMIC_NOTICE, GLOBAL_MAP (the moving set: lost notices repaired), TEAM_MAP_<r>
 /// (with robot.team_map.fuse: the other robots' map), LMAP_RESYNC
 /// (main_robot asks for a snapshot) and its own POSE_<r> (a second sender with this
-/// id); for every processed frame publishes its LMAP_EVENTs, its LMAP_SNAPSHOT
+/// id); for every processed frame publishes its events (LMAP_EVENTS, or one
+/// LMAP_EVENT each without robot.node.batch_events), its LMAP_SNAPSHOT
 /// chunks when one is due, then POSE_<r> (the end of the robot's frame for
 /// main_robot); STATUS_ROBOT_<r> on request. The robot_node process and the
 /// in-process team run both run this, so the live and in-process paths share it.
@@ -239,7 +251,8 @@ struct RobotQueues {
 ///            or synchronised clocks); across unsynchronised clocks it is clamped
 ///            at 0 or absurd.
 ///   frame:   RobotNode::on_sensor: the filter, the gate, the outgoing messages filled.
-///   outputs: this frame's LMAP_EVENTs, snapshot chunks and CANDIDATES encoded and sent.
+///   outputs: this frame's LMAP_EVENTS (or LMAP_EVENTs), snapshot chunks and
+///            CANDIDATES encoded and sent.
 ///   pose:    the POSE encoded and sent (its utime is stamped just before).
 struct FrameStages {
   DurationHistogram receive, frame, outputs, pose;
@@ -252,6 +265,7 @@ class RobotPorts {
       : shell_(shell),
         node_(node),
         event_(channels::lmap_event(shell.suffix())),
+        events_(channels::lmap_events(shell.suffix())),
         snapshot_(channels::lmap_snapshot(shell.suffix())),
         pose_(channels::pose(node.robot_id(), shell.suffix())),
         status_(channels::status_robot(node.robot_id(), shell.suffix())),
@@ -315,10 +329,11 @@ class RobotPorts {
     if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
     if (after_frame_) after_frame_(node_);
     const std::int64_t now = shell_.now_utime();
-    for (auto ev : node_.event_msgs()) {
-      ev.utime = now;
-      shell_.publish(event_, ev);
-    }
+    node_.stamp_events(now);
+    if (node_.robot().options().batch_events)
+      for (int i = 0; i < node_.num_event_batches(); ++i) shell_.publish(events_, node_.event_batch(i));
+    else
+      for (const auto& ev : node_.event_msgs()) shell_.publish(event_, ev);
     if (node_.snapshot_ready()) publish_snapshot();
     if (node_.candidates_ready()) shell_.publish(candidates_, node_.candidates_msg());
     pose_estimate_t pose = node_.pose_msg();
@@ -365,7 +380,7 @@ class RobotPorts {
 
   Shell& shell_;
   RobotNode& node_;
-  const std::string event_, snapshot_, pose_, status_, candidates_;  // channel names, built once
+  const std::string event_, events_, snapshot_, pose_, status_, candidates_;  // channel names, built once
   typename Shell::SequenceGaps notice_seq_;            // DYNAMIC_NOTICE's seq: lost notices
   std::function<void(const RobotNode&)> after_frame_;
   FrameStages stages_;

@@ -91,6 +91,10 @@ struct RobotOptions {
   /// CANDIDATES_<r> (for the viewer) every N frames while the robot has candidates,
   /// and once when the last one left; 0: never.
   int candidates_period_frames = 1;
+  /// A frame's events go to main_robot in LMAP_EVENTS messages (lmap_events_t, up to
+  /// contract::kMaxBatchEvents each) rather than one LMAP_EVENT per event: one
+  /// datagram where there were ~10, the same events in the same order (issue 18).
+  bool batch_events = true;
   int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
   /// A robot whose first frame is not frame 0 (started late, or restarted without
   /// a state file) takes the odometer's dead reckoning over that many frames of

@@ -87,8 +87,8 @@ struct Sender {
 
 /// May sender `id` publish on `channel` (a team channel with `suffix`)? Per-robot
 /// channels belong to their robot, the map's channels to main_robot, the world's to
-/// the simulator; LMAP_EVENT and LMAP_SNAPSHOT to robots, whose payload's robot_id
-/// (bytes 20..21 of both types' encoding) must be the sender's. Channels that are not
+/// the simulator; LMAP_EVENT, LMAP_EVENTS and LMAP_SNAPSHOT to robots, whose payload's
+/// robot_id (bytes 20..21 of the three types' encoding) must be the sender's. Channels that are not
 /// the team's: any sender of the team. docs/security.md lists what is bound.
 bool sender_may_publish(std::int16_t id, const std::string& channel, const std::string& suffix,
                         const std::uint8_t* payload, std::size_t size);
