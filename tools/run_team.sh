@@ -239,7 +239,9 @@ if [ "$GROUPED" -eq 0 ] && grep -q "channel groups on" "$OUT/logs/check.log"; th
   GROUPED=1
   KEY_ARGS+=(--channel-groups)
 fi
-[ "$GROUPED" -eq 0 ] || [ $((PORT + 19)) -le 65535 ] || die "--channel-groups uses ports $PORT..$((PORT + 19)): past 65535"
+# shellcheck source=tools/lcm_groups.sh
+. "$ROOT/tools/lcm_groups.sh"
+[ "$GROUPED" -eq 0 ] || [ $((PORT + LCM_GROUP_LAST)) -le 65535 ] || die "--channel-groups uses ports $PORT..$((PORT + LCM_GROUP_LAST)): past 65535"
 
 # The robots' mode (the override, else the config's robot.mode) as robot_node reads
 # it: its --check validates the robot section and says "valid, mode M".
@@ -504,10 +506,9 @@ stop_all() {
 }
 
 same_host() { :; }                       # every role here, no prefix
-# The team's LCM URL as every process opens it, and its channel groups' (lcm_groups.sh).
-# shellcheck source=tools/lcm_groups.sh
-. "$ROOT/tools/lcm_groups.sh"
-pose_url() { if [ "$GROUPED" -eq 1 ]; then lcm_group_url "$LCM_GROUP_OUTPUTS"; else lcm_base_url; fi; }
+# The team's LCM URL as every process opens it, and its channel groups' (lcm_groups.sh,
+# sourced above).
+pose_url() { if [ "$GROUPED" -eq 1 ]; then lcm_group_url "$LCM_GROUP_POSES"; else lcm_base_url; fi; }
 own_host() { echo ip netns exec "${HOST_NS[$1]}" env "LCM_DEFAULT_URL=$URL"; }
 
 if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; then
@@ -563,7 +564,7 @@ else
 fi
 if [ "$GROUPED" -eq 1 ]; then
   echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator; channel groups on LCM ports" \
-    "$(lcm_group_url 0 | sed 's/.*:\([0-9]*\).*/\1/')-$(lcm_group_url 19 | sed 's/.*:\([0-9]*\).*/\1/'), one lcm-logger per group;" \
+    "$(lcm_group_url 0 | sed 's/.*:\([0-9]*\).*/\1/')-$(lcm_group_url "$LCM_GROUP_LAST" | sed 's/.*:\([0-9]*\).*/\1/'), one lcm-logger per group;" \
     "logs in $OUT/logs" >&2
 else
   echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator, lcm-logger; logs in $OUT/logs" >&2

@@ -27,6 +27,8 @@ Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
 
 MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   robot_frame_.fill(-1);
+  held_frame_.fill(-1);
+  snapshot_done_frame_.fill(-1);
   resync_frame_.fill(-1000000);
   const auto max_id = static_cast<std::size_t>(options.max_landmark_id);
   pending_.reserve(max_id);
@@ -135,6 +137,9 @@ std::string MainNode::validate(const pose_estimate_t& m, Refusal* reason) const 
   Refusal& r = reason ? *reason : dummy;
   const MessageLimits& lim = map_.options().limits;
   if (std::string p = check_robot(m.robot_id, lim, &r); !p.empty()) return p;
+  r = Refusal::kMalformed;
+  if (m.event_seq < 0 || m.event_seq > kMaxSeq) return contract::got("event_seq not in [0, 2^62]", m.event_seq);
+  if (m.snapshot_chunks < 0) return contract::got("snapshot_chunks is negative", m.snapshot_chunks);
   return check_pose(m, lim, &r);
 }
 
@@ -173,6 +178,8 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
     case IncarnationVerdict::kRestarted:
       ++counters_.restarts;
       robot_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;
+      held_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;  // it waited for the old stream's seq
+      snapshot_done_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;
       frame_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       event_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       snapshot_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
@@ -252,6 +259,7 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
     case EventResult::kDuplicate:
     case EventResult::kStale: ++counters_.duplicates; break;
   }
+  settle_pose(m.robot_id);
   return true;
 }
 
@@ -325,6 +333,12 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
                    why);
   }
   ++counters_.snapshots;
+  const auto r = static_cast<std::size_t>(m.robot_id - 1);
+  if (m.chunk == m.num_chunks - 1) {  // its last chunk
+    snapshot_done_frame_[r] = m.frame;
+    if (held_frame_[r] == m.frame) held_snapshot_[r] = false;
+  }
+  settle_pose(m.robot_id);
   return true;
 }
 
@@ -364,18 +378,52 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   // the robot's earlier events never reached this map.
   if (first && m.frame > 0 && map_.stream(m.robot_id).last_seq == 0)
     request_resync(m.robot_id, resync_request_t::MAIN_STARTED);
-  const int done = finished_frame(m.robot_id, m.frame);
+  // The POSE goes out before its frame's events: the frame is finished when events
+  // up to its event_seq are applied. Held until then; an older held POSE is let go
+  // now (its events are late or lost: the map is not held back more than a frame).
+  int done = -1;
+  const int older = held_frame_[r];
+  const bool snapshot_in = m.snapshot_chunks == 0 || snapshot_done_frame_[r] == m.frame;  // (or came first)
+  if (m.event_seq <= map_.stream(m.robot_id).last_seq && snapshot_in) {
+    held_frame_[r] = -1;
+    done = finished_frame(m.robot_id, m.frame);
+  } else {
+    held_frame_[r] = m.frame;
+    held_seq_[r] = m.event_seq;
+    held_snapshot_[r] = !snapshot_in;
+    if (older >= 0 && older < m.frame) done = finished_frame(m.robot_id, older);
+  }
   if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // again, rate-limited
   return done;
+}
+
+void MainNode::settle_pose(int robot_id) {
+  const auto r = static_cast<std::size_t>(robot_id - 1);
+  if (held_frame_[r] < 0 || held_snapshot_[r] || map_.stream(robot_id).last_seq < held_seq_[r]) return;
+  const int frame = held_frame_[r];
+  held_frame_[r] = -1;
+  const int done = finished_frame(robot_id, frame);
+  if (done >= 0) finished_ = std::max(finished_, done);
 }
 
 int MainNode::finished_frame(int robot_id, int frame) {
   int& f = robot_frame_[static_cast<std::size_t>(robot_id - 1)];
   f = std::max(f, frame);
-  int all = -1;
-  for (int r : robot_frame_)
-    if (r >= 0) all = all < 0 ? r : std::min(all, r);
-  if (all <= completed_frame_) return -1;
+  // The oldest frame of the robots seen; a robot whose POSE is held (its events not
+  // in yet) has finished only the frame before that POSE's, also when that POSE is
+  // the first heard of it (then nothing: -1 holds every map back).
+  int all = std::numeric_limits<int>::max();
+  bool any = false;
+  for (std::size_t r = 0; r < robot_frame_.size(); ++r) {
+    int done = robot_frame_[r];
+    if (held_frame_[r] >= 0)
+      done = done < 0 ? held_frame_[r] - 1 : std::min(done, held_frame_[r] - 1);
+    else if (done < 0)
+      continue;
+    all = any ? std::min(all, done) : done;
+    any = true;
+  }
+  if (!any || all <= completed_frame_) return -1;
   completed_frame_ = all;
   return all;
 }

@@ -58,10 +58,12 @@ class ChannelGroupsLive : public ::testing::Test {
 
 TEST_F(ChannelGroupsLive, EachChannelGoesOutOnItsGroupsPortOnly) {
   using namespace channels;
-  // Probes on single ports: the team group, the robots' outputs, robot 2's own.
-  LcmTransport team(port_url(kGroupTeam)), poses(port_url(kGroupOutputs)), robot2(port_url(kGroupRobot + 2));
-  Log at_team, at_poses, at_robot2;
+  // Probes on single ports: the team group, the robots' outputs, the POSEs, robot 2's own.
+  LcmTransport team(port_url(kGroupTeam)), outputs(port_url(kGroupOutputs)), poses(port_url(kGroupPoses)),
+      robot2(port_url(kGroupRobot + 2));
+  Log at_team, at_outputs, at_poses, at_robot2;
   ASSERT_GT(team.subscribe(".*", &record, &at_team, kUnboundedQueue), 0);
+  ASSERT_GT(outputs.subscribe(".*", &record, &at_outputs, kUnboundedQueue), 0);
   ASSERT_GT(poses.subscribe(".*", &record, &at_poses, kUnboundedQueue), 0);
   ASSERT_GT(robot2.subscribe(".*", &record, &at_robot2, kUnboundedQueue), 0);
   // Robot 2 as a node reads it: its SENSOR, the notices.
@@ -71,12 +73,13 @@ TEST_F(ChannelGroupsLive, EachChannelGoesOutOnItsGroupsPortOnly) {
   ASSERT_GT(node.subscribe(dynamic_notice(), &record, &at_node, kUnboundedQueue), 0);
 
   for (const std::string& ch : {sensor(1), sensor(2), pose(2), dynamic_notice(), global_map(), ground_truth(),
-                               team_map(2), lmap_event(), std::string("UNKNOWN")})
+                               team_map(2), lmap_events(), lmap_snapshot(), pose(3), std::string("UNKNOWN")})
     ASSERT_TRUE(sender_.publish(ch, "x", 1)) << ch;
-  pump({&team, &poses, &robot2, &node});
+  pump({&team, &outputs, &poses, &robot2, &node});
 
   EXPECT_EQ(at_team, (Log{"DYNAMIC_NOTICE:x", "UNKNOWN:x"}));
-  EXPECT_EQ(at_poses, (Log{"POSE_2:x", "LMAP_EVENT:x"}));
+  EXPECT_EQ(at_outputs, (Log{"LMAP_EVENTS:x", "LMAP_SNAPSHOT:x"}));
+  EXPECT_EQ(at_poses, (Log{"POSE_2:x", "POSE_3:x"}));
   EXPECT_EQ(at_robot2, (Log{"SENSOR_2:x", "TEAM_MAP_2:x"}));
   std::sort(at_node.begin(), at_node.end());  // two ports: no order between them
   EXPECT_EQ(at_node, (Log{"DYNAMIC_NOTICE:x", "SENSOR_2:x"}));
@@ -89,11 +92,12 @@ TEST_F(ChannelGroupsLive, ARecorderHearsEveryGroupAndOrderHoldsWithinOne) {
   std::map<std::string, int> expected;
   for (int i = 0; i < 50; ++i)
     for (int g = 0; g < channels::kChannelGroups; ++g) {
-      // One channel of each group: the team's, outputs, map, observers, robots 1-16.
+      // One channel of each group: the team's, outputs, map, observers, poses, robots 1-16.
       const std::string ch = g == channels::kGroupTeam        ? channels::status_main()
-                             : g == channels::kGroupOutputs   ? channels::pose(3)
+                             : g == channels::kGroupOutputs   ? channels::lmap_events()
                              : g == channels::kGroupMap       ? channels::global_map()
                              : g == channels::kGroupObservers ? channels::ground_truth()
+                             : g == channels::kGroupPoses     ? channels::pose(3)
                                                               : channels::sensor(g - channels::kGroupRobot);
       ASSERT_EQ(channels::channel_group(ch), g) << ch;
       const std::string payload = std::to_string(i);

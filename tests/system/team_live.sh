@@ -40,11 +40,11 @@ if [ "$HOSTS" = --hosts ]; then
 elif [ "$HOSTS" = --channel-groups ]; then
   "$ROOT/tools/netns_run.sh" --port 7800 -- "$ROOT/tools/run_team.sh" --inside --channel-groups --build-dir "$BUILD" \
     --out "$OUT/live" "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
-  # Every process opened the groups; one recorder per group in use (4 + 3 robots).
+  # Every process opened the groups; one recorder per group in use (5 + 3 robots).
   for p in simulator main_robot robot_node_1 robot_node_2 robot_node_3; do
     grep -q "LCM in channel groups" "$OUT/live/logs/$p.log" || { echo "$p: not in channel groups"; exit 1; }
   done
-  [ "$(ls "$OUT/live/groups" | wc -l)" -eq 7 ] || { ls "$OUT/live/groups"; exit 1; }
+  [ "$(ls "$OUT/live/groups" | wc -l)" -eq 8 ] || { ls "$OUT/live/groups"; exit 1; }
   cat "$OUT/live/logs/log_merge.log"
 else
   "$ROOT/tools/netns_run.sh" --port 7693 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT/live" \

@@ -84,8 +84,8 @@ TEST(ChannelGroups, EveryChannelHasTheGroupOfItsReaders) {
     EXPECT_EQ(channel_group(run_info(sfx), sfx), kGroupTeam);
     EXPECT_EQ(channel_group(lmap_event(sfx), sfx), kGroupOutputs);
     EXPECT_EQ(channel_group(lmap_snapshot(sfx), sfx), kGroupOutputs);
-    EXPECT_EQ(channel_group(pose(1, sfx), sfx), kGroupOutputs);
-    EXPECT_EQ(channel_group(pose(16, sfx), sfx), kGroupOutputs);
+    EXPECT_EQ(channel_group(pose(1, sfx), sfx), kGroupPoses);
+    EXPECT_EQ(channel_group(pose(16, sfx), sfx), kGroupPoses);
     EXPECT_EQ(channel_group(global_map(sfx), sfx), kGroupMap);
     EXPECT_EQ(channel_group(ground_truth(sfx), sfx), kGroupObservers);
     EXPECT_EQ(channel_group(candidates(3, sfx), sfx), kGroupObservers);
@@ -123,15 +123,15 @@ TEST(ChannelGroups, APatternJoinsTheGroupsOfTheChannelsItMatches) {
   using namespace channels;
   const auto bit = [](int g) { return 1u << g; };
   EXPECT_EQ(groups_of_pattern(sensor(2), ""), bit(kGroupRobot + 2));
-  EXPECT_EQ(groups_of_pattern(any_pose(), ""), bit(kGroupOutputs));
-  EXPECT_EQ(groups_of_pattern(any_pose("_B"), "_B"), bit(kGroupOutputs));
+  EXPECT_EQ(groups_of_pattern(any_pose(), ""), bit(kGroupPoses));
+  EXPECT_EQ(groups_of_pattern(any_pose("_B"), "_B"), bit(kGroupPoses));
   EXPECT_EQ(groups_of_pattern(global_map(), ""), bit(kGroupMap));
   EXPECT_EQ(groups_of_pattern("STATUS_(ROBOT_[0-9]+|MAIN)", ""), bit(kGroupTeam));
   EXPECT_EQ(groups_of_pattern("(LMAP_EVENT|GLOBAL_MAP)", ""), bit(kGroupOutputs) | bit(kGroupMap));
   std::uint32_t all = 0;
   for (int g = 0; g < kChannelGroups; ++g) all |= bit(g);
   EXPECT_EQ(groups_of_pattern(".*", ""), all);  // a recorder: every group
-  EXPECT_EQ(groups_of_pattern(any_sensor(), ""), all & ~0xfu);  // every robot's group, nothing else
+  EXPECT_EQ(groups_of_pattern(any_sensor(), ""), all & ~0x1fu);  // every robot's group, nothing else
   // Names the system does not have go where unknown channels are published.
   EXPECT_EQ(groups_of_pattern("EXAMPLE", ""), bit(kGroupTeam));
   EXPECT_EQ(groups_of_pattern("((", ""), bit(kGroupTeam));  // not a std::regex: LCM decides

@@ -86,36 +86,46 @@ class RobotOnBus : public ::testing::Test {
   Observer obs{bus, ""};
 };
 
-TEST_F(RobotOnBus, EachFrameGoesOutAsItsEventsThenItsPose) {
+TEST_F(RobotOnBus, EachFrameGoesOutAsItsPoseThenItsEventsAndSnapshot) {
   int after_frame = 0;
   ports.after_frame([&](const RobotNode& n) {
     EXPECT_EQ(&n, &node);
     ++after_frame;
   });
+  std::vector<pose_estimate_t> poses;
+  obs.shell().subscribe<pose_estimate_t>(
+      channels::pose(1), [&](const pose_estimate_t& m, const std::string&) { poses.push_back(m); },
+      transport::kUnboundedQueue);
   for (const auto& f : robot1_frames(12)) send(f);
   EXPECT_EQ(after_frame, 12);
-  // Per frame: its events (LMAP_EVENTS, robot.node.batch_events), a snapshot every
-  // 10 frames, then the POSE (the frame's end).
-  int frame = 0, batches = 0, snapshots = 0;
+  // Per frame: the POSE first (the frame's end for a lockstep simulator), then its
+  // events (LMAP_EVENTS, robot.node.batch_events) and a snapshot every 10 frames.
+  int frame = -1, batches = 0, snapshots = 0;
   for (const std::string& s : obs.seen) {
     const std::string channel = s.substr(0, s.find(' '));
-    if (channel != "POSE_1") {
-      EXPECT_EQ(s, channel + " " + std::to_string(frame)) << "an output of the frame before its POSE";
+    if (channel == "POSE_1") {
+      EXPECT_EQ(s, "POSE_1 " + std::to_string(++frame));
+    } else {
+      EXPECT_EQ(s, channel + " " + std::to_string(frame)) << "an output of the frame after its POSE";
       EXPECT_NE(channel, "LMAP_EVENT") << "events go batched";
       ++(channel == "LMAP_EVENTS" ? batches : snapshots);
-    } else {
-      EXPECT_EQ(s, "POSE_1 " + std::to_string(frame++));
     }
   }
-  EXPECT_EQ(frame, 12);
+  EXPECT_EQ(frame, 11);
   EXPECT_GT(batches, 0);
   EXPECT_LE(batches, 12) << "one message per frame at this scene's ~10 landmarks in view";
   EXPECT_EQ(snapshots, 2);  // frames 0 and 10
   EXPECT_EQ(static_cast<int>(node.counters().events_sent), obs.batched_events);
+  // Each POSE says what follows it: the seq of the frame's last event, and the
+  // snapshot's chunks on frames 0 and 10.
+  ASSERT_EQ(poses.size(), 12u);
+  EXPECT_EQ(poses.back().event_seq, node.event_seq());
+  for (const auto& p : poses) EXPECT_EQ(p.snapshot_chunks, p.frame % 10 == 0 ? 1 : 0) << p.frame;
+  for (std::size_t i = 1; i < poses.size(); ++i) EXPECT_GE(poses[i].event_seq, poses[i - 1].event_seq);
 }
 
 // Without robot.node.batch_events: the same events, one LMAP_EVENT each, in the same
-// place in the frame's outputs.
+// place in the frame's outputs (after its POSE).
 TEST(RobotOnBusSingly, WithoutBatchingEachEventGoesAlone) {
   InProcessTransport bus;
   NodeShell shell{bus, ShellOptions("robot_node 1", "", nullptr)};
@@ -129,17 +139,17 @@ TEST(RobotOnBusSingly, WithoutBatchingEachEventGoesAlone) {
     obs.shell().publish(channels::sensor(1), f);
     bus.dispatch_all();
   }
-  int frame = 0, events = 0;
+  int frame = -1, events = 0;
   for (const std::string& s : obs.seen) {
     const std::string channel = s.substr(0, s.find(' '));
     EXPECT_NE(channel, "LMAP_EVENTS");
+    if (channel == "POSE_1") ++frame;
     if (channel == "LMAP_EVENT") {
       EXPECT_EQ(s, "LMAP_EVENT " + std::to_string(frame));
       ++events;
     }
-    if (channel == "POSE_1") ++frame;
   }
-  EXPECT_EQ(frame, 12);
+  EXPECT_EQ(frame, 11);
   EXPECT_GT(events, 12);
   EXPECT_EQ(static_cast<int>(node.counters().events_sent), events);
   EXPECT_EQ(obs.batched_events, 0);
@@ -330,6 +340,86 @@ TEST_F(MainOnBus, BatchedEventsAreAppliedBeforeTheFramesPose) {
   const std::vector<std::string> expected = {"LMAP_EVENTS 0", "POSE_1 0", "LMAP_EVENTS 0", "GLOBAL_MAP 0"};
   EXPECT_EQ(obs.seen, expected);
   EXPECT_EQ(node.map().count(GlobalStatus::kStatic), 2);
+}
+
+// The POSE goes out before the frame's events and snapshot, saying what follows
+// (event_seq, snapshot_chunks): main_robot holds it, and the frame's GLOBAL_MAP goes
+// out once those are applied; a robot whose first POSE is held holds the team's map
+// back too; events that never come are let go at the robot's next POSE.
+TEST_F(MainOnBus, AHeldPoseFinishesItsFrameWhenItsEventsAndSnapshotAreIn) {
+  NodeShell& robots = obs.shell();
+  std::vector<global_map_t> maps;
+  obs.shell().subscribe<global_map_t>(
+      channels::global_map(), [&](const global_map_t& m, const std::string&) { maps.push_back(m); },
+      transport::kUnboundedQueue);
+  auto posed = [](int robot, int frame, std::int64_t seq, int chunks = 0) {
+    pose_estimate_t p = pose(robot, frame);
+    p.event_seq = seq;
+    p.snapshot_chunks = static_cast<std::int16_t>(chunks);
+    return p;
+  };
+  // Frame 0: robot 2's POSE alone, nothing follows; robot 1's POSE, its two events follow.
+  robots.publish(channels::pose(2), posed(2, 0, 0));
+  robots.publish(channels::pose(1), posed(1, 0, 2));
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 1u) << "robot 2's frame 0 alone (robot 1 unheard of)";
+  robots.publish(channels::lmap_events(),
+                 test::events_msg({event(1, 1, 0, landmark_event_t::ADD, 4), event(1, 2, 0, landmark_event_t::ADD, 6)}));
+  bus.dispatch_all();
+  EXPECT_EQ(node.counters().events, 2);
+  ASSERT_EQ(maps.size(), 1u) << "frame 0 was out already; robot 1 finished it now";
+  // Frame 1: both POSEs first; robot 1 also sends a snapshot (one chunk).
+  robots.publish(channels::pose(1), posed(1, 1, 3, 1));
+  robots.publish(channels::pose(2), posed(2, 1, 0));
+  robots.publish(channels::lmap_event(), event(1, 3, 1, landmark_event_t::ADD, 9));
+  bus.dispatch_all();
+  EXPECT_EQ(maps.size(), 1u) << "robot 1's frame 1 waits for its snapshot";
+  lmap_snapshot_t snap{};
+  snap.robot_id = 1;
+  snap.seq = 3;
+  snap.frame = 1;
+  snap.num_chunks = 1;
+  snap.id_end = node.map().max_landmark_id();
+  robots.publish(channels::lmap_snapshot(), snap);
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 2u);
+  EXPECT_EQ(maps.back().frame, 1);
+  EXPECT_EQ(maps.back().num_landmarks, 3) << "4, 6 and 9: the map has robot 1's frame";
+  // Frame 2: robot 1's events are lost. Frame 3's POSE lets frame 2 go.
+  robots.publish(channels::pose(2), posed(2, 2, 0));
+  robots.publish(channels::pose(1), posed(1, 2, 4));
+  bus.dispatch_all();
+  EXPECT_EQ(maps.size(), 2u);
+  robots.publish(channels::pose(2), posed(2, 3, 0));
+  robots.publish(channels::pose(1), posed(1, 3, 5));
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 3u);
+  EXPECT_EQ(maps.back().frame, 2);
+  // A robot first heard of with a held POSE holds the team's map back.
+  robots.publish(channels::pose(3), posed(3, 4, 1));
+  robots.publish(channels::pose(2), posed(2, 4, 0));
+  robots.publish(channels::lmap_event(), event(1, 6, 4, landmark_event_t::ADD, 12));
+  robots.publish(channels::pose(1), posed(1, 4, 6));
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 4u) << "frame 3 (robot 1's let go by its frame 4), not frame 4";
+  EXPECT_EQ(maps.back().frame, 3);
+  robots.publish(channels::lmap_event(), event(3, 1, 4, landmark_event_t::ADD, 13));
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 5u);
+  EXPECT_EQ(maps.back().frame, 4);
+  // On separate ports the events and snapshot may come before their POSE: then it
+  // finishes the frame at once.
+  snap.seq = 7;
+  snap.frame = 5;
+  robots.publish(channels::lmap_event(), event(1, 7, 5, landmark_event_t::UPDATE, 12));
+  robots.publish(channels::lmap_snapshot(), snap);
+  robots.publish(channels::pose(2), posed(2, 5, 0));
+  robots.publish(channels::pose(3), posed(3, 5, 1));
+  robots.publish(channels::pose(1), posed(1, 5, 7, 1));
+  bus.dispatch_all();
+  ASSERT_EQ(maps.size(), 6u);
+  EXPECT_EQ(maps.back().frame, 5);
+  EXPECT_EQ(node.counters().rejected_inputs, 0);
 }
 
 // A GLOBAL_MAP publication is followed by GLOBAL_MOVING, its moving lists alone (no

@@ -103,15 +103,19 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
 /// woken only by the groups it reads. By reader:
 /// - kGroupTeam: DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO and
 ///   any other name (everyone; small messages);
-/// - kGroupOutputs: LMAP_EVENT(S), LMAP_SNAPSHOT, POSE_<r> (main_robot; a lockstep
-///   simulator). One port, so one socket: a robot's events of a frame reach main_robot
-///   before its POSE of that frame, which is when main_robot sends the frame's map;
+/// - kGroupOutputs: LMAP_EVENT(S), LMAP_SNAPSHOT (main_robot): one port, so one
+///   socket: a robot's events and snapshot of a frame arrive in the order sent;
 /// - kGroupMap: GLOBAL_MAP (the viewer; the robots read GLOBAL_MOVING);
 /// - kGroupObservers: GROUND_TRUTH, CANDIDATES_<r> (the viewer and recorders only);
+/// - kGroupPoses: POSE_<r> (main_robot, a lockstep simulator, the viewer): the POSE
+///   goes out before the frame's events and says what follows it (event_seq,
+///   snapshot_chunks), so it needs no common port with them, and a lockstep simulator
+///   is woken by the POSEs alone;
 /// - kGroupRobot + r: SENSOR_<r>, TEAM_MAP_<r> (robot r alone).
 /// Recorders and the viewer join every group. A robot watches for a second sender
 /// with its id on its STATUS_ROBOT_<r> then, not on its POSE_<r> (robot_node.hpp).
-inline constexpr int kGroupTeam = 0, kGroupOutputs = 1, kGroupMap = 2, kGroupObservers = 3, kGroupRobot = 3;
+inline constexpr int kGroupTeam = 0, kGroupOutputs = 1, kGroupMap = 2, kGroupObservers = 3, kGroupPoses = 4,
+                     kGroupRobot = 4;
 inline constexpr int kMaxGroupRobotId = 16;  // = contract::kMaxRobots (grouped_lcm_transport.cpp checks)
 inline constexpr int kChannelGroups = kGroupRobot + kMaxGroupRobotId + 1;
 
@@ -122,7 +126,7 @@ inline int channel_group(std::string_view channel, std::string_view suffix = "")
     const int r = robot_of(channel, p, suffix);
     if (r > 0) return r <= kMaxGroupRobotId ? kGroupRobot + r : kGroupTeam;
   }
-  if (robot_of(channel, kPosePrefix, suffix) > 0) return kGroupOutputs;
+  if (robot_of(channel, kPosePrefix, suffix) > 0) return kGroupPoses;
   if (robot_of(channel, kCandidatesPrefix, suffix) > 0) return kGroupObservers;
   std::string_view base;
   if (!strip_suffix(channel, suffix, &base)) return kGroupTeam;

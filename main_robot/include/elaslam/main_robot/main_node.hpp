@@ -74,6 +74,18 @@ class MainNode {
   /// invalid one (counted; `why` says why): from outside limits.team, a position or
   /// covariance outside limits, a frame jump not confirmed yet.
   int on_pose(const pose_estimate_t& msg, std::string* why = nullptr);
+  /// A robot sends its POSE before the frame's events and snapshot; the POSE says up
+  /// to which event seq the frame goes (event_seq) and whether a snapshot follows
+  /// (snapshot_chunks). A POSE whose events or snapshot are not all applied yet is
+  /// held: the frame counts as finished when they are (on_event, on_events,
+  /// on_snapshot: its last chunk), or, should some be lost, at the robot's next POSE. The newest
+  /// frame the team finished that way since the last call, else -1: the moment to
+  /// publish GLOBAL_MAP for it (as on_pose's return value).
+  int take_finished() {
+    const int f = finished_;
+    finished_ = -1;
+    return f;
+  }
 
   /// The global map in chunks that each fit one datagram (global_map_t), stamped
   /// with `frame` (default: the newest frame every robot has finished, or before any
@@ -133,6 +145,9 @@ class MainNode {
   /// Robot `robot_id` (valid) finished `frame`: the newest frame the whole team has
   /// finished when that advanced, else -1.
   int finished_frame(int robot_id, int frame);
+  /// Robot `robot_id`'s held POSE, when its events up to its event_seq are applied
+  /// now: the frame counts as finished (finished_ when the team's frame advanced).
+  void settle_pose(int robot_id);
   /// A refused message: counted per reason, `why` (when given) says why; returns false.
   bool refused(Refusal reason, const std::string& problem, std::string* why);
   int make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot, bool moving_only = false);
@@ -143,6 +158,13 @@ class MainNode {
   std::vector<dynamic_notice_t> notices_;
   std::int64_t notice_seq_ = 0;
   std::array<int, kMaxTeamRobots> robot_frame_;  // last finished frame per robot, -1: never seen
+  std::array<int, kMaxTeamRobots> held_frame_;   // a POSE waiting for its events (take_finished), -1: none
+  std::array<std::int64_t, kMaxTeamRobots> held_seq_{};  // ... the event seq it waits for
+  std::array<bool, kMaxTeamRobots> held_snapshot_{};     // ... and whether its frame's snapshot
+  // The frame of the last snapshot whose last chunk was applied, per robot: on
+  // separate ports a snapshot may come in before the POSE that announces it.
+  std::array<int, kMaxTeamRobots> snapshot_done_frame_;
+  int finished_ = -1;
   int completed_frame_ = -1;
   std::int64_t incarnation_ = 0;
   std::vector<resync_request_t> resyncs_, taken_;
@@ -176,8 +198,9 @@ struct MainQueues {
 /// A MainNode on the message layer (transport/node_shell.hpp): receives LMAP_EVENT,
 /// LMAP_EVENTS, LMAP_SNAPSHOT and every robot's POSE_<r>; publishes DYNAMIC_NOTICE as soon as an
 /// event or snapshot produces one, GLOBAL_MAP for frame k as soon as every robot seen
-/// so far has finished k (its POSE marks the end of its frame: it publishes its events
-/// before it), and GLOBAL_MAP / STATUS_MAIN on request. The main_robot process and
+/// so far has finished k (its POSE marks the end of its frame and says up to which
+/// event seq the frame goes: the frame is finished when those events are applied),
+/// and GLOBAL_MAP / STATUS_MAIN on request. The main_robot process and
 /// the in-process team run both run this. A template on the shell only so that this
 /// library builds without the transport; Shell is NodeShell.
 template <class Shell>
@@ -247,16 +270,23 @@ class MainPorts {
     std::string why;
     if (!node_.on_event(m, &why)) shell_.refuse("event refused: " + why);
     send_notices();
+    publish_finished();
   }
   void on_events(const lmap_events_t& m) {
     std::string why;
     if (!node_.on_events(m, &why)) shell_.refuse("events refused: " + why);
     send_notices();
+    publish_finished();
   }
   void on_snapshot(const lmap_snapshot_t& m) {
     std::string why;
     if (!node_.on_snapshot(m, &why)) shell_.refuse("snapshot refused: " + why);
     send_notices();
+    publish_finished();
+  }
+  /// A held POSE's events are in: that frame's map (MainNode::take_finished).
+  void publish_finished() {
+    if (const int done = node_.take_finished(); done >= 0) publish_map(done);
   }
   void on_pose(const pose_estimate_t& m) {
     std::string why;

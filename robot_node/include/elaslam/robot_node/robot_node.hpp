@@ -235,10 +235,10 @@ struct RobotQueues {
 /// DYNAMIC_NOTICE, GLOBAL_MAP (the moving set: lost notices repaired), TEAM_MAP_<r>
 /// (with robot.team_map.fuse: the other robots' map), LMAP_RESYNC
 /// (main_robot asks for a snapshot) and its own POSE_<r> (a second sender with this
-/// id); for every processed frame publishes its events (LMAP_EVENTS, or one
-/// LMAP_EVENT each without robot.node.batch_events), its LMAP_SNAPSHOT
-/// chunks when one is due, then POSE_<r> (the end of the robot's frame for
-/// main_robot); STATUS_ROBOT_<r> on request. The robot_node process and the
+/// id); for every processed frame publishes POSE_<r> (the end of the robot's
+/// frame; it carries the seq of the frame's last event, event_seq), then its events
+/// (LMAP_EVENTS, or one LMAP_EVENT each without robot.node.batch_events) and its
+/// LMAP_SNAPSHOT chunks when one is due; STATUS_ROBOT_<r> on request. The robot_node process and the
 /// in-process team run both run this, so the live and in-process paths share it.
 /// A template on the shell only so that this library builds without the transport
 /// (the no-allocation test compiles its sources alone); Shell is NodeShell.
@@ -251,9 +251,9 @@ struct RobotQueues {
 ///            or synchronised clocks); across unsynchronised clocks it is clamped
 ///            at 0 or absurd.
 ///   frame:   RobotNode::on_sensor: the filter, the gate, the outgoing messages filled.
-///   outputs: this frame's LMAP_EVENTS (or LMAP_EVENTs), snapshot chunks and
+///   pose:    the POSE encoded and sent (its utime is stamped just before); first.
+///   outputs: then this frame's LMAP_EVENTS (or LMAP_EVENTs), snapshot chunks and
 ///            CANDIDATES encoded and sent.
-///   pose:    the POSE encoded and sent (its utime is stamped just before).
 struct FrameStages {
   DurationHistogram receive, frame, outputs, pose;
 };
@@ -328,22 +328,26 @@ class RobotPorts {
     if (v != RobotNode::Verdict::kProcessed) return;
     if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
     if (after_frame_) after_frame_(node_);
+    // The POSE first: it ends the robot's frame for whoever waits on it (a lockstep
+    // simulator, the latency); it carries the seq of the frame's last event, which
+    // main_robot waits for before it counts the frame finished.
+    pose_estimate_t pose = node_.pose_msg();
     const std::int64_t now = shell_.now_utime();
-    node_.stamp_events(now);
+    pose.utime = now;
+    shell_.publish(pose_, pose);
+    const std::int64_t posed = shell_.now_utime();
+    node_.stamp_events(posed);
     if (node_.robot().options().batch_events)
       for (int i = 0; i < node_.num_event_batches(); ++i) shell_.publish(events_, node_.event_batch(i));
     else
       for (const auto& ev : node_.event_msgs()) shell_.publish(event_, ev);
     if (node_.snapshot_ready()) publish_snapshot();
     if (node_.candidates_ready()) shell_.publish(candidates_, node_.candidates_msg());
-    pose_estimate_t pose = node_.pose_msg();
-    pose.utime = shell_.now_utime();
-    shell_.publish(pose_, pose);
     const std::int64_t sent = shell_.now_utime();
     stages_.receive.add(received - msg.utime);
     stages_.frame.add(now - received);
-    stages_.outputs.add(pose.utime - now);
-    stages_.pose.add(sent - pose.utime);
+    stages_.pose.add(posed - now);
+    stages_.outputs.add(sent - posed);
   }
 
   void publish_snapshot() {
