@@ -27,7 +27,6 @@ Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
 
 MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   robot_frame_.fill(-1);
-  held_frame_.fill(-1);
   snapshot_done_frame_.fill(-1);
   resync_frame_.fill(-1000000);
   const auto max_id = static_cast<std::size_t>(options.max_landmark_id);
@@ -178,7 +177,7 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
     case IncarnationVerdict::kRestarted:
       ++counters_.restarts;
       robot_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;
-      held_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;  // it waited for the old stream's seq
+      held_[static_cast<std::size_t>(robot_id - 1)] = HeldPose{};  // it waited for the old stream's seq
       snapshot_done_frame_[static_cast<std::size_t>(robot_id - 1)] = -1;
       frame_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       event_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
@@ -336,7 +335,7 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
   const auto r = static_cast<std::size_t>(m.robot_id - 1);
   if (m.chunk == m.num_chunks - 1) {  // its last chunk
     snapshot_done_frame_[r] = m.frame;
-    if (held_frame_[r] == m.frame) held_snapshot_[r] = false;
+    if (held_[r].frame == m.frame) held_[r].snapshot = false;
   }
   settle_pose(m.robot_id);
   return true;
@@ -378,20 +377,25 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   // the robot's earlier events never reached this map.
   if (first && m.frame > 0 && map_.stream(m.robot_id).last_seq == 0)
     request_resync(m.robot_id, resync_request_t::MAIN_STARTED);
+  // A POSE older than one held or finished (a late or repeated datagram): the robot
+  // is past that frame; it changes nothing (holding it would let the held one go).
+  HeldPose& held = held_[r];
+  if (m.frame <= std::max(held.frame, robot_frame_[r])) {
+    ++counters_.stale_poses;
+    return -1;
+  }
   // The POSE goes out before its frame's events: the frame is finished when events
   // up to its event_seq are applied. Held until then; an older held POSE is let go
   // now (its events are late or lost: the map is not held back more than a frame).
   int done = -1;
-  const int older = held_frame_[r];
+  const int older = held.frame;
   const bool snapshot_in = m.snapshot_chunks == 0 || snapshot_done_frame_[r] == m.frame;  // (or came first)
   if (m.event_seq <= map_.stream(m.robot_id).last_seq && snapshot_in) {
-    held_frame_[r] = -1;
+    held = HeldPose{};
     done = finished_frame(m.robot_id, m.frame);
   } else {
-    held_frame_[r] = m.frame;
-    held_seq_[r] = m.event_seq;
-    held_snapshot_[r] = !snapshot_in;
-    if (older >= 0 && older < m.frame) done = finished_frame(m.robot_id, older);
+    held = HeldPose{m.frame, m.event_seq, !snapshot_in};
+    if (older >= 0) done = finished_frame(m.robot_id, older);
   }
   if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // again, rate-limited
   return done;
@@ -399,9 +403,10 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
 
 void MainNode::settle_pose(int robot_id) {
   const auto r = static_cast<std::size_t>(robot_id - 1);
-  if (held_frame_[r] < 0 || held_snapshot_[r] || map_.stream(robot_id).last_seq < held_seq_[r]) return;
-  const int frame = held_frame_[r];
-  held_frame_[r] = -1;
+  HeldPose& held = held_[r];
+  if (held.frame < 0 || held.snapshot || map_.stream(robot_id).last_seq < held.event_seq) return;
+  const int frame = held.frame;
+  held = HeldPose{};
   const int done = finished_frame(robot_id, frame);
   if (done >= 0) finished_ = std::max(finished_, done);
 }
@@ -416,8 +421,7 @@ int MainNode::finished_frame(int robot_id, int frame) {
   bool any = false;
   for (std::size_t r = 0; r < robot_frame_.size(); ++r) {
     int done = robot_frame_[r];
-    if (held_frame_[r] >= 0)
-      done = done < 0 ? held_frame_[r] - 1 : std::min(done, held_frame_[r] - 1);
+    if (const int held = held_[r].frame; held >= 0) done = done < 0 ? held - 1 : std::min(done, held - 1);
     else if (done < 0)
       continue;
     all = any ? std::min(all, done) : done;

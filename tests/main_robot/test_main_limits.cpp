@@ -284,6 +284,32 @@ TEST(MainLimits, AFarFutureFrameNeverPinsTheMapFrame) {
   EXPECT_EQ(node.on_pose(pose(1, 501)), 501);
 }
 
+// A late or repeated POSE (a reordered or duplicated datagram) took the place of the
+// POSE main held for its events: the held frame was then finished one POSE late (or
+// an old frame held again). Now a POSE of a frame already held or finished is
+// counted (stale_poses) and changes nothing.
+TEST(MainLimits, ALateOrRepeatedPoseNeverLetsTheHeldOneGo) {
+  MainNode node(options("1"));
+  EXPECT_EQ(node.on_pose(pose(1, 0)), 0);
+  pose_estimate_t p1 = pose(1, 1), p2 = pose(1, 2);
+  p1.event_seq = 1;  // one event follows each
+  p2.event_seq = 2;
+  EXPECT_EQ(node.on_pose(p1), -1);
+  EXPECT_TRUE(node.on_event(add(1, 1, 3, 0.01, 1)));
+  EXPECT_EQ(node.take_finished(), 1);
+  EXPECT_EQ(node.on_pose(p2), -1);  // held: its event is not in
+  EXPECT_EQ(node.on_pose(p1), -1);  // frame 1 again, late
+  EXPECT_EQ(node.on_pose(pose(1, 0)), -1);
+  EXPECT_EQ(node.take_finished(), -1);
+  EXPECT_TRUE(node.on_event(add(1, 2, 5, 0.01, 2)));
+  EXPECT_EQ(node.take_finished(), 2) << "frame 2 finished by its event, as if the late POSEs never came";
+  EXPECT_EQ(node.on_pose(p2), -1);  // repeated after it finished
+  EXPECT_EQ(node.take_finished(), -1);
+  EXPECT_EQ(node.counters().stale_poses, 3);
+  EXPECT_EQ(node.counters().rejected_inputs, 0);
+  EXPECT_EQ(node.on_pose(pose(1, 3)), 3);
+}
+
 // Found by fuzz_main_robot: an event, snapshot or POSE with a negative incarnation
 // (a start time, microseconds since the epoch: never negative) was followed, and the
 // state main saved then did not load back ("robots[1].incarnation not in [0, ...]").

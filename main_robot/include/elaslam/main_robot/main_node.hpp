@@ -40,6 +40,7 @@ struct MainCounters {
   std::int64_t restarts = 0;             // robots seen with a new incarnation
   std::int64_t stale_incarnation = 0;    // messages of an older incarnation refused (replay, second sender)
   std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, refused
+  std::int64_t stale_poses = 0;          // POSEs of a frame already held or finished (late, repeated): ignored
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
 };
@@ -158,9 +159,13 @@ class MainNode {
   std::vector<dynamic_notice_t> notices_;
   std::int64_t notice_seq_ = 0;
   std::array<int, kMaxTeamRobots> robot_frame_;  // last finished frame per robot, -1: never seen
-  std::array<int, kMaxTeamRobots> held_frame_;   // a POSE waiting for its events (take_finished), -1: none
-  std::array<std::int64_t, kMaxTeamRobots> held_seq_{};  // ... the event seq it waits for
-  std::array<bool, kMaxTeamRobots> held_snapshot_{};     // ... and whether its frame's snapshot
+  // A robot's POSE waiting for what it announced (take_finished).
+  struct HeldPose {
+    int frame = -1;             // -1: none held
+    std::int64_t event_seq = 0;  // the event seq it waits for
+    bool snapshot = false;       // and whether it waits for its frame's snapshot
+  };
+  std::array<HeldPose, kMaxTeamRobots> held_{};
   // The frame of the last snapshot whose last chunk was applied, per robot: on
   // separate ports a snapshot may come in before the POSE that announces it.
   std::array<int, kMaxTeamRobots> snapshot_done_frame_;
