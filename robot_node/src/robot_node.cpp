@@ -207,6 +207,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   const FrameSummary s = robot_.process(input_);
   last_frame_ = msg.frame;
   ++counters_.frames;
+  ++frames_this_run_;
   counters_.filter_faults += s.filter_faults;
   if (s.filter_full > 0) note_filter_full(s.filter_full);
   counters_.evictions += s.evicted;
@@ -257,7 +258,7 @@ void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, con
   pose_.num_accepted = static_cast<int16_t>(s.num_accepted);
   pose_.num_rejected = static_cast<int16_t>(s.num_rejected);
   pose_.num_landmarks = static_cast<int16_t>(f.num_landmarks());
-  pose_.frames_processed = counters_.frames;
+  pose_.frames_processed = frames_this_run_;
   pose_.event_seq = seq_;  // after fill_events: this frame's events included
   pose_.snapshot_chunks = static_cast<int16_t>(snapshot_ready_ ? num_chunks_ : 0);
 }
@@ -570,7 +571,7 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   if (inconsistent_frame_ >= 0 && last_frame_ - inconsistent_frame_ < kAlertFrames)
     s.fault_flags |= node_status_t::FAULT_INCONSISTENT;
   for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
-  s.frames = counters_.frames;
+  s.frames = frames_this_run_;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;
   s.rejected_inputs = counters_.rejected_inputs;
   s.decode_errors = counters_.decode_errors;

@@ -63,10 +63,12 @@ std::vector<std::uint8_t> bytes(const Msg& m) {
   return b;
 }
 
-/// What robot 2 published in one frame, encoded (processing time zeroed: it is the clock's, not the state's).
+/// What robot 2 published in one frame, encoded (processing time zeroed: it is the
+/// clock's, not the state's; frames_processed too: it is the process's).
 std::vector<std::uint8_t> published(const RobotNode& n) {
   pose_estimate_t p = n.pose_msg();
   p.processing_us = 0;
+  p.frames_processed = 0;
   std::vector<std::uint8_t> out = bytes(p);
   for (const auto& e : n.event_msgs()) {
     const auto b = bytes(e);
@@ -148,6 +150,31 @@ TEST(RobotState, RestoredNodeContinuesBitIdentically) {
       EXPECT_GT(held, 0);
     }
   }
+}
+
+// A node resumed from its state goes on with the robot's counters but says in POSE
+// (frames_processed) and STATUS (frames) what this process did: the count goes back,
+// and tools/evaluate sees the restart. (It said the resumed total; a robot killed
+// just after a save then looked as if it had never stopped: system_fault_loss.)
+TEST(RobotState, AResumedNodeCountsItsOwnFramesInPoseAndStatus) {
+  const TeamConfig c = paper(Mode::kEla, 7);
+  std::vector<sensor_frame_t> mine;
+  for (const auto& f : sensor_frames(c))
+    if (f.robot_id == kRobot && f.frame < 15) mine.push_back(f);
+  ASSERT_EQ(mine.size(), 15u);
+  RobotNode first(c.robot, kRobot);
+  for (int k = 0; k < 10; ++k) ASSERT_EQ(first.on_sensor(mine[static_cast<std::size_t>(k)], 1000 + k), RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(first.pose_msg().frames_processed, 10);
+  EXPECT_EQ(first.status_msg(0).frames, 10);
+  RobotNode resumed(c.robot, kRobot);
+  std::string why;
+  ASSERT_TRUE(load_robot_state(save_robot_state(first), &resumed, &why)) << why;
+  EXPECT_EQ(resumed.counters().frames, 10);
+  EXPECT_EQ(resumed.frames_this_run(), 0);
+  for (int k = 10; k < 15; ++k) ASSERT_EQ(resumed.on_sensor(mine[static_cast<std::size_t>(k)], 1000 + k), RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(resumed.counters().frames, 15);
+  EXPECT_EQ(resumed.pose_msg().frames_processed, 5);
+  EXPECT_EQ(resumed.status_msg(0).frames, 5);
 }
 
 // Every state a real run goes through loads back (the validation refuses no real

@@ -135,7 +135,11 @@ class RobotNode {
   void skip_seq(std::int64_t n) { seq_ += n; }
 
   node_status_t status_msg(std::int64_t now_utime) const;
+  /// counters().frames is the robot's (saved in its state, resumed with it);
+  /// frames_this_run() counts only what this process did, as POSE.frames_processed
+  /// and STATUS.frames say (a count that goes back shows a restart: tools/evaluate).
   const RobotNodeCounters& counters() const { return counters_; }
+  std::int64_t frames_this_run() const { return frames_this_run_; }
   std::int64_t event_seq() const { return seq_; }  // seq of the last LMAP_EVENT sent
   const Robot& robot() const { return robot_; }
   const DurationHistogram& processing() const { return processing_; }
@@ -175,6 +179,7 @@ class RobotNode {
   Robot robot_;
   FrameInput input_;
   RobotNodeCounters counters_;
+  std::int64_t frames_this_run_ = 0;  // not in the state: a resumed node counts from 0
   DurationHistogram processing_;
   int last_frame_ = -1;
   JumpGuard frame_guard_;        // frame jumps beyond confirm_jump_frames wait for the next frame
