@@ -43,6 +43,7 @@ class SimNode {
     shell_.publish(channels::run_info(shell_.suffix()), info_);
   }
   void publish_status(int frame);
+  void prepare_frame(int k);
   bool publish_frame(int k, const FrameSchedule& schedule);
   void say_summary() const;
   void note_truncation(int k);
@@ -75,8 +76,12 @@ int SimNode::run() {
   }
   const FrameSchedule schedule(o_.rate_hz, mono_ns() + r_.start_delay_ms * kNsPerMs);
   std::int64_t next_status = schedule.deadline_ns(0);
+  // Frame k+1 is built as soon as frame k is out: in lockstep while the robots work
+  // on frame k (the world does not depend on what they send), not after their POSEs.
+  if (o_.frames > 0) prepare_frame(0);
   for (int k = 0; k < o_.frames && !shell_.stop_requested(); ++k) {
     if (!publish_frame(k, schedule)) break;
+    if (k + 1 < o_.frames) prepare_frame(k + 1);
     if (waiter_ && !waiter_->wait(k, r_.lockstep_timeout_ms) && !shell_.stop_requested()) {
       if (++lockstep_timeouts_ <= kTimeoutsReported)  // the first few; the summary has the total
         shell_.say("lockstep: not every robot's POSE for frame " + std::to_string(k) + " within " +
@@ -115,9 +120,8 @@ void SimNode::publish_status(int frame) {
   shell_.publish(channels::status_sim(shell_.suffix()), m);
 }
 
-/// Advance the world to frame k and build its messages ahead of the deadline (the
-/// measured processing time), then publish them at the deadline. False on a stop.
-bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
+/// Advance the world to frame k and build its messages (the measured processing time).
+void SimNode::prepare_frame(int k) {
   const std::int64_t t_work = mono_ns();
   if (k > 0) world_.step();
   for (int r = 0; r < world_.num_robots(); ++r)
@@ -125,6 +129,10 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
   note_truncation(k);
   to_message(world_, 0, truth_.get());
   stats_.processing.add((mono_ns() - t_work) / 1000);
+}
+
+/// Publish frame k's messages (prepare_frame) at its deadline. False on a stop.
+bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
   const std::int64_t deadline = schedule.deadline_ns(k);
   if (!sleep_until(deadline, shell_.stop())) return false;
 
