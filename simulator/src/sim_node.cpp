@@ -76,11 +76,14 @@ int SimNode::run() {
   }
   const FrameSchedule schedule(o_.rate_hz, mono_ns() + r_.start_delay_ms * kNsPerMs);
   std::int64_t next_status = schedule.deadline_ns(0);
-  // Frame k+1 is built as soon as frame k is out: in lockstep while the robots work
-  // on frame k (the world does not depend on what they send), not after their POSEs.
+  // Frame k+1 is built while frame k is in flight. In lockstep at once, while the
+  // robots work on frame k (the world does not depend on what they send), not after
+  // their POSEs; at a set rate half a period after frame k's deadline, when the
+  // robots are done with it, not on a core they wait for.
   if (o_.frames > 0) prepare_frame(0);
   for (int k = 0; k < o_.frames && !shell_.stop_requested(); ++k) {
     if (!publish_frame(k, schedule)) break;
+    if (!waiter_ && !sleep_until(schedule.deadline_ns(k) + schedule.period_ns() / 2, shell_.stop())) break;
     if (k + 1 < o_.frames) prepare_frame(k + 1);
     if (waiter_ && !waiter_->wait(k, r_.lockstep_timeout_ms) && !shell_.stop_requested()) {
       if (++lockstep_timeouts_ <= kTimeoutsReported)  // the first few; the summary has the total
