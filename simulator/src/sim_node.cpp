@@ -83,8 +83,10 @@ int SimNode::run() {
   if (o_.frames > 0) prepare_frame(0);
   for (int k = 0; k < o_.frames && !shell_.stop_requested(); ++k) {
     if (!publish_frame(k, schedule)) break;
-    if (!waiter_ && !sleep_until(schedule.deadline_ns(k) + schedule.period_ns() / 2, shell_.stop())) break;
-    if (k + 1 < o_.frames) prepare_frame(k + 1);
+    if (k + 1 < o_.frames) {
+      if (!waiter_ && !sleep_until(schedule.deadline_ns(k) + schedule.period_ns() / 2, shell_.stop())) break;
+      prepare_frame(k + 1);
+    }
     if (waiter_ && !waiter_->wait(k, r_.lockstep_timeout_ms) && !shell_.stop_requested()) {
       if (++lockstep_timeouts_ <= kTimeoutsReported)  // the first few; the summary has the total
         shell_.say("lockstep: not every robot's POSE for frame " + std::to_string(k) + " within " +
