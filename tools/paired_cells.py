@@ -1,0 +1,96 @@
+#!/usr/bin/env python3
+"""Which of a sweep's cell-metrics does one mode win against another, and which of
+the wins and losses are more than noise?
+
+Reads a sweep's runs.csv (`build/bin/sweep ... --out DIR`). For every cell
+(dynamism, speed) and metric (landmark error, each robot's error) it pairs the
+runs of the two modes by seed, takes the mean of the differences A - B and a
+two-sided paired t-test at 5 %. A cell-metric is won when the mean difference is
+below zero (the sweep's "cells won" rule); it is a significant win or loss when
+|t| is above the critical value for n - 1 degrees of freedom.
+
+Usage: tools/paired_cells.py DIR [--a ela] [--b ekf]
+"""
+import argparse
+import collections
+import csv
+import math
+import os
+import statistics
+import sys
+
+_here = os.path.dirname(os.path.realpath(__file__))
+sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
+from elaslam_tool import add_version, parse_args  # noqa: E402  (standard library only)
+
+# Two-sided 5 % critical values of Student's t, degrees of freedom 1-30; above, 1.96.
+T975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+        2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+        2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042]
+
+
+def t_critical(dof):
+    return T975[dof - 1] if dof <= len(T975) else 1.96
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_version(ap)
+    ap.add_argument("dir", help="a sweep's output directory (its runs.csv)")
+    ap.add_argument("--a", default="ela", help="mode A (default ela)")
+    ap.add_argument("--b", default="ekf", help="mode B (default ekf)")
+    args = parse_args(ap)
+    path = f"{args.dir}/runs.csv"
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        sys.exit(f"paired_cells.py: cannot read {path}: {e.strerror}")
+    runs = collections.defaultdict(dict)
+    metrics = None
+    for i, r in enumerate(rows, start=2):
+        try:
+            key = (int(r["dynamism"]), float(r["speed"]), int(r["seed"]))
+            mode = r["mode"]
+        except (KeyError, TypeError, ValueError):
+            sys.exit(f"paired_cells.py: {path}:{i}: not a sweep's runs.csv row (mode, dynamism, speed, seed)")
+        if metrics is None:
+            metrics = ["landmark_error"] + sorted(k for k in r if k.startswith("robot") and k.endswith("_error"))
+        runs[key][mode] = r
+    if metrics is None:
+        sys.exit(f"paired_cells.py: {path} has no runs")
+    diffs = collections.defaultdict(list)
+    for (dyn, speed, _), by_mode in runs.items():
+        if args.a not in by_mode or args.b not in by_mode:
+            continue
+        for m in metrics:
+            try:
+                d = float(by_mode[args.a][m]) - float(by_mode[args.b][m])
+            except (KeyError, TypeError, ValueError):
+                sys.exit(f"paired_cells.py: {path}: no number for {m}")
+            if math.isfinite(d):
+                diffs[(dyn, speed, m)].append(d)
+    if not diffs:
+        sys.exit(f"paired_cells.py: {path} has no seed run in both {args.a} and {args.b}")
+    won = sig_won = lost = sig_lost = 0
+    print(f"{args.a} - {args.b}, paired by seed: mean difference, paired t (two-sided 5 %)")
+    for (dyn, speed, m), d in sorted(diffs.items()):
+        mean = statistics.fmean(d)
+        se = statistics.stdev(d) / math.sqrt(len(d)) if len(d) > 1 else float("inf")
+        t = mean / se if se > 0 else 0.0
+        significant = len(d) > 1 and abs(t) > t_critical(len(d) - 1)
+        if mean < 0:
+            won += 1
+            sig_won += significant
+        else:
+            lost += 1
+            sig_lost += significant
+            print(f"  lost  {dyn:3d} % {speed:.1f} m/s {m:16s} {mean:+.4f} m  t {t:+.3g}"
+                  f"{'  significant' if significant else ''}")
+    total = won + lost
+    print(f"{args.a} below {args.b} in {won} of {total} cell-metrics ({sig_won} significant); "
+          f"lost {lost} ({sig_lost} significant)")
+
+
+if __name__ == "__main__":
+    main()
