@@ -164,12 +164,12 @@ void final_line(const RobotNode& node, const FrameStages& st) {
   const auto& c = node.counters();
   std::fprintf(stderr,
                "robot_node %d: frames=%lld gaps=%lld duplicates=%lld out_of_order=%lld rejected=%lld "
-               "decode_errors=%lld filter_faults=%lld events=%lld notices_applied=%lld landmarks=%d "
+               "decode_errors=%lld filter_faults=%lld events=%lld notices_applied=%lld notices_stale=%lld landmarks=%d "
                "evictions=%lld restored=%lld frame_us p50=%lld p99=%lld max=%lld\n",
                node.robot_id(), (long long)c.frames, (long long)c.frames_gap, (long long)c.frames_duplicate,
                (long long)c.frames_out_of_order, (long long)c.rejected_inputs, (long long)c.decode_errors,
                (long long)c.filter_faults, (long long)c.events_sent, (long long)c.notices_applied,
-               node.robot().filter().num_landmarks(), (long long)c.evictions, (long long)c.restored,
+               (long long)c.notices_stale, node.robot().filter().num_landmarks(), (long long)c.evictions, (long long)c.restored,
                (long long)node.processing().quantile(0.5),
                (long long)node.processing().quantile(0.99), (long long)node.processing().max());
   // Where the frames' time went (FrameStages; receive needs the sender's clock).

@@ -434,8 +434,21 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
     problem = contract::got("detected_by not in limits.team " + team_text(options_.limits.team_mask), msg.detected_by),
     reason = Refusal::kOutsideTeam;
   if (!problem.empty()) return refused(reason, problem, why);
+  // This robot's own finding, echoed by main: nothing to do (on_global_map skips it too).
+  if (msg.detected_by == robot_id_) {
+    ++counters_.notices_ignored;
+    return true;
+  }
+  // A duplicated or late datagram: a notice of this frame or a later one was had
+  // already, or this robot's own view of the landmark changed after the notice's
+  // frame (it saw it again and took it back). Applying it would undo newer state;
+  // the rule is the one of the GLOBAL_MAP repair below.
   auto& had = notice_frame_[static_cast<std::size_t>(msg.landmark_id)];
-  had = std::max(had, msg.frame);
+  if (had >= msg.frame || robot_.lmap()[msg.landmark_id].status_frame > msg.frame) {
+    ++counters_.notices_stale;
+    return true;
+  }
+  had = msg.frame;
   // Ahead of this robot's frames: hold it (a fresh node, one far behind or a full
   // buffer applies it at once; a notice is never lost).
   if (last_frame_ >= 0 && msg.frame > last_frame_ && std::int64_t{msg.frame} <= std::int64_t{last_frame_} + options_.max_frame_gap &&

@@ -212,6 +212,7 @@ TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {
   run(0, 4);
   dynamic_notice_t n{};
   n.seq = 1;
+  n.frame = 3;  // found moving in frame 3, after this robot mapped it
   n.landmark_id = 3;
   n.detected_by = 2;  // this robot itself: nothing to do
   EXPECT_TRUE(node_.on_notice(n));
@@ -430,6 +431,52 @@ TEST_F(RobotNodeInput, ANoticeAheadOfThisRobotsFrameWaitsForIt) {
   n.frame = 4 + 1000;
   EXPECT_TRUE(node_.on_notice(n));
   EXPECT_FALSE(node_.robot().filter().has_landmark(5));
+}
+
+// A DYNAMIC_NOTICE datagram duplicated or delayed on the link (or replayed by main
+// after a restart) must not undo what this robot has learnt since: a landmark it
+// took back after the notice stays, and a notice is applied once.
+TEST_F(RobotNodeInput, ADuplicatedOrLateNoticeNeverUndoesNewerState) {
+  run(0, 4);  // frames 0..3: landmark 3 mapped
+  dynamic_notice_t n{};
+  n.seq = 1;
+  n.landmark_id = 3;
+  n.detected_by = 1;
+  n.frame = 3;
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_FALSE(node_.robot().filter().has_landmark(3));
+  EXPECT_EQ(node_.counters().notices_applied, 1);
+  // The landmark never moved here: this robot sees it again and takes it back.
+  int k = 4;
+  for (; k < 60 && node_.robot().lmap()[3].status != LandmarkStatus::kStatic; ++k) run(k, k + 1);
+  ASSERT_EQ(node_.robot().lmap()[3].status, LandmarkStatus::kStatic);
+  ASSERT_TRUE(node_.robot().filter().has_landmark(3));
+  // The same notice again (a duplicate), an older one, another robot's of the same
+  // frame: none removes it.
+  EXPECT_TRUE(node_.on_notice(n));
+  n.frame = 2;
+  EXPECT_TRUE(node_.on_notice(n));
+  n.frame = 3;
+  n.detected_by = 3;
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_TRUE(node_.robot().filter().has_landmark(3));
+  EXPECT_EQ(node_.robot().lmap()[3].times_moving, 1);
+  EXPECT_EQ(node_.counters().notices_applied, 1);
+  EXPECT_EQ(node_.counters().notices_stale, 3);
+  // A finding newer than the one had but older than this robot taking it back (a
+  // late datagram): this robot's own view is newer.
+  const int back = node_.robot().lmap()[3].status_frame;
+  ASSERT_GT(back - 1, 3);
+  n.frame = back - 1;
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_TRUE(node_.robot().filter().has_landmark(3));
+  EXPECT_EQ(node_.counters().notices_stale, 4);
+  // A finding after it is applied.
+  n.frame = k - 1;
+  EXPECT_TRUE(node_.on_notice(n));
+  EXPECT_FALSE(node_.robot().filter().has_landmark(3));
+  EXPECT_EQ(node_.counters().notices_applied, 2);
+  EXPECT_EQ(node_.counters().notices_stale, 4);
 }
 
 }  // namespace

@@ -41,6 +41,7 @@ struct RobotNodeCounters {
   std::int64_t notices_ignored = 0;   // notices about landmarks this robot did not hold / its own
   std::int64_t notices_deferred = 0;  // notices for a frame this robot had not processed yet: held until it has
   std::int64_t notices_repaired = 0;  // moving landmarks learnt from GLOBAL_MAP whose notice never came
+  std::int64_t notices_stale = 0;     // notices not after one had for the landmark, or older than this robot's own view of it
   std::int64_t resyncs_answered = 0;  // snapshots sent on main_robot's request
   std::int64_t foreign_poses = 0;     // own POSE_<r> (or STATUS_ROBOT_<r>) messages of another incarnation: a second sender with this id
   RefusalCounts refused;              // refused messages per reason (their sum is rejected_inputs)
