@@ -539,9 +539,13 @@ int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_rob
   return n;
 }
 
+// Once per period: at the first finished frame of a period after the last team
+// map's (frame k * period in a lossless run; the next one finished when the team's
+// finished frame jumps over it, lost POSEs).
 bool MainNode::team_map_due(int frame) {
   const int period = map_.options().team_map_period_frames;
-  if (period <= 0 || frame < 0 || frame % period != 0 || frame <= team_map_frame_) return false;
+  if (period <= 0 || frame < 0 || frame <= team_map_frame_) return false;
+  if (team_map_frame_ >= 0 && frame / period <= team_map_frame_ / period) return false;
   team_map_frame_ = frame;
   return true;
 }

@@ -163,6 +163,26 @@ TEST(TeamMap, MainSendsEachRobotTheOthersInformationOnly) {
   EXPECT_FALSE(main.team_map_due(-1));
 }
 
+// Team maps go out once per period of team_map_period_frames, at the first frame the
+// team finishes in it: a period whose multiple of the period was never finished (its
+// POSEs lost, the team's finished frame jumping over it) still gets its team maps.
+TEST(TeamMap, DueOncePerPeriodAlsoWhenTheFinishedFrameJumpsOverItsMultiple) {
+  GlobalMapOptions o;
+  o.team_map_period_frames = 10;
+  MainNode main(o);
+  EXPECT_TRUE(main.team_map_due(0));
+  EXPECT_FALSE(main.team_map_due(5));
+  EXPECT_FALSE(main.team_map_due(8));
+  EXPECT_TRUE(main.team_map_due(11));  // frames 9 and 10 never finished
+  EXPECT_FALSE(main.team_map_due(12));
+  EXPECT_FALSE(main.team_map_due(19));
+  EXPECT_TRUE(main.team_map_due(20));
+  EXPECT_FALSE(main.team_map_due(20));
+  EXPECT_FALSE(main.team_map_due(15));  // an older frame never makes one again
+  EXPECT_TRUE(main.team_map_due(47));
+  EXPECT_FALSE(main.team_map_due(-1));
+}
+
 // ---- the team: NEES and accuracy --------------------------------------------------
 
 const TeamConfig& paper() {

@@ -107,8 +107,9 @@ class MainNode {
   /// without r's own information (GlobalMap::fused_without), in the same chunk pool
   /// (map_chunk; the last make_* call fills it). Returns the chunk count.
   int make_team_map(int robot_id, std::int64_t now_utime, int frame = -1);
-  /// True (once) when the team maps of `frame` are due: every
-  /// main.team_map_period_frames frames, never for an older frame than the last.
+  /// True (once) when the team maps of `frame` are due: once per period of
+  /// main.team_map_period_frames, at the first frame finished in a period after the
+  /// last team map's (its multiple when no POSE is lost), never for an older frame.
   bool team_map_due(int frame);
   /// Whether robot r has been heard from (a POSE): who gets a team map.
   bool robot_seen(int robot_id) const {
