@@ -517,7 +517,10 @@ bool RobotNode::on_team_map(const global_map_t& msg, std::string* why) {
                      "landmark " + std::to_string(l.id) + " lists this robot as a contributor: not a map without it",
                      why);
   }
-  if (msg.incarnation == team_map_incarnation_ && msg.version < team_map_version_) {
+  // Older: a version below the last applied of main's incarnation, or a chunk of an
+  // earlier incarnation (a datagram delayed past main's restart; incarnations grow).
+  if (msg.incarnation < team_map_incarnation_ ||
+      (msg.incarnation == team_map_incarnation_ && msg.version < team_map_version_)) {
     ++counters_.team_map_stale;
     return true;
   }

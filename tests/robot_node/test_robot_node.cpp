@@ -279,6 +279,17 @@ TEST(RobotNodeTeamMap, TeamEstimatesGoIntoTheAidedFilterOnly) {
   ASSERT_TRUE(node.on_team_map(g));
   EXPECT_EQ(node.counters().team_map_stale, 1);
   EXPECT_EQ(robot.team_counters().fused, 2);
+  // A chunk of main's previous incarnation (a datagram delayed past main's
+  // restart): ignored, whatever its version, and the current incarnation's older
+  // versions stay old after it.
+  g.incarnation = 6;
+  g.version = 50;
+  ASSERT_TRUE(node.on_team_map(g));
+  g.incarnation = 7;
+  g.version = 9;
+  ASSERT_TRUE(node.on_team_map(g));
+  EXPECT_EQ(node.counters().team_map_stale, 3);
+  EXPECT_EQ(robot.team_counters().fused, 2);
   // This robot's own information in it: refused.
   g.version = 11;
   g.landmarks[1].contributors = 0b010;
