@@ -235,8 +235,9 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
           (g.status == GlobalStatus::kStatic && !g.history_unknown && g.moving_by == 0)) {
         // r held it here and now lists it as moving, r found it moving after this map
         // last changed its status, or it has never moved as far as this map knows
-        // (events or the state file): r's MOVING event was lost.
-        remove_as_moving(id, robot_id, frame, notices);
+        // (events or the state file): r's MOVING event was lost. Stamped with the
+        // frame r found it moving, when listed: robots compare it with their own view.
+        remove_as_moving(id, robot_id, found >= 0 ? std::min(found, frame) : frame, notices);
       } else if (g.contributors() == 0) {
         // r's opinion of unknown age, about a landmark no robot holds here (also one
         // this map has not seen: its ADD was lost too, as after a restart).

@@ -231,6 +231,10 @@ TEST(GlobalMapChunks, AListedFindingNewerThanTheMapStandsInForALostMovingEvent) 
       EXPECT_EQ(m.entry(7).status, GlobalStatus::kMoving);
       ASSERT_EQ(notices.size(), 1u);  // the other robots are told
       EXPECT_EQ(notices[0].landmark_id, 7);
+      // ...of the frame it was found moving, not the snapshot's: a robot that took
+      // it back between the two must not drop it (its notice guard compares frames).
+      EXPECT_EQ(notices[0].frame, 40);
+      EXPECT_EQ(m.entry(7).status_frame, 40);
     } else {
       EXPECT_EQ(m.entry(7).status, GlobalStatus::kStatic);
       EXPECT_TRUE(notices.empty());
