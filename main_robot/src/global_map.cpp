@@ -302,8 +302,16 @@ std::string GlobalMap::to_json() const {
       est.push_back({{"robot", r + 1}, {"frame", e.frame}, {"x", e.position.x()}, {"y", e.position.y()},
                      {"cov", {e.cov(0, 0), e.cov(0, 1), e.cov(1, 0), e.cov(1, 1)}}});
     }
-    lms.push_back({{"id", id}, {"status", static_cast<int>(g.status)}, {"status_frame", g.status_frame},
-                   {"moving_by", g.moving_by}, {"estimates", est}});
+    json l = {{"id", id}, {"status", static_cast<int>(g.status)}, {"status_frame", g.status_frame},
+              {"moving_by", g.moving_by}, {"estimates", est}};
+    // The fused estimate of a static landmark: the one it keeps when no robot holds
+    // it any more (a robot that restarted fresh dropped it from its snapshots).
+    if (g.status == GlobalStatus::kStatic)
+      l["fused"] = {{"x", g.fused.x()}, {"y", g.fused.y()},
+                    {"cov", {g.fused_cov(0, 0), g.fused_cov(0, 1), g.fused_cov(1, 0), g.fused_cov(1, 1)}}};
+    if (g.moving_unconfirmed) l["moving_unconfirmed"] = true;
+    if (g.history_unknown) l["history_unknown"] = true;
+    lms.push_back(std::move(l));
   }
   j["landmarks"] = lms;
   return j.dump(1);
@@ -376,7 +384,29 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
         if (bad.empty()) bad = check_cov2(est.cov, options_.limits, "cov");
         if (!bad.empty()) throw std::runtime_error(where + ": " + bad);
       }
-      if (g.status == GlobalStatus::kStatic) loaded.fuse(g);
+      // Optional (files of before 2026-12-03 lack them): a static landmark no robot
+      // holds comes back at its saved fused estimate, or not at all.
+      const auto flag = [&](const char* key) {
+        if (!l.contains(key)) return false;
+        if (!l.at(key).is_boolean()) throw std::runtime_error("landmark " + std::to_string(id) + ": " + key + " is not a boolean");
+        return l.at(key).get<bool>();
+      };
+      g.moving_unconfirmed = g.status == GlobalStatus::kMoving && flag("moving_unconfirmed");
+      g.history_unknown = flag("history_unknown");
+      if (g.status != GlobalStatus::kStatic || fuse_estimates(g.by_robot, options_.fusion, 0, &g.fused, &g.fused_cov))
+        continue;
+      if (!l.contains("fused")) {
+        g = GlobalEntry{};  // no estimate and no position: as if never mapped
+        continue;
+      }
+      const json& f = l.at("fused");
+      const auto c = f.at("cov").get<std::vector<double>>();
+      if (c.size() != 4) throw std::runtime_error("landmark " + std::to_string(id) + " fused cov: expected 4 numbers");
+      g.fused = {f.at("x").get<double>(), f.at("y").get<double>()};
+      g.fused_cov << c[0], c[1], c[2], c[3];
+      std::string bad = check_position(g.fused.x(), g.fused.y(), options_.limits, "fused position");
+      if (bad.empty()) bad = check_cov2(g.fused_cov, options_.limits, "fused cov");
+      if (!bad.empty()) throw std::runtime_error("landmark " + std::to_string(id) + ": " + bad);
     }
   } catch (const std::exception& ex) {
     if (why) *why = ex.what();

@@ -220,6 +220,54 @@ TEST(GlobalMap, PersistenceRoundTripAndRestart) {
   EXPECT_EQ(restarted.apply(ev(1, 3, landmark_event_t::UPDATE, 2, 5, 5), nullptr), EventResult::kApplied);
 }
 
+// What a restart must not lose: a static landmark no robot holds any more keeps its
+// fused estimate (it came back at (0, 0) with a zero covariance, which every map
+// chunk then failed the message checks with), and a moving entry that is only an
+// opinion of unknown age stays one (it came back as a confirmed finding, which the
+// robots apply as a notice, and which a robot holding it static could no longer
+// override). A file of before, without the fused estimate, drops such a landmark.
+TEST(GlobalMap, PersistenceKeepsALandmarkNoRobotHoldsAndAnUnconfirmedMovingEntry) {
+  GlobalMap m(options());
+  std::vector<Notice> n;
+  m.apply(ev(2, 1, landmark_event_t::ADD, 7, 7, 7), &n);
+  m.apply_snapshot(2, 1, 10, {}, {}, &n);  // robot 2 restarted fresh: it no longer holds 7
+  ASSERT_EQ(m.entry(7).status, GlobalStatus::kStatic);
+  ASSERT_EQ(m.entry(7).contributors(), 0);
+  m.apply_snapshot(1, 40, 60, {{2, held(1, 1, 60)}}, {5}, &n);  // 5: unconfirmed moving
+  ASSERT_TRUE(m.entry(5).moving_unconfirmed);
+  ASSERT_TRUE(m.entry(2).history_unknown);
+  const std::string text = m.to_json();
+  GlobalMap restarted(options());
+  std::string why;
+  ASSERT_TRUE(restarted.from_json(text, &why)) << why;
+  EXPECT_EQ(restarted.to_json(), text);
+  EXPECT_EQ(restarted.entry(7).status, GlobalStatus::kStatic);
+  EXPECT_TRUE(restarted.entry(7).fused.isApprox(m.entry(7).fused, 1e-12));
+  EXPECT_TRUE(restarted.entry(7).fused_cov.isApprox(m.entry(7).fused_cov, 1e-12));
+  EXPECT_GT(restarted.entry(7).fused_cov.determinant(), 0.0);
+  EXPECT_TRUE(restarted.entry(5).moving_unconfirmed);
+  EXPECT_TRUE(restarted.entry(2).history_unknown);
+  // Still an opinion: robot 2 holding 5 static in a later snapshot takes it back.
+  restarted.apply_snapshot(2, 30, 61, {{5, held(5, 5, 61)}}, {}, &n);
+  EXPECT_EQ(restarted.entry(5).status, GlobalStatus::kStatic);
+  // A file of before (no fused estimate, no flags): landmark 7 is left out.
+  nlohmann::json j = nlohmann::json::parse(text);
+  for (auto& l : j["landmarks"]) {
+    l.erase("fused");
+    l.erase("moving_unconfirmed");
+    l.erase("history_unknown");
+  }
+  GlobalMap old(options());
+  ASSERT_TRUE(old.from_json(j.dump(), &why)) << why;
+  EXPECT_EQ(old.entry(7).status, GlobalStatus::kAbsent);
+  EXPECT_EQ(old.entry(2).status, GlobalStatus::kStatic);
+  // A saved fused estimate is checked like an estimate.
+  for (auto& l : j["landmarks"])
+    if (l["id"] == 7) l["fused"] = {{"x", 7.0}, {"y", 7.0}, {"cov", {0.0, 0.0, 0.0, 0.0}}};
+  EXPECT_FALSE(old.from_json(j.dump(), &why));
+  EXPECT_NE(why.find("fused cov"), std::string::npos) << why;
+}
+
 // A state file of a build with 8 robot ids (before issue 18) loads: its robots'
 // streams continue, the others start fresh.
 TEST(GlobalMap, StateOfEightRobotIdsLoads) {

@@ -71,11 +71,11 @@ struct GlobalEntry {
   // held no estimate of it here: an opinion of unknown age (a robot keeps listing a
   // landmark as moving until it sees it again, also after another robot's RETURN).
   // No notice went out for it; a robot holding it static in a snapshot of the same
-  // or a later frame takes it back. Not persisted.
+  // or a later frame takes it back. Persisted (optional key).
   bool moving_unconfirmed = false;
   // First known from a robot whose stream had a gap (a snapshot after a gap, or an
   // event before the snapshot that repairs the gap, e.g. right after a restart), so
-  // whether it moved before is unknown here. Not persisted.
+  // whether it moved before is unknown here. Persisted (optional key).
   bool history_unknown = false;
   std::array<RobotEstimate, kMaxTeamRobots> by_robot{};
   Eigen::Vector2d fused = Eigen::Vector2d::Zero();
