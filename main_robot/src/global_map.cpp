@@ -214,7 +214,9 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
   const std::size_t r = static_cast<std::size_t>(robot_id - 1);
   // An older snapshot than one applied (lower seq, or the same seq and an older
   // frame: no events between them) would roll the map back.
-  if (seq < s.snapshot_seq || (seq == s.snapshot_seq && frame < s.snapshot_frame)) return false;
+  // So would one older than r's events applied here (a chunk delayed past the next
+  // frame's events): a snapshot holds r's map as of its seq.
+  if (seq < s.snapshot_seq || (seq == s.snapshot_seq && frame < s.snapshot_frame) || seq < s.last_seq) return false;
   s.snapshot_seq = seq;
   s.snapshot_frame = frame;
   // Events of r this map has not seen: a gap on r's event stream, or a snapshot

@@ -325,10 +325,12 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
                            snap_moving_frames_, &pending_)) {
     ++counters_.stale_snapshots;
     const RobotStream& st = map_.stream(m.robot_id);
+    const std::string what = m.seq < st.last_seq ? "the robot's events applied (seq " + std::to_string(st.last_seq) + ")"
+                                                 : "the one applied (seq " + std::to_string(st.snapshot_seq) +
+                                                       ", frame " + std::to_string(st.snapshot_frame) + ")";
     return refused(Refusal::kStale,
-                   "snapshot (seq " + std::to_string(m.seq) + ", frame " + std::to_string(m.frame) +
-                       ") older than the one applied (seq " + std::to_string(st.snapshot_seq) + ", frame " +
-                       std::to_string(st.snapshot_frame) + "): it would roll the map back",
+                   "snapshot (seq " + std::to_string(m.seq) + ", frame " + std::to_string(m.frame) + ") older than " +
+                       what + ": it would roll the map back",
                    why);
   }
   ++counters_.snapshots;

@@ -212,6 +212,29 @@ TEST(MainLimits, AnOlderSnapshotNeverRollsTheMapBack) {
   EXPECT_EQ(node.counters().refused[Refusal::kStale], 2);
 }
 
+// A snapshot chunk delayed past the robot's next events: it holds the map as of
+// its seq, and applying it undid those events (an UPDATE moved back, a newly
+// added landmark lost its only estimate).
+TEST(MainLimits, ASnapshotOlderThanTheEventsAppliedNeverRollsThemBack) {
+  MainNode node(options());
+  std::string why;
+  ASSERT_TRUE(node.on_event(add(1, 1, 2), &why)) << why;  // frame 10's ADD, seq 1
+  landmark_event_t u = add(1, 2, 2);                      // frame 11: UPDATE, seq 2
+  u.kind = landmark_event_t::UPDATE;
+  u.x = 3.0;
+  ASSERT_TRUE(node.on_event(u, &why)) << why;
+  ASSERT_TRUE(node.on_event(add(1, 3, 7), &why)) << why;  // and ADD 7, seq 3
+  ASSERT_DOUBLE_EQ(node.map().entry(2).by_robot[0].position.x(), 3.0);
+  // Frame 10's snapshot (seq 1) arrives last.
+  EXPECT_FALSE(node.on_snapshot(snapshot(1, 1, 10, {2}), &why));
+  EXPECT_NE(why.find("events applied (seq 3)"), std::string::npos) << why;
+  EXPECT_DOUBLE_EQ(node.map().entry(2).by_robot[0].position.x(), 3.0);
+  EXPECT_EQ(node.map().entry(7).contributors(), 1);
+  EXPECT_EQ(node.counters().refused[Refusal::kStale], 1);
+  // One as of the newest event is applied.
+  EXPECT_TRUE(node.on_snapshot(snapshot(1, 3, 11, {2, 7}), &why)) << why;
+}
+
 TEST(MainLimits, DuplicateIdsInOneSnapshotAreRefused) {
   MainNode node(options());
   std::string why;
