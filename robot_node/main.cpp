@@ -67,6 +67,8 @@ std::int64_t wall_clock_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
+void save(const std::string& path, const RobotNode& node);
+
 /// The state in `path` when there is one (true: resumed); a corrupt one is moved
 /// aside to PATH.corrupt (said why) and the node starts fresh: a bad file must not
 /// keep a robot down. A fresh start takes a new incarnation (later starts: larger ones).
@@ -85,6 +87,10 @@ bool resume(const std::string& path, RobotNode* node) {
     // stale. Jump ahead instead: main_robot sees one gap, asks for a snapshot
     // (LMAP_RESYNC) and refuses none of this run's events.
     node->skip_seq(kResumeSeqSkip);
+    // Saved at once, before anything is sent: killed again before its first save, the
+    // next resume would reuse this run's seq numbers, and main_robot would take its
+    // events for duplicates of this run's and see no gap to repair.
+    save(path, *node);
     std::fprintf(stderr, "robot_node %d: resumed from %s at frame %d, %d landmarks, seq %lld (incarnation %lld)\n",
                  node->robot_id(), path.c_str(), node->robot().last_frame(), node->robot().filter().num_landmarks(),
                  (long long)node->event_seq(), (long long)node->incarnation());

@@ -13,7 +13,8 @@
 # its mean pose error (evaluate, metrics.json robots[].error_mean) is within RATIO
 # of the uninterrupted run's. Prints the figures per seed. Last, a stale state file
 # (the previous run's last frame) at the start of a new run is dropped after 10
-# refused frames and the robot runs on.
+# refused frames and the robot runs on. And a robot killed twice right after its
+# resume, before any frame, skips its seq ahead twice (a resume saves at once).
 # Needs root and ip netns (exit 77 otherwise); no Python venv (the state file is
 # read with the system python3's json).
 #   [SEEDS="1 2 3"] [KILL_FRAME=60] [RATIO=1.5] tests/system/robot_restart.sh BUILD_DIR
@@ -140,4 +141,24 @@ print(f"robot_restart: a stale state (frame 149) at the start of a new run: drop
 if r2["frames"] < 130:
     print("robot_restart: the stale state kept robot 2 down too long"); sys.exit(1)
 PY
+# A resume saves at once, before anything is sent: a robot killed again before its
+# first frame resumes with seq numbers of its own, not the killed run's again (main
+# would take the second run's events for duplicates and see no gap).
+dir="$OUT/twice"
+mkdir -p "$dir"
+cp "$OUT/seed$seed/restart/robot2/state.json" "$dir/state.json"
+state_seq() { python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["state"]["node"]["seq"])' "$1"; }
+seq0=$(state_seq "$dir/state.json")
+for run in 1 2; do
+  "$ROOT/tools/netns_run.sh" --port 7710 -- bash -c '
+    "$1/bin/robot_node" --config "$2" --robot 2 --state "$3/state.json" > "$3/run'$run'.log" 2>&1 & p=$!
+    for _ in $(seq 100); do grep -q "resumed from" "$3/run'$run'.log" && break; sleep 0.05; done
+    sleep 0.1; kill -KILL $p; wait $p 2>/dev/null; true' _ "$BUILD" "$CONFIG" "$dir" > "$dir/netns$run.txt" 2>&1 ||
+    { cat "$dir/netns$run.txt"; exit 1; }
+  grep -q "resumed from" "$dir/run$run.log" || { echo "robot_restart: run $run did not resume"; cat "$dir/run$run.log"; exit 1; }
+done
+seq2=$(state_seq "$dir/state.json")
+echo "robot_restart: killed twice before a frame: state seq $seq0 -> $seq2"
+[ "$seq2" -ge $((seq0 + 2 * (1 << 24))) ] ||
+  { echo "robot_restart: the second resume reused the first one's seq numbers (state seq $seq0 -> $seq2)"; rc=1; }
 exit $rc
