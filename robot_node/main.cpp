@@ -114,7 +114,8 @@ void save(const std::string& path, const RobotNode& node) {
 /// every node.state_save_interval_s (0: after every frame). And a resumed state that
 /// the arriving frames do not continue (a new run from frame 0, or down longer than
 /// node.max_frame_gap: every frame refused as old or too far ahead) is dropped after
-/// kMisfitFrames such refusals with none processed: the node starts fresh.
+/// kMisfitFrames such refusals with none processed: the node starts fresh. Also
+/// without --state: a sensor source that starts over while the node runs.
 class StateKeeper {
  public:
   static constexpr std::int64_t kMisfitFrames = 10;
@@ -127,8 +128,9 @@ class StateKeeper {
         refused_at_start_(refused()) {}
 
   void turn() {
+    if (watching_ && !path_.empty()) check_fit();
+    check_source();
     if (path_.empty()) return;
-    if (watching_) check_fit();
     const auto now = Clock::now();
     if (now < next_save_ || node_->counters().frames == saved_frames_) return;
     save(path_, *node_);
@@ -150,6 +152,21 @@ class StateKeeper {
     std::fprintf(stderr, "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
                  "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
                  (long long)kMisfitFrames);
+    *node_ = RobotNode(options_, node_->robot_id());
+    node_->set_incarnation(wall_clock_us());
+    watching_ = false;
+  }
+
+  // A sensor source that started over while the node ran (kMisfitFrames frames older
+  // than the last processed and none processed since, RobotNode::frames_behind): a
+  // new run. The old map and frames are of the old one: start fresh, with a new
+  // incarnation (so main_robot takes the new stream for a restart). A replayed old
+  // recording does the same (the team key refuses one, docs/security.md).
+  void check_source() {
+    if (node_->frames_behind() < kMisfitFrames) return;
+    std::fprintf(stderr, "robot_node %d: the sensor frames started over (%d in a row older than frame %d, none "
+                 "processed): a new run, starting fresh\n", node_->robot_id(), node_->frames_behind(),
+                 node_->robot().last_frame());
     *node_ = RobotNode(options_, node_->robot_id());
     node_->set_incarnation(wall_clock_us());
     watching_ = false;

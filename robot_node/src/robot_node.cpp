@@ -190,6 +190,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   }
   if (msg.frame < last_frame_) {
     ++counters_.frames_out_of_order;
+    ++behind_;  // with none processed since: a source that started over (frames_behind)
     if (why) *why = "frame " + std::to_string(msg.frame) + " older than " + std::to_string(last_frame_);
     return Verdict::kOutOfOrder;
   }
@@ -206,6 +207,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     input_.obs[static_cast<std::size_t>(k)] = {msg.obs[k].landmark_id, {msg.obs[k].range, msg.obs[k].bearing}};
   const FrameSummary s = robot_.process(input_);
   last_frame_ = msg.frame;
+  behind_ = 0;
   ++counters_.frames;
   ++frames_this_run_;
   counters_.filter_faults += s.filter_faults;

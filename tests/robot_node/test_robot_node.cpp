@@ -490,5 +490,30 @@ TEST_F(RobotNodeInput, ADuplicatedOrLateNoticeNeverUndoesNewerState) {
   EXPECT_EQ(node_.counters().notices_stale, 4);
 }
 
+// A sensor source that starts over (a new run from frame 0) while the node runs on:
+// its frames are refused as old, and counted in a row until a frame is processed
+// (the process shell starts fresh after 10); a late datagram between processed
+// frames starts no run.
+TEST(RobotNodeSource, FramesBehindAreCountedInARowUntilOneIsProcessed) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  RobotNode node(o, 2);
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  const auto msg = [&](int k) {
+    const Pose2 p{0.01 * k, 0.0, 0.0};
+    return to_msg(test::frame_from(k, p, p, lms, test::all_ids(6)), 2);
+  };
+  for (int k = 0; k < 30; ++k) ASSERT_EQ(node.on_sensor(msg(k), 0), RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(node.on_sensor(msg(25), 0), RobotNode::Verdict::kOutOfOrder);  // a late datagram
+  EXPECT_EQ(node.frames_behind(), 1);
+  EXPECT_EQ(node.on_sensor(msg(30), 0), RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(node.frames_behind(), 0);
+  EXPECT_EQ(node.on_sensor(msg(30), 0), RobotNode::Verdict::kDuplicate);  // not older: not counted
+  EXPECT_EQ(node.frames_behind(), 0);
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(node.on_sensor(msg(k), 0), RobotNode::Verdict::kOutOfOrder);
+  EXPECT_EQ(node.frames_behind(), 10);
+  EXPECT_EQ(node.on_sensor(msg(31), 0), RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(node.frames_behind(), 0);
+}
+
 }  // namespace
 }  // namespace elaslam

@@ -14,7 +14,8 @@
 # of the uninterrupted run's. Prints the figures per seed. Last, a stale state file
 # (the previous run's last frame) at the start of a new run is dropped after 10
 # refused frames and the robot runs on. And a robot killed twice right after its
-# resume, before any frame, skips its seq ahead twice (a resume saves at once).
+# resume, before any frame, skips its seq ahead twice (a resume saves at once); and
+# a running robot whose sensor source starts over starts fresh.
 # Needs root and ip netns (exit 77 otherwise); no Python venv (the state file is
 # read with the system python3's json).
 #   [SEEDS="1 2 3"] [KILL_FRAME=60] [RATIO=1.5] tests/system/robot_restart.sh BUILD_DIR
@@ -161,4 +162,21 @@ seq2=$(state_seq "$dir/state.json")
 echo "robot_restart: killed twice before a frame: state seq $seq0 -> $seq2"
 [ "$seq2" -ge $((seq0 + 2 * (1 << 24))) ] ||
   { echo "robot_restart: the second resume reused the first one's seq numbers (state seq $seq0 -> $seq2)"; rc=1; }
+# A sensor source that starts over while the robot runs on (a new run from frame 0,
+# no state file): the robot starts fresh after 10 refused frames and processes the
+# rest, instead of refusing every frame until they pass its old ones.
+dir="$OUT/source"
+mkdir -p "$dir"
+"$ROOT/tools/netns_run.sh" --port 7710 -- bash -c '
+  "$1/bin/robot_node" --config "$2" --robot 2 > "$3/robot.log" 2>&1 & p=$!
+  for n in 40 60; do
+    "$1/bin/simulator" --config "$2" --seed 1 --rate 20 --frames $n --wait-for-nodes 1 > "$3/sim$n.log" 2>&1 || exit 1
+    sleep 0.3
+  done
+  kill -INT $p; wait $p' _ "$BUILD" "$CONFIG" "$dir" > "$dir/netns.txt" 2>&1 ||
+  { cat "$dir/netns.txt" "$dir"/*.log; exit 1; }
+frames=$(sed -n 's/^robot_node 2: frames=\([0-9]*\) .*/\1/p' "$dir/robot.log")
+echo "robot_restart: a sensor source that started over: robot 2 processed ${frames:-?} frames of the second run's 60"
+grep -q "sensor frames started over" "$dir/robot.log" && [ "${frames:-0}" -ge 45 ] ||
+  { echo "robot_restart: the robot did not start fresh on a new run"; cat "$dir/robot.log"; rc=1; }
 exit $rc

@@ -140,6 +140,12 @@ class RobotNode {
   /// frames_this_run() counts only what this process did, as POSE.frames_processed
   /// and STATUS.frames say (a count that goes back shows a restart: tools/evaluate).
   const RobotNodeCounters& counters() const { return counters_; }
+  /// SENSOR frames refused as older than the last processed one since it was
+  /// processed. A late datagram now and then comes between processed frames; a run
+  /// of them with none processed is a sensor source that started over (a new run from
+  /// frame 0) while this node ran on, which it would refuse until the frames pass
+  /// its old ones: the process shell starts fresh after 10 (main.cpp).
+  int frames_behind() const { return behind_; }
   std::int64_t frames_this_run() const { return frames_this_run_; }
   std::int64_t event_seq() const { return seq_; }  // seq of the last LMAP_EVENT sent
   const Robot& robot() const { return robot_; }
@@ -211,6 +217,7 @@ class RobotNode {
   int last_resync_frame_ = -1;
   int duplicate_until_frame_ = -1;            // STATUS shows FAULT_DUPLICATE_SENDER until then
   std::int64_t team_map_incarnation_ = 0, team_map_version_ = -1;  // newest TEAM_MAP_<r> applied
+  int behind_ = 0;  // SENSOR frames refused as older since the last processed one
   struct TeamPending {  // a team estimate waiting for this robot's frame after its map's frame
     bool valid = false;
     int frame = 0;
