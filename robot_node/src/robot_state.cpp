@@ -189,6 +189,7 @@ struct RobotStateAccess {
 json RobotStateAccess::save_node(const RobotNode& n) {
   json counters = json::object();
   for (const auto& c : kCounters) counters[c.first] = n.counters_.*c.second;
+  counters["refused"] = n.counters_.refused.n;  // per reason: their sum is rejected_inputs
   json held = json::array();
   for (const dynamic_notice_t& m : n.held_)
     held.push_back({{"utime", m.utime}, {"frame", m.frame}, {"seq", m.seq}, {"landmark_id", m.landmark_id},
@@ -269,6 +270,17 @@ void RobotStateAccess::load_node(const json& s, RobotNode* n) {
   const json& counters = need(node, "node", "counters");
   for (const auto& c : kCounters)
     n->counters_.*c.second = whole(need(counters, "node.counters", c.first), std::string("node.counters.") + c.first, 0, kMaxCount);
+  // Optional (absent in files of before 2026-12-03, whose refusals then count from 0):
+  // rejected_inputs per reason, which must add up to it.
+  if (counters.contains("refused")) {
+    const json& by = array(counters.at("refused"), "node.counters.refused", kNumRefusals, kNumRefusals);
+    std::int64_t sum = 0;
+    for (std::size_t k = 0; k < by.size(); ++k) {
+      n->counters_.refused.n[k] = whole(by[k], "node.counters.refused[" + std::to_string(k) + "]", 0, kMaxCount);
+      sum += n->counters_.refused.n[k];
+    }
+    if (sum != n->counters_.rejected_inputs) fail("node.counters.refused", "does not add up to rejected_inputs");
+  }
   const json& held = array(need(node, "node", "held_notices"), "node.held_notices", 0, n->held_.capacity());
   for (std::size_t k = 0; k < held.size(); ++k) {
     const std::string w = "node.held_notices[" + std::to_string(k) + "]";

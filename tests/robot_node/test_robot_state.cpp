@@ -177,6 +177,34 @@ TEST(RobotState, AResumedNodeCountsItsOwnFramesInPoseAndStatus) {
   EXPECT_EQ(resumed.status_msg(0).frames, 5);
 }
 
+// The refusals per reason are kept with their total: a resumed node's STATUS said
+// rejected_inputs N with refused[] all 0 (their sum must be rejected_inputs).
+TEST(RobotState, RefusalsPerReasonAreKeptWithTheirTotal) {
+  const TeamConfig c = paper(Mode::kEla, 7);
+  RobotNode first(c.robot, kRobot);
+  dynamic_notice_t bad{};
+  bad.landmark_id = -1;  // malformed
+  EXPECT_FALSE(first.on_notice(bad));
+  bad.landmark_id = 3;
+  bad.detected_by = 9;  // outside the team (1-3)
+  EXPECT_FALSE(first.on_notice(bad));
+  ASSERT_EQ(first.counters().rejected_inputs, 2);
+  ASSERT_EQ(first.counters().refused.total(), 2);
+  RobotNode resumed(c.robot, kRobot);
+  std::string why;
+  const std::string text = save_robot_state(first);
+  ASSERT_TRUE(load_robot_state(text, &resumed, &why)) << why;
+  EXPECT_EQ(resumed.counters().rejected_inputs, 2);
+  EXPECT_EQ(resumed.counters().refused.n, first.counters().refused.n);
+  // Counts that do not add up to the total are refused.
+  json d = json::parse(text);
+  d["state"]["node"]["counters"]["refused"][0] = 5;
+  d["fnv1a64"] = robot_state_checksum(d["state"].dump());
+  RobotNode other(c.robot, kRobot);
+  EXPECT_FALSE(load_robot_state(d.dump(), &other, &why));
+  EXPECT_NE(why.find("node.counters.refused"), std::string::npos) << why;
+}
+
 // Every state a real run goes through loads back (the validation refuses no real
 // state: its covariance passes the PSD check, its L-map agrees with its slots).
 // Prints the largest file and what saving it (text + atomic write) costs.
