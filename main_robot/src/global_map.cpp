@@ -290,8 +290,12 @@ std::string GlobalMap::to_json() const {
   j["newest_frame"] = newest_frame_;
   j["max_landmark_id"] = max_landmark_id();
   json streams = json::array();
-  for (const auto& s : streams_)
-    streams.push_back({{"last_seq", s.last_seq}, {"last_frame", s.last_frame}, {"incarnation", s.incarnation}});
+  for (const auto& s : streams_) {
+    json st = {{"last_seq", s.last_seq}, {"last_frame", s.last_frame}, {"incarnation", s.incarnation},
+               {"snapshot_seq", s.snapshot_seq}, {"snapshot_frame", s.snapshot_frame}};
+    if (s.gap_pending) st["repair_seq"] = s.repair_seq;  // a gap not repaired yet: repaired after a restart too
+    streams.push_back(std::move(st));
+  }
   j["robots"] = streams;
   json lms = json::array();
   for (int id = 0; id < max_landmark_id(); ++id) {
@@ -357,6 +361,13 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
         loaded.streams_[r].last_frame = static_cast<int>(integer(rs[r], "last_frame", -1, kIntMax));
         if (rs[r].contains("incarnation"))  // absent in v1 files of before
           loaded.streams_[r].incarnation = integer(rs[r], "incarnation", 0, std::numeric_limits<std::int64_t>::max());
+        // Absent in files of before 2026-12-03. A pending gap repair starts over: every
+        // id must be covered again by a chunk as new as repair_seq.
+        if (rs[r].contains("snapshot_seq")) {
+          loaded.streams_[r].snapshot_seq = integer(rs[r], "snapshot_seq", 0, kMaxSeq);
+          loaded.streams_[r].snapshot_frame = static_cast<int>(integer(rs[r], "snapshot_frame", -1, kIntMax));
+        }
+        if (rs[r].contains("repair_seq")) loaded.streams_[r].restart_repair(integer(rs[r], "repair_seq", 0, kMaxSeq));
       } catch (const std::exception& e) {
         throw std::runtime_error(where + e.what());
       }

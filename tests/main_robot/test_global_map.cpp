@@ -133,6 +133,34 @@ RobotEstimate held(double x, double y, int frame) {
   return RobotEstimate{true, {x, y}, Eigen::Matrix2d::Identity() * 0.01, frame};
 }
 
+// A gap not yet repaired when main_robot restarts from its state file is repaired
+// after it: the snapshot's moving list still stands in for the lost MOVING (the
+// pending repair was not saved, and the list was ignored). And an older snapshot
+// than the last one applied is still refused after the restart.
+TEST(GlobalMap, APendingGapRepairSurvivesARestart) {
+  GlobalMap m(options());
+  std::vector<Notice> notices;
+  m.apply(ev(1, 1, landmark_event_t::ADD, 4, 4, 4), &notices);
+  m.apply(ev(2, 1, landmark_event_t::ADD, 4, 4.1, 4), &notices);
+  m.apply_snapshot(1, 1, 5, {{4, held(4, 4, 5)}}, {}, &notices);
+  // Robot 1's seq 2 (MOVING of 4) is lost; seq 3 arrives: a gap.
+  EXPECT_EQ(m.apply(ev(1, 3, landmark_event_t::ADD, 6, 6, 6), &notices), EventResult::kAppliedAfterGap);
+  ASSERT_TRUE(m.stream(1).gap_pending);
+  GlobalMap restarted(options());
+  std::string why;
+  ASSERT_TRUE(restarted.from_json(m.to_json(), &why)) << why;
+  EXPECT_TRUE(restarted.stream(1).gap_pending);
+  EXPECT_EQ(restarted.to_json(), m.to_json());
+  const int n = options().max_landmark_id;
+  EXPECT_FALSE(restarted.apply_snapshot(1, 1, 4, 0, n, {{4, held(4, 4, 4)}}, {}, {}, &notices));  // older: refused
+  notices.clear();
+  EXPECT_TRUE(restarted.apply_snapshot(1, 3, 12, 0, n, {{6, held(6, 6, 12)}}, {4}, {9}, &notices));
+  EXPECT_EQ(restarted.entry(4).status, GlobalStatus::kMoving);
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_EQ(notices[0].landmark_id, 4);
+  EXPECT_FALSE(restarted.stream(1).gap_pending);
+}
+
 // A restarted main_robot (empty, no state file) rebuilds from the robots' first
 // snapshots: a moving id that no robot holds here is an opinion of unknown age,
 // set moving without a notice, and any robot's static holding takes it back.
