@@ -154,8 +154,15 @@ bool GlobalMap::fused_without(int id, int robot_id, Eigen::Vector2d* position, E
 
 void GlobalMap::remove_as_moving(int id, int robot_id, int frame, std::vector<Notice>* notices, bool unconfirmed) {
   GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
-  if (g.status == GlobalStatus::kMoving) {  // already known: idempotent, no second notice
-    if (!unconfirmed && g.moving_unconfirmed) g.moving_unconfirmed = false;
+  if (g.status == GlobalStatus::kMoving) {  // already known: idempotent, no second notice...
+    if (unconfirmed || !g.moving_unconfirmed) return;
+    // ...unless only an opinion of unknown age had it moving: this finding confirms
+    // it, and the robots hear of it now (no notice went out for the opinion).
+    g.moving_unconfirmed = false;
+    g.status_frame = frame;
+    g.moving_by = robot_id;
+    if (notices) notices->push_back({id, robot_id, frame});
+    ++version_;
     return;
   }
   g.status = GlobalStatus::kMoving;

@@ -180,6 +180,31 @@ TEST(GlobalMap, RestartWithoutStateTakesSnapshotMovingListsAsUnconfirmed) {
   EXPECT_TRUE(notices.empty());
 }
 
+// A robot's MOVING event for a landmark that only a snapshot's opinion of unknown age
+// had as moving confirms it: the other robots are told now (no notice went out for
+// the opinion), with this finding's frame and finder.
+TEST(GlobalMap, AMovingEventConfirmsAnUnconfirmedEntryAndTellsTheRobots) {
+  GlobalMap m(options());
+  std::vector<Notice> notices;
+  m.apply_snapshot(1, 40, 60, {{2, held(1, 1, 60)}}, {5}, &notices);
+  ASSERT_TRUE(m.entry(5).moving_unconfirmed);
+  ASSERT_TRUE(notices.empty());
+  const std::int64_t version = m.version();
+  m.apply(ev(2, 1, landmark_event_t::MOVING, 5, 0, 0, 0, 70), &notices);
+  EXPECT_FALSE(m.entry(5).moving_unconfirmed);
+  EXPECT_EQ(m.entry(5).moving_by, 2);
+  EXPECT_EQ(m.entry(5).status_frame, 70);
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_EQ(notices[0].landmark_id, 5);
+  EXPECT_EQ(notices[0].detected_by, 2);
+  EXPECT_EQ(notices[0].frame, 70);
+  EXPECT_GT(m.version(), version);
+  // Once confirmed, a further finding is idempotent again.
+  m.apply(ev(3, 1, landmark_event_t::MOVING, 5, 0, 0, 0, 71), &notices);
+  EXPECT_EQ(notices.size(), 1u);
+  EXPECT_EQ(m.entry(5).moving_by, 2);
+}
+
 // After a gap: robot r's MOVING was lost when r held the landmark here, or when the
 // landmark never moved as far as this map knows (notice either way); r's listing is
 // left alone when the landmark moved before and another robot holds it static
