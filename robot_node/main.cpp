@@ -152,6 +152,10 @@ class StateKeeper {
     std::fprintf(stderr, "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
                  "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
                  (long long)kMisfitFrames);
+    start_fresh();
+  }
+  // A fresh node with a new incarnation (main_robot takes its stream for a restart).
+  void start_fresh() {
     *node_ = RobotNode(options_, node_->robot_id());
     node_->set_incarnation(wall_clock_us());
     watching_ = false;
@@ -167,9 +171,7 @@ class StateKeeper {
     std::fprintf(stderr, "robot_node %d: the sensor frames started over (%d in a row older than frame %d, none "
                  "processed): a new run, starting fresh\n", node_->robot_id(), node_->frames_behind(),
                  node_->robot().last_frame());
-    *node_ = RobotNode(options_, node_->robot_id());
-    node_->set_incarnation(wall_clock_us());
-    watching_ = false;
+    start_fresh();
   }
 
   const std::string path_;

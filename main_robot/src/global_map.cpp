@@ -346,6 +346,15 @@ std::int64_t integer(const nlohmann::json& o, const char* key, std::int64_t lo, 
 
 constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
 
+// A 2x2 covariance saved as 4 numbers, row by row, under "cov" (checked by the caller).
+Eigen::Matrix2d cov2(const nlohmann::json& o, const char* what) {
+  const auto c = o.at("cov").get<std::vector<double>>();
+  if (c.size() != 4) throw std::runtime_error(std::string(what) + ": expected 4 numbers");
+  Eigen::Matrix2d C;
+  C << c[0], c[1], c[2], c[3];
+  return C;
+}
+
 }  // namespace
 
 bool GlobalMap::from_json(const std::string& text, std::string* why) {
@@ -391,13 +400,11 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
       for (const json& e : l.at("estimates")) {
         const int r = static_cast<int>(integer(e, "robot", 0, 100));
         if (r < 1 || r > kMaxTeamRobots) throw std::runtime_error("estimate robot " + std::to_string(r));
-        const auto c = e.at("cov").get<std::vector<double>>();
-        if (c.size() != 4) throw std::runtime_error("cov: expected 4 numbers");
         RobotEstimate& est = g.by_robot[static_cast<std::size_t>(r - 1)];
         est.valid = true;
         est.frame = static_cast<int>(integer(e, "frame", -1, kIntMax));
         est.position = {e.at("x").get<double>(), e.at("y").get<double>()};
-        est.cov << c[0], c[1], c[2], c[3];
+        est.cov = cov2(e, "cov");
         const std::string where = "landmark " + std::to_string(id) + " robot " + std::to_string(r);
         if (!options_.limits.in_team(r)) throw std::runtime_error(where + ": robot not in limits.team " + team_text(options_.limits.team_mask));
         std::string bad = check_position(est.position.x(), est.position.y(), options_.limits, "position");
@@ -420,10 +427,8 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
         continue;
       }
       const json& f = l.at("fused");
-      const auto c = f.at("cov").get<std::vector<double>>();
-      if (c.size() != 4) throw std::runtime_error("landmark " + std::to_string(id) + " fused cov: expected 4 numbers");
       g.fused = {f.at("x").get<double>(), f.at("y").get<double>()};
-      g.fused_cov << c[0], c[1], c[2], c[3];
+      g.fused_cov = cov2(f, "fused cov");
       std::string bad = check_position(g.fused.x(), g.fused.y(), options_.limits, "fused position");
       if (bad.empty()) bad = check_cov2(g.fused_cov, options_.limits, "fused cov");
       if (!bad.empty()) throw std::runtime_error("landmark " + std::to_string(id) + ": " + bad);

@@ -445,12 +445,11 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
   // already, or this robot's own view of the landmark changed after the notice's
   // frame (it saw it again and took it back). Applying it would undo newer state;
   // the rule is the one of the GLOBAL_MAP repair below.
-  auto& had = notice_frame_[static_cast<std::size_t>(msg.landmark_id)];
-  if (had >= msg.frame || robot_.lmap()[msg.landmark_id].status_frame > msg.frame) {
+  if (!notice_is_news(msg.landmark_id, msg.frame)) {
     ++counters_.notices_stale;
     return true;
   }
-  had = msg.frame;
+  notice_frame_[static_cast<std::size_t>(msg.landmark_id)] = msg.frame;
   // Ahead of this robot's frames: hold it (a fresh node, one far behind or a full
   // buffer applies it at once; a notice is never lost).
   if (last_frame_ >= 0 && msg.frame > last_frame_ && std::int64_t{msg.frame} <= std::int64_t{last_frame_} + options_.max_frame_gap &&
@@ -464,7 +463,7 @@ bool RobotNode::on_notice(const dynamic_notice_t& msg, std::string* why) {
 }
 
 void RobotNode::apply_notice(const dynamic_notice_t& msg) {
-  const bool removed = msg.detected_by != robot_id_ && robot_.apply_notice(msg.landmark_id, msg.frame);
+  const bool removed = robot_.apply_notice(msg.landmark_id, msg.frame);  // another robot's (on_notice)
   ++(removed ? counters_.notices_applied : counters_.notices_ignored);
 }
 
@@ -479,6 +478,12 @@ bool RobotNode::refused(Refusal reason, const std::string& problem, std::string*
   return false;
 }
 
+// Not had already (a notice of this frame or a later one for the landmark), and not
+// older than this robot's own view of it (it saw it again and took it back after).
+bool RobotNode::notice_is_news(int id, int frame) const {
+  return notice_frame_[static_cast<std::size_t>(id)] < frame && robot_.lmap()[id].status_frame <= frame;
+}
+
 bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {
   Refusal reason = Refusal::kMalformed;
   if (const std::string problem = validate(msg, &reason); !problem.empty()) return refused(reason, problem, why);
@@ -487,9 +492,7 @@ bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {
     const int id = msg.moving_ids[i], by = msg.moving_by[i], frame = msg.moving_frames[i];
     // Unconfirmed (no notice went out), this robot's own finding, a notice had, or
     // this robot's own view of it changed since (it saw it again): nothing to repair.
-    if (by == 0 || by == robot_id_ || notice_frame_[static_cast<std::size_t>(id)] >= frame ||
-        robot_.lmap()[id].status_frame > frame)
-      continue;
+    if (by == 0 || by == robot_id_ || !notice_is_news(id, frame)) continue;
     dynamic_notice_t n{};
     n.frame = frame;
     n.landmark_id = id;

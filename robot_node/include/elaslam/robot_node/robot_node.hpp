@@ -227,6 +227,9 @@ class RobotNode {
   std::vector<TeamPending> team_pending_;  // per landmark id (robot.team_map.fuse only)
   std::vector<TeamEstimate> team_due_;     // scratch: those due now
   int team_pending_count_ = 0;
+  /// A notice (or GLOBAL_MAP moving entry) for landmark `id` found in `frame` says
+  /// something new: the rule of on_notice and of the GLOBAL_MAP repair.
+  bool notice_is_news(int id, int frame) const;
   std::vector<int> notice_frame_;             // per landmark id: frame of the newest notice had, -1: none
   std::vector<std::uint8_t> id_seen_;  // duplicate-id check within a frame
   std::vector<dynamic_notice_t> held_;  // notices for frames not processed yet (fixed capacity)
