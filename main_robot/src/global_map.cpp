@@ -72,10 +72,13 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
   if (incarnation == s.incarnation || s.incarnation == 0) {
     s.incarnation = incarnation;
+    s.incarnation_frame = std::max(s.incarnation_frame, frame);
     return IncarnationVerdict::kCurrent;
   }
   if (incarnation > s.incarnation) {  // restarted without its state: a new stream
     s.previous_incarnation = s.incarnation;
+    s.previous_frame = s.incarnation_frame;
+    s.incarnation_frame = frame;
     s.incarnation = incarnation;
     s.last_seq = 0;
     s.snapshot_seq = 0;
@@ -86,8 +89,13 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
     return IncarnationVerdict::kRestarted;
   }
   ++s.stale_incarnation;
-  if (incarnation == s.previous_incarnation && ++s.previous_heard >= 3)
-    s.duplicate_until_frame = std::max(newest_frame_, frame) + 50;
+  // The replaced incarnation heard again. Its datagrams still on their way when it
+  // was replaced (a dead process's last frames, late) carry frames it had reached;
+  // a second live sender goes on to new ones: three new frames are two senders.
+  if (incarnation == s.previous_incarnation && frame > s.previous_frame) {
+    s.previous_frame = frame;
+    if (++s.previous_heard >= 3) s.duplicate_until_frame = std::max(newest_frame_, frame) + 50;
+  }
   return IncarnationVerdict::kStale;
 }
 
@@ -172,6 +180,13 @@ void GlobalMap::remove_as_moving(int id, int robot_id, int frame, std::vector<No
   for (auto& e : g.by_robot) e.valid = false;  // deleted from the map
   if (notices && !unconfirmed) notices->push_back({id, robot_id, frame});
   ++version_;
+}
+
+void GlobalMap::missed_events(int robot_id, std::int64_t seq) {
+  RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
+  if (seq <= s.last_seq) return;
+  ++s.gaps;
+  s.start_repair(seq);  // a snapshot taken after them
 }
 
 EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices) {
@@ -375,6 +390,7 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
       try {
         loaded.streams_[r].last_seq = integer(rs[r], "last_seq", 0, kMaxSeq);
         loaded.streams_[r].last_frame = static_cast<int>(integer(rs[r], "last_frame", -1, kIntMax));
+        loaded.streams_[r].incarnation_frame = loaded.streams_[r].last_frame;  // its events' (POSEs' not kept)
         if (rs[r].contains("incarnation"))  // absent in v1 files of before
           loaded.streams_[r].incarnation = integer(rs[r], "incarnation", 0, std::numeric_limits<std::int64_t>::max());
         // Absent in files of before 2026-12-03. A pending gap repair starts over: every

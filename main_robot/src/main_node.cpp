@@ -390,14 +390,23 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   // up to its event_seq are applied. Held until then; an older held POSE is let go
   // now (its events are late or lost: the map is not held back more than a frame).
   int done = -1;
-  const int older = held.frame;
+  const HeldPose older = held;
   const bool snapshot_in = m.snapshot_chunks == 0 || snapshot_done_frame_[r] == m.frame;  // (or came first)
   if (m.event_seq <= map_.stream(m.robot_id).last_seq && snapshot_in) {
     held = HeldPose{};
     done = finished_frame(m.robot_id, m.frame);
   } else {
     held = HeldPose{m.frame, m.event_seq, !snapshot_in};
-    if (older >= 0) done = finished_frame(m.robot_id, older);
+    if (older.frame >= 0) done = finished_frame(m.robot_id, older.frame);
+  }
+  // The older POSE's events are still not in when the robot's next POSE comes: lost
+  // (or late). The robot's last events of a burst would otherwise be missed until its
+  // next event shows the gap, which may be never: a gap now, repaired by a snapshot
+  // taken after them (a late one that still comes is applied as usual).
+  if (older.frame >= 0 && map_.stream(m.robot_id).last_seq < older.event_seq) {
+    map_.missed_events(m.robot_id, older.event_seq);
+    ++counters_.gaps;
+    request_resync(m.robot_id, resync_request_t::GAP);
   }
   if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // again, rate-limited
   return done;

@@ -571,10 +571,16 @@ bool RobotNode::on_resync(const resync_request_t& msg, std::int64_t now_utime) {
   return true;
 }
 
-bool RobotNode::on_own_channel(std::int64_t incarnation) {
+bool RobotNode::on_own_channel(std::int64_t incarnation, int frame) {
   if (incarnation == incarnation_) return false;  // this process's own message, looped back
   ++counters_.foreign_poses;
-  const bool fresh = last_frame_ > duplicate_until_frame_;
+  if (incarnation < incarnation_) {  // a predecessor's late datagram, or a live older process
+    if (incarnation != older_sender_) older_sender_ = incarnation, older_sender_frame_ = frame, older_sender_frames_ = 0;
+    if (frame <= older_sender_frame_ && older_sender_frames_ > 0) return false;
+    older_sender_frame_ = std::max(older_sender_frame_, frame);
+    if (++older_sender_frames_ < 3) return false;
+  }
+  const bool fresh = duplicate_until_frame_ < 0 || last_frame_ > duplicate_until_frame_;
   duplicate_until_frame_ = std::max(last_frame_, 0) + 50;
   return fresh || counters_.foreign_poses % 100 == 1;
 }
@@ -587,7 +593,7 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   s.node_id = static_cast<int16_t>(robot_id_);
   s.mode = status_mode(options_.mode);
   s.incarnation = incarnation_;
-  s.fault_flags = counters_.foreign_poses > 0 && last_frame_ <= duplicate_until_frame_ ? node_status_t::FAULT_DUPLICATE_SENDER : 0;
+  s.fault_flags = duplicate_until_frame_ >= 0 && last_frame_ <= duplicate_until_frame_ ? node_status_t::FAULT_DUPLICATE_SENDER : 0;
   if (full_frame_ >= 0 && last_frame_ - full_frame_ < kAlertFrames) s.fault_flags |= node_status_t::FAULT_CAPACITY;
   if (inconsistent_frame_ >= 0 && last_frame_ - inconsistent_frame_ < kAlertFrames)
     s.fault_flags |= node_status_t::FAULT_INCONSISTENT;

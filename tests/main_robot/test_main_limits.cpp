@@ -333,6 +333,44 @@ TEST(MainLimits, ALateOrRepeatedPoseNeverLetsTheHeldOneGo) {
   EXPECT_EQ(node.on_pose(pose(1, 3)), 3);
 }
 
+// A robot's last events before a quiet spell were lost: main held their POSE, let it
+// go at the next POSE, and noticed nothing (a gap shows only at the robot's next
+// event, which may never come; a lost MOVING then stayed out of the map). The POSE
+// says which events precede it: those still missing at the next POSE are a gap now,
+// repaired by a snapshot; one that was only late still applies.
+TEST(MainLimits, EventsAPoseAnnouncedAndNoneFollowedAreAGapAtTheNextPose) {
+  MainNode node(options("1"));
+  EXPECT_EQ(node.on_pose(pose(1, 0)), 0);
+  EXPECT_TRUE(node.on_event(add(1, 1, 3, 0.01, 0)));
+  pose_estimate_t p1 = pose(1, 1), p2 = pose(1, 2), p3 = pose(1, 3);
+  p1.event_seq = 3;  // seqs 2 and 3 follow it: lost
+  p2.event_seq = 3;  // nothing new
+  p3.event_seq = 3;
+  EXPECT_EQ(node.on_pose(p1), -1);
+  EXPECT_TRUE(node.take_resyncs(0).empty());
+  EXPECT_EQ(node.on_pose(p2), 1);  // frame 1 let go: its events are lost or late
+  const auto& asked = node.take_resyncs(0);
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0].robot_id, 1);
+  EXPECT_EQ(asked[0].reason, resync_request_t::GAP);
+  EXPECT_EQ(node.counters().gaps, 1);
+  EXPECT_TRUE(node.map().stream(1).gap_pending);
+  EXPECT_EQ(node.map().stream(1).last_seq, 1);  // a late event still applies
+  EXPECT_NE(node.status_msg(0).fault_flags & node_status_t::FAULT_UNREPAIRED_GAP, 0);
+  // Seq 2 was late, not lost: applied as usual.
+  EXPECT_TRUE(node.on_event(test::event_msg(1, 2, landmark_event_t::MOVING, 3, 1)));
+  EXPECT_EQ(node.map().entry(3).status, GlobalStatus::kMoving);
+  EXPECT_EQ(node.counters().duplicates, 0);
+  // Seq 3 is lost: the snapshot the robot sends on the request repairs it.
+  std::string why;
+  EXPECT_TRUE(node.on_snapshot(snapshot(1, 3, 2, {5}, {3}), &why)) << why;
+  EXPECT_FALSE(node.map().stream(1).gap_pending);
+  EXPECT_EQ(node.map().entry(5).status, GlobalStatus::kStatic);
+  EXPECT_EQ(node.on_pose(p3), 3);
+  EXPECT_EQ(node.counters().gaps, 1);
+  EXPECT_TRUE(node.take_resyncs(0).empty());
+}
+
 // Found by fuzz_main_robot: an event, snapshot or POSE with a negative incarnation
 // (a start time, microseconds since the epoch: never negative) was followed, and the
 // state main saved then did not load back ("robots[1].incarnation not in [0, ...]").

@@ -289,11 +289,44 @@ TEST(Incarnations, ARobotSeesASecondSenderOfItsPose) {
   const TeamConfig cfg = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
   RobotNode r(cfg.robot, 2);
   r.set_incarnation(7);
-  EXPECT_FALSE(r.on_own_channel(7));  // its own, looped back
+  EXPECT_FALSE(r.on_own_channel(7, 0));  // its own, looped back
   EXPECT_EQ(r.status_msg(0).fault_flags, 0);
-  EXPECT_TRUE(r.on_own_channel(8));
-  EXPECT_FALSE(r.on_own_channel(8));  // said once, not every frame
+  EXPECT_TRUE(r.on_own_channel(8, 0));  // started after this one: at once
+  EXPECT_FALSE(r.on_own_channel(8, 1));  // said once, not every frame
   EXPECT_TRUE(r.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
+}
+
+// A robot restarted as a new process may still hear its dead predecessor's last
+// datagrams (late on a slow link): they were flagged as a second live sender. An
+// older incarnation is one only when it goes on to new frames.
+TEST(Incarnations, APredecessorsLateDatagramsAreNotASecondSender) {
+  const TeamConfig cfg = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+  RobotNode r(cfg.robot, 2);
+  r.set_incarnation(7);
+  for (int f : {40, 41, 41, 40}) EXPECT_FALSE(r.on_own_channel(5, f)) << f;  // the predecessor's last frames
+  EXPECT_EQ(r.status_msg(0).fault_flags, 0);
+  EXPECT_EQ(r.counters().foreign_poses, 4);
+  // A live older process keeps going: its third new frame is a second sender.
+  EXPECT_TRUE(r.on_own_channel(5, 42));
+  EXPECT_TRUE(r.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
+}
+
+// main_robot: the same for a robot that restarted without its state. Its old
+// incarnation's datagrams of frames it had reached are late ones; new frames are a
+// second sender.
+TEST(Incarnations, MainTakesLateDatagramsOfAReplacedIncarnationForLateNotForASecondSender) {
+  GlobalMapOptions o;
+  o.max_landmark_id = 32;
+  MainNode main(o);
+  for (int s = 1; s <= 5; ++s) ASSERT_TRUE(main.on_event(event(2, 500, s, s, 10 + s)));  // frames 11-15
+  ASSERT_TRUE(main.on_event(event(2, 900, 1, 7, 16)));  // restarted
+  for (int f : {13, 14, 15, 15, 12}) EXPECT_FALSE(main.on_event(event(2, 500, 6, 9, f))) << f;
+  EXPECT_FALSE(main.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
+  EXPECT_EQ(main.counters().stale_incarnation, 5);
+  for (int f : {16, 17}) EXPECT_FALSE(main.on_event(event(2, 500, 6, 9, f)));
+  EXPECT_FALSE(main.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
+  EXPECT_FALSE(main.on_event(event(2, 500, 6, 9, 18)));  // a third new frame: it is alive
+  EXPECT_TRUE(main.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
 }
 
 TEST(Resync, AGapAsksOnceThenAgainAfterTheInterval) {

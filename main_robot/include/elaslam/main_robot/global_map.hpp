@@ -124,7 +124,10 @@ struct RobotStream {
   std::int64_t duplicates = 0; // duplicate or stale events ignored
   std::int64_t restarts = 0;   // new incarnations after the first
   std::int64_t stale_incarnation = 0;  // messages of an older incarnation refused
-  std::int64_t previous_heard = 0;     // of those, of previous_incarnation since it was replaced
+  std::int64_t previous_heard = 0;     // of those, of previous_incarnation since it was replaced, each with
+                                       // a frame newer than any before (it kept working: a second sender)
+  int incarnation_frame = -1;          // the newest frame of any message of the current incarnation
+  int previous_frame = -1;             // ... of previous_incarnation: as it was when replaced, then as heard
   int duplicate_until_frame = -1;      // a second live sender was seen: flagged until this frame
   int last_frame = -1;
 
@@ -182,6 +185,10 @@ class GlobalMap {
   int max_landmark_id() const { return static_cast<int>(entries_.size()); }
   std::int64_t version() const { return version_; }
   int newest_frame() const { return newest_frame_; }
+  /// Robot `robot_id`'s events up to `seq` should have come and have not (its POSE
+  /// said so): a gap, repaired by snapshot chunks with a seq of at least `seq`. The
+  /// stream's last_seq stays: a late event still applies.
+  void missed_events(int robot_id, std::int64_t seq);
   const RobotStream& stream(int robot_id) const { return streams_[static_cast<std::size_t>(robot_id - 1)]; }
   int count(GlobalStatus s) const;
   const GlobalMapOptions& options() const { return options_; }

@@ -93,11 +93,14 @@ class RobotNode {
   /// ready (snapshot_chunk()), at most one per processed frame.
   bool on_resync(const resync_request_t& msg, std::int64_t now_utime);
 
-  /// A message of `incarnation` seen on one of this robot's own output channels (its
-  /// POSE_<r>, or its STATUS_ROBOT_<r> in channel groups). Returns true when it is
-  /// another sender's (another incarnation): two processes run as this robot; the
-  /// STATUS fault flag stays set for 50 frames after the last one.
-  bool on_own_channel(std::int64_t incarnation);
+  /// A message of `incarnation` and `frame` seen on one of this robot's own output
+  /// channels (its POSE_<r>, or its STATUS_ROBOT_<r> in channel groups). Another
+  /// incarnation is another sender: two processes run as this robot, flagged (returns
+  /// true; the STATUS fault flag stays set for 50 frames after the last one) when it
+  /// is newer (it started after this one), or older and heard with three frames, each
+  /// newer than the one before (it keeps working; a dead predecessor's late datagrams
+  /// are not a second sender).
+  bool on_own_channel(std::int64_t incarnation, int frame);
 
   void count_decode_error() { ++counters_.decode_errors; }
   void count_queue_drops(std::int64_t n) { counters_.queue_drops += n; }
@@ -216,6 +219,9 @@ class RobotNode {
   candidate_list_t candidates_{};  // reserved for kMaxCandidates at construction
   int last_resync_frame_ = -1;
   int duplicate_until_frame_ = -1;            // STATUS shows FAULT_DUPLICATE_SENDER until then
+  std::int64_t older_sender_ = 0;             // an older incarnation heard on the own channels
+  int older_sender_frame_ = -1;               // its newest frame heard
+  int older_sender_frames_ = 0;               // how many newer frames it was heard with
   std::int64_t team_map_incarnation_ = 0, team_map_version_ = -1;  // newest TEAM_MAP_<r> applied
   int behind_ = 0;  // SENSOR frames refused as older since the last processed one
   struct TeamPending {  // a team estimate waiting for this robot's frame after its map's frame
@@ -309,10 +315,10 @@ class RobotPorts {
     // wake this robot for every robot's POSE (channels.hpp).
     const int own = shell_.transport().channel_groups()
                         ? shell_.template subscribe<node_status_t>(
-                              status_, [this](const node_status_t& m, const std::string&) { on_own(status_, m.incarnation); },
+                              status_, [this](const node_status_t& m, const std::string&) { on_own(status_, m.incarnation, m.frame); },
                               queues.own_pose)
                         : shell_.template subscribe<pose_estimate_t>(
-                              pose_, [this](const pose_estimate_t& m, const std::string&) { on_own(pose_, m.incarnation); },
+                              pose_, [this](const pose_estimate_t& m, const std::string&) { on_own(pose_, m.incarnation, m.frame); },
                               queues.own_pose);
     int team = 1;
     if (node_.robot().options().team_map_fuse)
@@ -384,8 +390,8 @@ class RobotPorts {
     if (node_.on_resync(msg, shell_.now_utime())) publish_snapshot();
   }
 
-  void on_own(const std::string& channel, std::int64_t incarnation) {
-    if (node_.on_own_channel(incarnation))  // loudly, not rate-limited: an operator must see it
+  void on_own(const std::string& channel, std::int64_t incarnation, int frame) {
+    if (node_.on_own_channel(incarnation, frame))  // loudly, not rate-limited: an operator must see it
       shell_.say("FAULT: another process publishes " + channel + " (incarnation " + std::to_string(incarnation) +
                  ", this one " + std::to_string(node_.incarnation()) + "): two robots with one id");
   }
