@@ -184,6 +184,17 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
       snapshot_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       alert_ = "robot " + std::to_string(robot_id) + " restarted without its state (incarnation " +
                std::to_string(incarnation) + "): its stream starts over, snapshot requested";
+      // Far behind the frame the team finished: the sensor source started over (a
+      // new run; frames are the team's one index, a robot restarted within a run
+      // comes back at the team's frame). The team's frame starts over with it, else
+      // no map would go out until the new run passed the old one's last frame.
+      if (completed_frame_ >= 0 && frame < completed_frame_ - map_.options().max_frame_gap) {
+        alert_ += "; frame " + std::to_string(frame) + " is far behind the team's " + std::to_string(completed_frame_) +
+                  ": a new run, the team's frame starts over";
+        completed_frame_ = -1;
+        team_map_frame_ = -1;
+        ++counters_.runs_started;
+      }
       request_resync(robot_id, resync_request_t::NEW_INCARNATION);
       return true;
     case IncarnationVerdict::kStale: break;

@@ -371,6 +371,44 @@ TEST(MainLimits, EventsAPoseAnnouncedAndNoneFollowedAreAGapAtTheNextPose) {
   EXPECT_TRUE(node.take_resyncs(0).empty());
 }
 
+// main_robot running on into a new run (the simulator or the log started over, the
+// robots starting fresh with new incarnations at frame 0) kept the old run's
+// finished frame: no map went out until the new run passed it. A robot that comes
+// back far behind the team's frame is a new run: the team's frame starts over. A
+// robot restarted within a run (at the team's frame) changes nothing.
+TEST(MainLimits, ANewRunStartsTheTeamsFrameOver) {
+  GlobalMapOptions o = options("1,2");
+  o.max_frame_gap = 100;
+  o.team_map_period_frames = 10;
+  MainNode node(o);
+  const auto send = [&node](int robot, int frame, std::int64_t incarnation) {  // the team's finished frame, or -1
+    pose_estimate_t p = pose(robot, frame);
+    p.incarnation = incarnation;
+    return node.on_pose(p);
+  };
+  int done = -1;
+  for (int k = 0; k <= 300; ++k)
+    for (int r : {1, 2}) done = std::max(done, send(r, k, 100 * r));
+  EXPECT_EQ(done, 300);
+  EXPECT_TRUE(node.team_map_due(300));
+  // Robot 2 restarted without its state within the run: at the team's frame.
+  EXPECT_EQ(send(2, 301, 250), -1);
+  EXPECT_EQ(send(1, 301, 100), 301);
+  EXPECT_EQ(node.counters().runs_started, 0);
+  // A new run: both robots start over at frame 0 with new incarnations.
+  // (Robot 2, still in the old run, counts with its old frame, past this one.)
+  EXPECT_EQ(send(1, 0, 1000), 0);
+  EXPECT_EQ(node.counters().runs_started, 1);
+  EXPECT_NE(node.take_alert().find("a new run"), std::string::npos);
+  EXPECT_EQ(send(2, 0, 2000), -1);
+  EXPECT_EQ(send(1, 1, 1000), -1);
+  EXPECT_EQ(send(2, 1, 2000), 1);
+  EXPECT_TRUE(node.team_map_due(1));
+  node.make_global_map(0);
+  EXPECT_EQ(node.map_chunk(0).frame, 1);
+  EXPECT_EQ(node.counters().runs_started, 1);
+}
+
 // Found by fuzz_main_robot: an event, snapshot or POSE with a negative incarnation
 // (a start time, microseconds since the epoch: never negative) was followed, and the
 // state main saved then did not load back ("robots[1].incarnation not in [0, ...]").

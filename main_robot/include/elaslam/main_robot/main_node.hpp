@@ -38,6 +38,7 @@ struct MainCounters {
   std::int64_t team_maps_published = 0;  // TEAM_MAP_<r> publications (all chunks of one count once)
   std::int64_t resyncs_requested = 0;    // LMAP_RESYNC requests sent
   std::int64_t restarts = 0;             // robots seen with a new incarnation
+  std::int64_t runs_started = 0;         // ... far behind the team's frame: a new run (the team's frame starts over)
   std::int64_t stale_incarnation = 0;    // messages of an older incarnation refused (replay, second sender)
   std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, refused
   std::int64_t stale_poses = 0;          // POSEs of a frame already held or finished (late, repeated): ignored
