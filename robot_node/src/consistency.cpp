@@ -67,6 +67,26 @@ bool ConsistencyMonitor::end_frame() {
   return inconsistent_;
 }
 
+std::vector<std::pair<double, int>> ConsistencyMonitor::window() const {
+  std::vector<std::pair<double, int>> out;
+  if (ring_.empty()) return out;
+  const std::size_t first = filled_ == ring_.size() ? next_ : 0;
+  for (std::size_t k = 0; k < filled_; ++k) {
+    const Entry& e = ring_[(first + k) % ring_.size()];
+    out.emplace_back(e.nis, e.dof);
+  }
+  return out;
+}
+
+void ConsistencyMonitor::restore(const std::vector<std::pair<double, int>>& frames) {
+  restart();
+  for (const auto& [nis, dof] : frames) {
+    frame_nis_ = nis;
+    frame_dof_ = dof;
+    end_frame();
+  }
+}
+
 void ConsistencyMonitor::restart() {
   for (Entry& e : ring_) e = {};
   next_ = filled_ = 0;

@@ -234,6 +234,13 @@ json RobotStateAccess::save(const RobotNode& n) {
   json robot = {{"initialised", r.initialised_},
                 {"last_frame", r.last_frame_},
                 {"last_odometer", json::array({r.last_odometer_.x, r.last_odometer_.y, r.last_odometer_.theta})}};
+  // What the robot saw lately of its own trouble (a lost robot: Robot::apply_team_map)
+  // and the consistency monitor's window: optional keys (absent in files of before
+  // 2026-12-03: the window starts empty).
+  if (r.trouble_frame_ >= 0) robot["trouble_frame"] = r.trouble_frame_;
+  json window = json::array();
+  for (const auto& [nis, dof] : r.monitor_.window()) window.push_back(json::array({nis, dof}));
+  if (!window.empty()) robot["consistency_window"] = std::move(window);
   return {{"robot_id", n.robot_id_},
           {"mode", to_string(o.mode)},
           {"capacity", o.ekf.capacity},
@@ -313,6 +320,23 @@ void RobotStateAccess::load_robot(const json& s, Robot* r, int node_last_frame) 
   r->last_odometer_.x = real(odo[0], "robot.last_odometer[0]", -bound, bound);
   r->last_odometer_.y = real(odo[1], "robot.last_odometer[1]", -bound, bound);
   r->last_odometer_.theta = real(odo[2], "robot.last_odometer[2]", -kPi - kAngleSlack, kPi + kAngleSlack);
+  r->trouble_frame_ = -1;
+  if (robot.contains("trouble_frame"))
+    r->trouble_frame_ = static_cast<int>(whole(robot.at("trouble_frame"), "robot.trouble_frame", -1, r->last_frame_));
+  std::vector<std::pair<double, int>> window;
+  if (robot.contains("consistency_window")) {
+    const json& w = array(robot.at("consistency_window"), "robot.consistency_window", 0,
+                          static_cast<std::size_t>(r->monitor_.window_frames()));
+    for (std::size_t k = 0; k < w.size(); ++k) {
+      const std::string where = "robot.consistency_window[" + std::to_string(k) + "]";
+      const json& e = array(w[k], where, 2, 2);
+      const double nis = real(e[0], where + "[0] (NIS)", 0.0, kMaxVariance);
+      const auto dof = static_cast<int>(whole(e[1], where + "[1] (dof)", 0, 2.0 * r->options_.max_observations));
+      if (dof % 2 != 0) fail(where + "[1] (dof)", "odd: 2 per correction");
+      window.emplace_back(nis, dof);
+    }
+  }
+  r->monitor_.restore(window);
 }
 
 void RobotStateAccess::load_filter(const json& s, Robot* r) {

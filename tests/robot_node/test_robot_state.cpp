@@ -152,6 +152,45 @@ TEST(RobotState, RestoredNodeContinuesBitIdentically) {
   }
 }
 
+// The consistency monitor's window and the robot's last trouble frame are in the
+// state file: a robot restarted before every frame finds itself inconsistent (and
+// recovers) in the same frames as one never stopped. Before 2026-12-03 the window
+// started empty at every resume: no verdict for a window's length after a restart.
+TEST(RobotState, TheConsistencyMonitorSurvivesARestart) {
+  TeamConfig c = paper(Mode::kEla, 7);
+  c.robot.consistency_window_frames = 10;
+  c.robot.consistency_probability = 0.5;  // a verdict in about half the windows: the window shows
+  c.robot.consistency_recover = true;     // ... and changes the pose
+  const auto frames = sensor_frames(c);
+  std::string state_a, state_every, state_off;
+  const auto a = run_team(c, frames, [](int) { return false; }, &state_a);
+  const auto every = run_team(c, frames, [](int k) { return k > 0; }, &state_every);
+  ASSERT_EQ(every.size(), a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_EQ(a[k], every[k]) << "frame " << k;
+  EXPECT_EQ(state_a, state_every);
+  const json robot = json::parse(state_a)["state"]["robot"];
+  ASSERT_TRUE(robot.contains("consistency_window"));
+  EXPECT_GE(robot["consistency_window"].size(), 1u);  // (emptied at each recovery)
+  // The monitor mattered: without it robot 2 publishes something else.
+  TeamConfig off = c;
+  off.robot.consistency_window_frames = 0;
+  const auto without = run_team(off, frames, [](int) { return false; }, &state_off);
+  EXPECT_NE(without, a);
+  // A window that does not fit the configuration is refused, naming the key.
+  json d = json::parse(state_a);
+  d["state"]["robot"]["consistency_window"][0][1] = 3;  // an odd dof
+  d["fnv1a64"] = robot_state_checksum(d["state"].dump());
+  RobotNode other(c.robot, kRobot);
+  std::string why;
+  EXPECT_FALSE(load_robot_state(d.dump(), &other, &why));
+  EXPECT_NE(why.find("robot.consistency_window[0][1]"), std::string::npos) << why;
+  d = json::parse(state_a);
+  d["state"]["robot"]["trouble_frame"] = 100000;  // after the last frame
+  d["fnv1a64"] = robot_state_checksum(d["state"].dump());
+  EXPECT_FALSE(load_robot_state(d.dump(), &other, &why));
+  EXPECT_NE(why.find("robot.trouble_frame"), std::string::npos) << why;
+}
+
 // A node resumed from its state goes on with the robot's counters but says in POSE
 // (frames_processed) and STATUS (frames) what this process did: the count goes back,
 // and tools/evaluate sees the restart. (It said the resumed total; a robot killed

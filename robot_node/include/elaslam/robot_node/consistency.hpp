@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace elaslam {
@@ -34,6 +35,14 @@ class ConsistencyMonitor {
   bool end_frame();
   /// Empty the window (after a recovery: the old innovations say nothing of the new state).
   void restart();
+
+  /// The window's frames, oldest first: (NIS, dof) each (the robot's state file
+  /// keeps them; allocates, not for the frame's path).
+  std::vector<std::pair<double, int>> window() const;
+  /// Empty the window and refill it with `frames`, oldest first, as end_frame would
+  /// (the verdict is recomputed); beyond window_frames only the newest are kept.
+  void restore(const std::vector<std::pair<double, int>>& frames);
+  int window_frames() const { return static_cast<int>(ring_.size()); }
 
   bool inconsistent() const { return inconsistent_; }
   double window_nis() const { return nis_; }
