@@ -182,11 +182,12 @@ void GlobalMap::remove_as_moving(int id, int robot_id, int frame, std::vector<No
   ++version_;
 }
 
-void GlobalMap::missed_events(int robot_id, std::int64_t seq) {
+bool GlobalMap::missed_events(int robot_id, std::int64_t seq) {
   RobotStream& s = streams_[static_cast<std::size_t>(robot_id - 1)];
-  if (seq <= s.last_seq) return;
+  if (seq <= s.last_seq) return false;  // all in
   ++s.gaps;
   s.start_repair(seq);  // a snapshot taken after them
+  return true;
 }
 
 EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices) {

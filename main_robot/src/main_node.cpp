@@ -414,12 +414,8 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   // (or late). The robot's last events of a burst would otherwise be missed until its
   // next event shows the gap, which may be never: a gap now, repaired by a snapshot
   // taken after them (a late one that still comes is applied as usual).
-  if (older.frame >= 0 && map_.stream(m.robot_id).last_seq < older.event_seq) {
-    map_.missed_events(m.robot_id, older.event_seq);
-    ++counters_.gaps;
-    request_resync(m.robot_id, resync_request_t::GAP);
-  }
-  if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // again, rate-limited
+  if (older.frame >= 0 && map_.missed_events(m.robot_id, older.event_seq)) ++counters_.gaps;
+  if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // (rate-limited)
   return done;
 }
 

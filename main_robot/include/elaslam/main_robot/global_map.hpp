@@ -187,8 +187,8 @@ class GlobalMap {
   int newest_frame() const { return newest_frame_; }
   /// Robot `robot_id`'s events up to `seq` should have come and have not (its POSE
   /// said so): a gap, repaired by snapshot chunks with a seq of at least `seq`. The
-  /// stream's last_seq stays: a late event still applies.
-  void missed_events(int robot_id, std::int64_t seq);
+  /// stream's last_seq stays: a late event still applies. False when they are all in.
+  bool missed_events(int robot_id, std::int64_t seq);
   const RobotStream& stream(int robot_id) const { return streams_[static_cast<std::size_t>(robot_id - 1)]; }
   int count(GlobalStatus s) const;
   const GlobalMapOptions& options() const { return options_; }
