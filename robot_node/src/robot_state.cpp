@@ -1,5 +1,6 @@
 #include "elaslam/robot_node/robot_state.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -197,8 +198,13 @@ json RobotStateAccess::save_node(const RobotNode& n) {
   json had = json::array();  // [id, frame] of the newest notice had per landmark (GLOBAL_MAP repair)
   for (std::size_t id = 0; id < n.notice_frame_.size(); ++id)
     if (n.notice_frame_[id] >= 0) had.push_back({static_cast<int>(id), n.notice_frame_[id]});
-  return {{"last_frame", n.last_frame_}, {"seq", n.seq_}, {"counters", counters}, {"held_notices", held},
-          {"notice_frames", had}};
+  json out = {{"last_frame", n.last_frame_}, {"seq", n.seq_}, {"counters", counters}, {"held_notices", held},
+              {"notice_frames", had}};
+  // The last frames of the faults STATUS shows for kAlertFrames: optional keys
+  // (absent in files of before 2026-12-04, whose resumed node showed neither).
+  if (n.inconsistent_frame_ >= 0) out["inconsistent_frame"] = n.inconsistent_frame_;
+  if (n.full_frame_ >= 0) out["full_frame"] = n.full_frame_;
+  return out;
 }
 
 json RobotStateAccess::save_filter(const EkfSlam& f) {
@@ -306,6 +312,12 @@ void RobotStateAccess::load_node(const json& s, RobotNode* n) {
     const json& pair = array(had[k], w, 2, 2);
     const auto id = static_cast<std::size_t>(whole(pair[0], w + "[0]", 0, n->options_.ekf.max_landmark_id - 1));
     n->notice_frame_[id] = static_cast<int>(whole(pair[1], w + "[1]", 0, kMaxFrame));
+  }
+  for (const auto& [key, frame] : {std::pair<const char*, int*>{"inconsistent_frame", &n->inconsistent_frame_},
+                                   std::pair<const char*, int*>{"full_frame", &n->full_frame_}}) {
+    *frame = -1;
+    if (node.contains(key))
+      *frame = static_cast<int>(whole(node.at(key), std::string("node.") + key, 0, std::max(n->last_frame_, 0)));
   }
 }
 

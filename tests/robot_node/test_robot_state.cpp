@@ -64,12 +64,16 @@ std::vector<std::uint8_t> bytes(const Msg& m) {
 }
 
 /// What robot 2 published in one frame, encoded (processing time zeroed: it is the
-/// clock's, not the state's; frames_processed too: it is the process's).
+/// clock's, not the state's; frames_processed too: it is the process's), and the
+/// fault flags its STATUS shows (the rest of STATUS is the process's: its own frame
+/// count and timings).
 std::vector<std::uint8_t> published(const RobotNode& n) {
   pose_estimate_t p = n.pose_msg();
   p.processing_us = 0;
   p.frames_processed = 0;
   std::vector<std::uint8_t> out = bytes(p);
+  const auto flags = static_cast<std::uint32_t>(n.status_msg(0).fault_flags);
+  for (int k = 0; k < 4; ++k) out.push_back(static_cast<std::uint8_t>(flags >> (8 * k)));
   for (const auto& e : n.event_msgs()) {
     const auto b = bytes(e);
     out.insert(out.end(), b.begin(), b.end());
@@ -170,6 +174,9 @@ TEST(RobotState, TheConsistencyMonitorSurvivesARestart) {
   EXPECT_EQ(state_a, state_every);
   const json robot = json::parse(state_a)["state"]["robot"];
   ASSERT_TRUE(robot.contains("consistency_window"));
+  // STATUS showed FAULT_INCONSISTENT in some frames (compared above, restarts or
+  // not: the frame it was last raised is in the file since 2026-12-04).
+  EXPECT_TRUE(json::parse(state_a)["state"]["node"].contains("inconsistent_frame"));
   EXPECT_GE(robot["consistency_window"].size(), 1u);  // (emptied at each recovery)
   // The monitor mattered: without it robot 2 publishes something else.
   TeamConfig off = c;
@@ -189,6 +196,11 @@ TEST(RobotState, TheConsistencyMonitorSurvivesARestart) {
   d["fnv1a64"] = robot_state_checksum(d["state"].dump());
   EXPECT_FALSE(load_robot_state(d.dump(), &other, &why));
   EXPECT_NE(why.find("robot.trouble_frame"), std::string::npos) << why;
+  d = json::parse(state_a);
+  d["state"]["node"]["inconsistent_frame"] = 100000;  // after the last frame
+  d["fnv1a64"] = robot_state_checksum(d["state"].dump());
+  EXPECT_FALSE(load_robot_state(d.dump(), &other, &why));
+  EXPECT_NE(why.find("node.inconsistent_frame"), std::string::npos) << why;
 }
 
 // A node resumed from its state goes on with the robot's counters but says in POSE
