@@ -1,6 +1,7 @@
 // libFuzzer target: the state loaders, robot_node's (--state: load_robot_state) and
 // main_robot's (--state: GlobalMap::from_json). The first byte picks the loader and
-// whether the robot state is sealed again: a state file carries an FNV-1a checksum
+// whether the robot state is sealed again (mod 4: 0 raw, 1 sealed, 2 main's, 3
+// sealed into a robot with the team's map on): a state file carries an FNV-1a checksum
 // of its "state" object, so most mutations stop there; the sealed variant parses
 // the text as JSON, recomputes the checksum and loads that, so the fuzzer reaches
 // the field validation behind it. A refused state must leave the node as it was
@@ -43,12 +44,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
   std::string why;
-  switch (data[0] % 3) {
+  switch (data[0] % 4) {
     case 0:
-    case 1: {
-      RobotNode node(robot_options(), 1);
+    case 1:
+    case 3: {  // 3: sealed, into a node with robot.team_map.fuse on (the aided filter's keys)
+      RobotOptions o = robot_options();
+      o.team_map_fuse = data[0] % 4 == 3;
+      RobotNode node(o, 1);
       const std::string before = save_robot_state(node);
-      const bool ok = load_robot_state(data[0] % 3 == 0 ? text : sealed(text), &node, &why);
+      const bool ok = load_robot_state(data[0] % 4 == 0 ? text : sealed(text), &node, &why);
       if (!ok && save_robot_state(node) != before) {
         std::fprintf(stderr, "fuzz_state: a refused robot state changed the node (%s)\n", why.c_str());
         std::abort();

@@ -4,14 +4,16 @@ project's files: windows of a recording's messages in the targets' record format
 (fuzz/fuzz_input.hpp: [channel index][length, 2 bytes LE][payload]), the configs,
 and state files.
 
-    fuzz/make_corpus.py --log RUN.lcmlog [--robot-state FILE] [--main-state FILE] [--out fuzz/corpus]
+    fuzz/make_corpus.py --log RUN.lcmlog [--robot-state FILE] [--main-state FILE]
+                        [--team-robot-state FILE] [--out fuzz/corpus]
 
 Writes OUT/fuzz_robot_node/ (robot 1's inputs: SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MOVING,
 LMAP_RESYNC, POSE_1), OUT/fuzz_main_robot/ (LMAP_EVENT, LMAP_SNAPSHOT, POSE_1, POSE_2,
 POSE_3, POSE_7, LMAP_EVENTS), OUT/fuzz_viewer/ (RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE,
 STATUS_ROBOT_1, CANDIDATES_1, GROUND_TRUTH), each a few windows of consecutive frames from the first frame on;
 OUT/fuzz_state/ (the state files with fuzz_state's selector byte: raw and sealed
-robot state, main state); OUT/fuzz_mrclam/ (tests/dataset/data/tiny, robot 1). The
+robot state, main state, and robot 1's state from a run with the team's map on
+(robot.team_map.fuse, main.team_map_period_frames), sealed); OUT/fuzz_mrclam/ (tests/dataset/data/tiny, robot 1). The
 config corpus is config/*.yaml (copied). Needs the PyPI lcm (the project's .venv).
 """
 import argparse
@@ -74,6 +76,7 @@ def main():
     ap.add_argument("--log", required=True)
     ap.add_argument("--robot-state")
     ap.add_argument("--main-state")
+    ap.add_argument("--team-robot-state")
     ap.add_argument("--out", default=os.path.join(_here, "corpus"))
     args = parse_args(ap)
     lcm = need("lcm")
@@ -87,6 +90,8 @@ def main():
         states += [b"\x00" + text, b"\x01" + text]
     if args.main_state:
         states.append(b"\x02" + open(args.main_state, "rb").read())
+    if args.team_robot_state:
+        states.append(b"\x03" + open(args.team_robot_state, "rb").read())
     if states:
         write(args.out, "fuzz_state", states)
     tiny = os.path.join(_here, "..", "tests", "dataset", "data", "tiny")

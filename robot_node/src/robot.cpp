@@ -434,19 +434,15 @@ void Robot::mirror_update_landmark_only(int id, const RangeBearing& z, FrameSumm
 
 EkfStatus Robot::mirror_add(int id, const RangeBearing& z, FrameSummary* s) {
   const EkfStatus st = ekf_.add_landmark(id, z);
-  if (aided_ && st == EkfStatus::kOk) {
-    team_.forget(id);
-    if (aided_->add_landmark(id, z) != EkfStatus::kOk) ++s->filter_faults;
-  }
+  // The team channel is kept (team_aid.hpp): what the team's estimate taught the
+  // pose and map before the landmark left stays in the aided filter.
+  if (aided_ && st == EkfStatus::kOk && aided_->add_landmark(id, z) != EkfStatus::kOk) ++s->filter_faults;
   return st;
 }
 
 EkfStatus Robot::mirror_remove(int id) {
   const EkfStatus st = ekf_.remove_landmark(id);
-  if (aided_) {
-    aided_->remove_landmark(id);  // kUnknownLandmark when its add had failed: nothing to remove
-    team_.forget(id);
-  }
+  if (aided_) aided_->remove_landmark(id);  // kUnknownLandmark when its add had failed: nothing to remove
   return st;
 }
 
@@ -483,7 +479,7 @@ bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
     return false;
   }
   TeamIncrement inc;
-  if (!team_.offer(e.landmark_id, e.position, e.cov, aided_->landmark(e.landmark_id), aided_->landmark_cov(e.landmark_id),
+  if (!team_.offer(e.landmark_id, e.epoch, e.position, e.cov, aided_->landmark(e.landmark_id), aided_->landmark_cov(e.landmark_id),
                    &inc))
     return false;
   const UpdateReport r = aided_->update_position(e.landmark_id, inc.z, inc.R);

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
 #include "elaslam/common/contract.hpp"
@@ -182,6 +183,8 @@ struct RobotStateAccess {
   static void check_header(const json& s, const RobotNode& n);
   static void load_node(const json& s, RobotNode* n);
   static void load_robot(const json& s, Robot* r, int node_last_frame);
+  static void parse_filter(const json& f, const std::string& key, const Robot& r, Eigen::VectorXd* x,
+                           Eigen::MatrixXd* P, std::vector<int>* slot_ids);
   static void load_filter(const json& s, Robot* r);
   static void load_lmap(const json& s, Robot* r);
   static void check_consistency(const Robot& r);
@@ -204,6 +207,18 @@ json RobotStateAccess::save_node(const RobotNode& n) {
   // (absent in files of before 2026-12-04, whose resumed node showed neither).
   if (n.inconsistent_frame_ >= 0) out["inconsistent_frame"] = n.inconsistent_frame_;
   if (n.full_frame_ >= 0) out["full_frame"] = n.full_frame_;
+  // The newest team map applied and its estimates still held for a later frame
+  // (robot.team_map.fuse): optional, absent in files of before 2026-12-04.
+  if (n.options_.team_map_fuse) {
+    json pending = json::array();
+    for (std::size_t id = 0; id < n.team_pending_.size(); ++id) {
+      const auto& p = n.team_pending_[id];
+      if (p.valid)
+        pending.push_back({{"id", static_cast<int>(id)}, {"frame", p.frame}, {"position", to_json(p.position)},
+                           {"cov", to_json(p.cov)}, {"epoch", p.epoch}});
+    }
+    out["team_map"] = {{"incarnation", n.team_map_incarnation_}, {"version", n.team_map_version_}, {"pending", std::move(pending)}};
+  }
   return out;
 }
 
@@ -247,6 +262,18 @@ json RobotStateAccess::save(const RobotNode& n) {
   json window = json::array();
   for (const auto& [nis, dof] : r.monitor_.window()) window.push_back(json::array({nis, dof}));
   if (!window.empty()) robot["consistency_window"] = std::move(window);
+  // The aided filter and what the team channel fused into it (robot.team_map.fuse):
+  // optional, absent in files of before 2026-12-04.
+  if (r.aided_) {
+    json channel = json::array();
+    for (int id = 0; id < r.team_.max_landmark_id(); ++id)
+      if (r.team_.fused_information(id).any())
+        channel.push_back({{"id", id},
+                           {"epoch", r.team_.epoch(id)},
+                           {"Y", to_json(r.team_.fused_information(id))},
+                           {"y", to_json(r.team_.fused_vector(id))}});
+    robot["aided"] = {{"filter", save_filter(*r.aided_)}, {"channel", std::move(channel)}};
+  }
   return {{"robot_id", n.robot_id_},
           {"mode", to_string(o.mode)},
           {"capacity", o.ekf.capacity},
@@ -319,6 +346,28 @@ void RobotStateAccess::load_node(const json& s, RobotNode* n) {
     if (node.contains(key))
       *frame = static_cast<int>(whole(node.at(key), std::string("node.") + key, 0, std::max(n->last_frame_, 0)));
   }
+  if (n->options_.team_map_fuse && node.contains("team_map")) {
+    const json& t = node.at("team_map");
+    n->team_map_incarnation_ = whole(need(t, "node.team_map", "incarnation"), "node.team_map.incarnation", 0, kMaxIncarnation);
+    n->team_map_version_ = whole(need(t, "node.team_map", "version"), "node.team_map.version", -1, kMaxCount);
+    const json& pending = array(need(t, "node.team_map", "pending"), "node.team_map.pending", 0, n->team_pending_.size());
+    for (std::size_t k = 0; k < pending.size(); ++k) {
+      const std::string w = "node.team_map.pending[" + std::to_string(k) + "]";
+      const json& e = pending[k];
+      const auto id = static_cast<std::size_t>(whole(need(e, w, "id"), w + ".id", 0, n->options_.ekf.max_landmark_id - 1));
+      auto& p = n->team_pending_[id];
+      if (p.valid) fail(w + ".id", std::to_string(id) + " appears twice");
+      // A team map's estimates are applied after the robot's frame that follows the
+      // map's: those held are of this frame or a later one.
+      p.frame = static_cast<int>(whole(need(e, w, "frame"), w + ".frame", std::max(n->last_frame_, 0),
+                                       std::max(n->last_frame_, 0) + n->options_.max_frame_gap));
+      p.position = vec2(need(e, w, "position"), w + ".position", n->options_.limits.world_bound);
+      p.cov = cov2(need(e, w, "cov"), w + ".cov", n->options_.limits);
+      p.epoch = static_cast<int>(whole(need(e, w, "epoch"), w + ".epoch", -1, kMaxFrame));
+      p.valid = true;
+      ++n->team_pending_count_;
+    }
+  }
 }
 
 void RobotStateAccess::load_robot(const json& s, Robot* r, int node_last_frame) {
@@ -351,29 +400,31 @@ void RobotStateAccess::load_robot(const json& s, Robot* r, int node_last_frame) 
   r->monitor_.restore(window);
 }
 
-void RobotStateAccess::load_filter(const json& s, Robot* r) {
-  const json& f = need(s, "state", "filter");
-  const EkfOptions& o = r->options_.ekf;
-  const MessageLimits& lim = r->options_.limits;
-  const json& ids = array(need(f, "filter", "slot_ids"), "filter.slot_ids", 0, static_cast<std::size_t>(o.capacity));
+// A filter saved by save_filter under `key` ("filter", or "robot.aided.filter"):
+// its slot ids, mean and covariance, each checked.
+void RobotStateAccess::parse_filter(const json& f, const std::string& key, const Robot& r, Eigen::VectorXd* x_out,
+                                    Eigen::MatrixXd* P_out, std::vector<int>* ids_out) {
+  const EkfOptions& o = r.options_.ekf;
+  const MessageLimits& lim = r.options_.limits;
+  const json& ids = array(need(f, key, "slot_ids"), key + ".slot_ids", 0, static_cast<std::size_t>(o.capacity));
   std::vector<int> slot_ids;
   for (std::size_t k = 0; k < ids.size(); ++k)
-    slot_ids.push_back(static_cast<int>(whole(ids[k], "filter.slot_ids[" + std::to_string(k) + "]", 0, o.max_landmark_id - 1)));
+    slot_ids.push_back(static_cast<int>(whole(ids[k], key + ".slot_ids[" + std::to_string(k) + "]", 0, o.max_landmark_id - 1)));
   const Eigen::Index dim = StateLayout::dim(static_cast<int>(slot_ids.size()));
   const auto n_mean = static_cast<std::size_t>(dim), n_lower = static_cast<std::size_t>(dim * (dim + 1) / 2);
-  const json& mean = array(need(f, "filter", "mean"), "filter.mean", n_mean, n_mean);
+  const json& mean = array(need(f, key, "mean"), key + ".mean", n_mean, n_mean);
   Eigen::VectorXd x(dim);
   for (Eigen::Index i = 0; i < dim; ++i) {
     const bool heading = i == StateLayout::kTheta;
-    x(i) = real(mean[static_cast<std::size_t>(i)], "filter.mean[" + std::to_string(i) + "]",
+    x(i) = real(mean[static_cast<std::size_t>(i)], key + ".mean[" + std::to_string(i) + "]",
                 heading ? -kPi - kAngleSlack : -lim.world_bound, heading ? kPi + kAngleSlack : lim.world_bound);
   }
-  const json& lower = array(need(f, "filter", "cov_lower"), "filter.cov_lower", n_lower, n_lower);
+  const json& lower = array(need(f, key, "cov_lower"), key + ".cov_lower", n_lower, n_lower);
   Eigen::MatrixXd P(dim, dim);
   std::size_t k = 0;
   for (Eigen::Index i = 0; i < dim; ++i)
     for (Eigen::Index j = 0; j <= i; ++j, ++k) {
-      const std::string w = "filter.cov_lower[" + std::to_string(k) + "] (P(" + std::to_string(i) + "," + std::to_string(j) + "))";
+      const std::string w = key + ".cov_lower[" + std::to_string(k) + "] (P(" + std::to_string(i) + "," + std::to_string(j) + "))";
       P(i, j) = P(j, i) = real(lower[k], w, -kMaxVariance, kMaxVariance);
       if (i == j && P(i, i) < 0.0) fail(w, "negative variance " + num(P(i, i)));
       if (i == j && P(i, i) > lim.cov_ceiling) fail(w, "variance " + num(P(i, i)) + " above limits.cov_ceiling_m2 " + num(lim.cov_ceiling));
@@ -383,18 +434,66 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
     const Eigen::Index o2 = StateLayout::landmark_offset(static_cast<int>(slot));
     const Eigen::Matrix2d block = P.block<2, 2>(o2, o2);
     if (const std::string bad = check_cov2(block, lim, "covariance"); !bad.empty())
-      fail("filter.cov_lower (landmark " + std::to_string(slot_ids[slot]) + ")", bad);
+      fail(key + ".cov_lower (landmark " + std::to_string(slot_ids[slot]) + ")", bad);
   }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(P);
   const double tol = kPsdTolerance * std::max(1.0, P.diagonal().maxCoeff());
   if (ldlt.info() != Eigen::Success || (ldlt.vectorD().array() < -tol).any())
-    fail("filter.cov_lower", "the covariance is not positive semi-definite (smallest LDLT pivot " +
+    fail(key + ".cov_lower", "the covariance is not positive semi-definite (smallest LDLT pivot " +
                                  num(ldlt.vectorD().minCoeff()) + ")");
+  *x_out = std::move(x);
+  *P_out = std::move(P);
+  *ids_out = std::move(slot_ids);
+}
+
+void RobotStateAccess::load_filter(const json& s, Robot* r) {
+  Eigen::VectorXd x;
+  Eigen::MatrixXd P;
+  std::vector<int> slot_ids;
+  parse_filter(need(s, "state", "filter"), "filter", *r, &x, &P, &slot_ids);
   if (r->ekf_.restore(x, P, slot_ids) != EkfStatus::kOk) fail("filter.slot_ids", "a landmark id appears twice");
-  // The aided filter (team_aid.hpp) is not saved: it restarts as the own filter,
-  // the team's information to be fused again from the next team map.
-  if (r->aided_) r->aided_->restore(x, P, slot_ids);
   r->team_.clear();
+  if (!r->aided_) return;  // (a file of a node with robot.team_map.fuse on: its aided filter is left out)
+  const json& robot = need(s, "state", "robot");
+  if (!robot.contains("aided")) {
+    // Absent in files of before 2026-12-04 (or of a node with the team map off):
+    // the aided filter restarts as the own filter, the team's information to be
+    // fused again from the next team map.
+    r->aided_->restore(x, P, slot_ids);
+    return;
+  }
+  const json& aided = robot.at("aided");
+  parse_filter(need(aided, "robot.aided", "filter"), "robot.aided.filter", *r, &x, &P, &slot_ids);
+  for (std::size_t k = 0; k < slot_ids.size(); ++k)
+    if (!r->ekf_.has_landmark(slot_ids[k]))  // the aided filter mirrors the own filter's landmarks
+      fail("robot.aided.filter.slot_ids[" + std::to_string(k) + "]",
+           "landmark " + std::to_string(slot_ids[k]) + " is not in the own filter");
+  if (r->aided_->restore(x, P, slot_ids) != EkfStatus::kOk) fail("robot.aided.filter.slot_ids", "a landmark id appears twice");
+  // The team channel: per landmark, the epoch and the information fused (Y:
+  // symmetric, positive semi-definite; y). It outlives the landmark's stay in the
+  // aided filter (team_aid.hpp), so any id.
+  const json& channel = array(need(aided, "robot.aided", "channel"), "robot.aided.channel", 0,
+                              static_cast<std::size_t>(r->options_.ekf.max_landmark_id));
+  for (std::size_t k = 0; k < channel.size(); ++k) {
+    const std::string w = "robot.aided.channel[" + std::to_string(k) + "]";
+    const json& c = channel[k];
+    const int id = static_cast<int>(whole(need(c, w, "id"), w + ".id", 0, r->options_.ekf.max_landmark_id - 1));
+    if (r->team_.epoch(id) >= 0 || r->team_.fused_information(id).any()) fail(w + ".id", std::to_string(id) + " appears twice");
+    const int epoch = static_cast<int>(whole(need(c, w, "epoch"), w + ".epoch", -1, kMaxFrame));
+    const json& yy = array(need(c, w, "Y"), w + ".Y", 4, 4);
+    Eigen::Matrix2d Y;
+    for (int i = 0; i < 4; ++i) Y(i / 2, i % 2) = real(yy[static_cast<std::size_t>(i)], w + ".Y[" + std::to_string(i) + "]", -kMaxVariance, kMaxVariance);
+    // (Sums of V diag(lambda) V^T: symmetric up to rounding, kept as they were.)
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
+    eig.computeDirect(0.5 * (Y + Y.transpose()));
+    const double scale = std::max(1.0, Y.cwiseAbs().maxCoeff());
+    if (std::abs(Y(0, 1) - Y(1, 0)) > kPsdTolerance * scale || eig.eigenvalues()(0) < -kPsdTolerance * scale)
+      fail(w + ".Y", "not a symmetric positive semi-definite information matrix");
+    const json& yv = array(need(c, w, "y"), w + ".y", 2, 2);
+    const Eigen::Vector2d y(real(yv[0], w + ".y[0]", -kMaxVariance, kMaxVariance),
+                            real(yv[1], w + ".y[1]", -kMaxVariance, kMaxVariance));
+    r->team_.restore(id, epoch, Y, y);
+  }
 }
 
 void RobotStateAccess::load_lmap(const json& s, Robot* r) {

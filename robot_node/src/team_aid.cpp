@@ -11,17 +11,27 @@ namespace elaslam {
 TeamChannel::TeamChannel(int max_landmark_id, double min_gain)
     : min_gain_(min_gain),
       Y_(static_cast<std::size_t>(std::max(max_landmark_id, 0)), Eigen::Matrix2d::Zero()),
-      y_(static_cast<std::size_t>(std::max(max_landmark_id, 0)), Eigen::Vector2d::Zero()) {}
+      y_(static_cast<std::size_t>(std::max(max_landmark_id, 0)), Eigen::Vector2d::Zero()),
+      epoch_(static_cast<std::size_t>(std::max(max_landmark_id, 0)), -1) {}
 
 void TeamChannel::forget(int id) {
   if (id < 0 || id >= max_landmark_id()) return;
   Y_[static_cast<std::size_t>(id)].setZero();
   y_[static_cast<std::size_t>(id)].setZero();
+  epoch_[static_cast<std::size_t>(id)] = -1;
+}
+
+void TeamChannel::restore(int id, int epoch, const Eigen::Matrix2d& Y, const Eigen::Vector2d& y) {
+  if (id < 0 || id >= max_landmark_id()) return;
+  Y_[static_cast<std::size_t>(id)] = Y;
+  y_[static_cast<std::size_t>(id)] = y;
+  epoch_[static_cast<std::size_t>(id)] = epoch;
 }
 
 void TeamChannel::clear() {
   std::fill(Y_.begin(), Y_.end(), Eigen::Matrix2d::Zero());
   std::fill(y_.begin(), y_.end(), Eigen::Vector2d::Zero());
+  std::fill(epoch_.begin(), epoch_.end(), -1);
 }
 
 // dY = Y_new - Y_f = V diag(lambda) V^T. Directions with lambda > 0 carry the
@@ -29,7 +39,7 @@ void TeamChannel::clear() {
 // 1 / lambda. Directions with none (lambda <= 0) get a variance a billion times the
 // largest one and the current estimate as their value: no innovation, and an
 // information of 1e-9 of the increment's, which the channel counts as fused.
-bool TeamChannel::offer(int id, const Eigen::Vector2d& g, const Eigen::Matrix2d& G, const Eigen::Vector2d& l,
+bool TeamChannel::offer(int id, int epoch, const Eigen::Vector2d& g, const Eigen::Matrix2d& G, const Eigen::Vector2d& l,
                         const Eigen::Matrix2d& P_ll, TeamIncrement* out) const {
   if (id < 0 || id >= max_landmark_id() || !g.allFinite() || !G.allFinite() || !l.allFinite() || !P_ll.allFinite())
     return false;
@@ -38,8 +48,10 @@ bool TeamChannel::offer(int id, const Eigen::Vector2d& g, const Eigen::Matrix2d&
   const Eigen::Matrix2d Y_new = llt.solve(Eigen::Matrix2d::Identity());
   const Eigen::Vector2d y_new = Y_new * g;
   const auto i = static_cast<std::size_t>(id);
-  const Eigen::Matrix2d dY = 0.5 * ((Y_new - Y_[i]) + (Y_new - Y_[i]).transpose());
-  const Eigen::Vector2d dy = y_new - y_[i];
+  const bool same = epoch == epoch_[i];  // else the team started the landmark afresh
+  const Eigen::Matrix2d Y_f = same ? Y_[i] : Eigen::Matrix2d::Zero();
+  const Eigen::Matrix2d dY = 0.5 * ((Y_new - Y_f) + (Y_new - Y_f).transpose());
+  const Eigen::Vector2d dy = y_new - (same ? y_[i] : Eigen::Vector2d::Zero());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
   eig.computeDirect(dY);
   const Eigen::Vector2d lambda = eig.eigenvalues();  // ascending
@@ -61,13 +73,20 @@ bool TeamChannel::offer(int id, const Eigen::Vector2d& g, const Eigen::Matrix2d&
   out->z = V * value;
   out->R = V * info.cwiseInverse().asDiagonal() * V.transpose();
   out->R = 0.5 * (out->R + out->R.transpose()).eval();
+  out->epoch = epoch;
   return true;
 }
 
 void TeamChannel::commit(int id, const TeamIncrement& inc) {
   if (id < 0 || id >= max_landmark_id()) return;
-  Y_[static_cast<std::size_t>(id)] += inc.Y;
-  y_[static_cast<std::size_t>(id)] += inc.Y * inc.z;
+  const auto i = static_cast<std::size_t>(id);
+  if (inc.epoch != epoch_[i]) {
+    Y_[i].setZero();
+    y_[i].setZero();
+    epoch_[i] = inc.epoch;
+  }
+  Y_[i] += inc.Y;
+  y_[i] += inc.Y * inc.z;
 }
 
 }  // namespace elaslam

@@ -121,6 +121,11 @@ std::vector<std::vector<std::uint8_t>> run_team(const TeamConfig& c, const std::
     const int chunks = main.make_global_map(0);  // the moving set: the notice repair's state is in the file too
     for (int c = 0; c < chunks; ++c)
       for (auto& r : robots) r->on_global_map(main.map_chunk(c));
+    if (c.main.team_map_period_frames > 0 && i == R - 1 && main.team_map_due(frames[f].frame))
+      for (auto& r : robots) {
+        const int m = main.make_team_map(r->robot_id(), 0);
+        for (int k = 0; k < m; ++k) EXPECT_TRUE(r->on_team_map(main.map_chunk(k)));
+      }
   }
   *final_state = save_robot_state(*robots[kRobot - 1]);
   return out;
@@ -201,6 +206,75 @@ TEST(RobotState, TheConsistencyMonitorSurvivesARestart) {
   d["fnv1a64"] = robot_state_checksum(d["state"].dump());
   EXPECT_FALSE(load_robot_state(d.dump(), &other, &why));
   EXPECT_NE(why.find("node.inconsistent_frame"), std::string::npos) << why;
+}
+
+// With the team's map (robot.team_map.fuse, config/mrclam.yaml) the robot's POSE is
+// the aided filter's: the state file keeps that filter, what the team channel has
+// fused into it and the team estimates held for the next frame. Before 2026-12-04
+// the aided filter restarted as the own filter: a restarted robot published the
+// pose of a robot the team had never helped until the next team map, and then fused
+// again what its channel had forgotten.
+TEST(RobotState, ARestartedRobotKeepsWhatTheTeamMapGaveIt) {
+  TeamConfig c = paper(Mode::kEla, 7);
+  c.robot.team_map_fuse = true;
+  c.main.team_map_period_frames = 10;
+  const auto frames = sensor_frames(c);
+  std::string state_a, state_b, state_every;
+  const auto a = run_team(c, frames, [](int) { return false; }, &state_a);
+  const auto b = run_team(c, frames, [](int k) { return k == 65; }, &state_b);
+  const auto every = run_team(c, frames, [](int k) { return k > 0; }, &state_every);
+  ASSERT_EQ(a.size(), 150u);
+  ASSERT_EQ(b.size(), a.size());
+  ASSERT_EQ(every.size(), a.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k], b[k]) << "frame " << k;
+    EXPECT_EQ(a[k], every[k]) << "frame " << k;
+  }
+  EXPECT_EQ(state_a, state_b);
+  EXPECT_EQ(state_a, state_every);
+  // The team's map mattered: the channel holds what it fused, and without the
+  // team map robot 2 publishes other poses.
+  const json st = json::parse(state_a)["state"];
+  ASSERT_TRUE(st["robot"].contains("aided"));
+  EXPECT_GE(st["robot"]["aided"]["channel"].size(), 3u);
+  TeamConfig alone = c;
+  alone.robot.team_map_fuse = false;
+  alone.main.team_map_period_frames = 0;
+  std::string state_alone;
+  EXPECT_NE(run_team(alone, frames, [](int) { return false; }, &state_alone), a);
+
+  // Damaged parts are refused, naming the key; the node stays as it was.
+  RobotNode other(c.robot, kRobot);
+  std::string why;
+  const auto refused = [&](const json& d, const std::string& key) {
+    json f = json::parse(state_a);
+    f["state"] = d;
+    f["fnv1a64"] = robot_state_checksum(d.dump());
+    EXPECT_FALSE(load_robot_state(f.dump(), &other, &why)) << key;
+    EXPECT_NE(why.find(key), std::string::npos) << why;
+  };
+  json d = st;
+  d["robot"]["aided"]["channel"][0]["Y"] = json::array({1.0, 0.0, 0.0, -1.0});  // not positive semi-definite
+  refused(d, "robot.aided.channel[0].Y");
+  d = st;
+  d["robot"]["aided"]["channel"].push_back(d["robot"]["aided"]["channel"][0]);
+  refused(d, "robot.aided.channel[");  // an id twice
+  d = st;
+  d["robot"]["aided"]["filter"]["mean"][0] = 1e9;
+  refused(d, "robot.aided.filter.mean[0]");
+  d = st;
+  d["node"]["team_map"]["version"] = -5;
+  refused(d, "node.team_map.version");
+  EXPECT_EQ(other.counters().frames, 0);
+  // A file without the new keys (before 2026-12-04) still loads: the aided filter
+  // restarts as the own filter.
+  d = st;
+  d["robot"].erase("aided");
+  d["node"].erase("team_map");
+  json f = json::parse(state_a);
+  f["state"] = d;
+  f["fnv1a64"] = robot_state_checksum(d.dump());
+  EXPECT_TRUE(load_robot_state(f.dump(), &other, &why)) << why;
 }
 
 // A node resumed from its state goes on with the robot's counters but says in POSE

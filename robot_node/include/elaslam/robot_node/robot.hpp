@@ -53,6 +53,7 @@ struct MapEvent {
   int frame = 0;
   Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+  int epoch = -1;  // main's frame of the landmark's last change of status (TeamChannel)
 };
 
 /// What happened in one frame.
@@ -77,6 +78,7 @@ struct TeamEstimate {
   int landmark_id = -1;
   Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
+  int epoch = -1;  // main's frame of the landmark's last change of status (TeamChannel)
 };
 
 /// The team map's effect on this robot (RobotNode reports them).

@@ -15,8 +15,17 @@
 // measurement of the landmark, z = l + v with v ~ N(0, (Y_new - Y_f)^-1).
 //
 // Directions in which the team's information fell (a robot's estimate dropped, a
-// covariance that grew) are not fused; a rule that never double counts. Fixed
-// memory; no allocation after construction.
+// covariance that grew) are not fused; a rule that never double counts.
+//
+// The channel outlives the landmark's stay in the aided filter. A landmark that
+// leaves it (evicted for room, found moving) takes its own estimate along, but what
+// the team's estimate taught the robot's pose and the other landmarks stays. While
+// main_robot's estimate goes on from the same data, its next team estimate is still
+// only worth its increment; forgetting the channel would fuse all of it again. Each
+// team estimate carries an epoch, main's frame of its last change of status
+// (global_landmark_t.status_frame): a new epoch is the team starting the landmark
+// afresh (it moved, and came back), from data the robot never had, and the channel
+// starts again too. Fixed memory; no allocation after construction.
 #pragma once
 
 #include <vector>
@@ -26,6 +35,7 @@
 namespace elaslam {
 
 struct TeamIncrement {
+  int epoch = -1;                               // the team estimate's epoch (TeamChannel)
   Eigen::Vector2d z = Eigen::Vector2d::Zero();  // [m] the measurement of the landmark's position
   Eigen::Matrix2d R = Eigen::Matrix2d::Zero();  // [m^2] its covariance (positive definite)
   Eigen::Matrix2d Y = Eigen::Matrix2d::Zero();  // R^-1: the information it carries
@@ -38,26 +48,33 @@ class TeamChannel {
   /// smaller ones wait until they add up (it bounds the filter work per team map).
   TeamChannel(int max_landmark_id, double min_gain);
 
-  /// A team estimate (g, G) of landmark `id`, whose current estimate in the aided
-  /// filter has covariance P_ll and mean l. True with the increment to fuse in
-  /// `out`; false when there is nothing worth fusing (or G is not a covariance).
-  bool offer(int id, const Eigen::Vector2d& g, const Eigen::Matrix2d& G, const Eigen::Vector2d& l,
+  /// A team estimate (g, G) of landmark `id` of `epoch` (main's status_frame), whose
+  /// current estimate in the aided filter has covariance P_ll and mean l. True with
+  /// the increment to fuse in `out`; false when there is nothing worth fusing (or G
+  /// is not a covariance). An epoch other than the one fused so far counts from zero.
+  bool offer(int id, int epoch, const Eigen::Vector2d& g, const Eigen::Matrix2d& G, const Eigen::Vector2d& l,
              const Eigen::Matrix2d& P_ll, TeamIncrement* out) const;
   /// The increment `inc` of landmark `id` was fused: count it.
   void commit(int id, const TeamIncrement& inc);
 
-  /// The landmark left the aided filter: the information fused went with it.
+  /// Forget what was fused for `id` (the next estimate is fused whole).
   void forget(int id);
   void clear();
 
   /// The information fused so far for `id` (zero when none).
   const Eigen::Matrix2d& fused_information(int id) const { return Y_[static_cast<std::size_t>(id)]; }
+  const Eigen::Vector2d& fused_vector(int id) const { return y_[static_cast<std::size_t>(id)]; }
+  /// The epoch of what was fused for `id` (-1 when nothing).
+  int epoch(int id) const { return epoch_[static_cast<std::size_t>(id)]; }
+  /// What a state file says was fused for `id` (robot_state.cpp checks it).
+  void restore(int id, int epoch, const Eigen::Matrix2d& Y, const Eigen::Vector2d& y);
   int max_landmark_id() const { return static_cast<int>(Y_.size()); }
 
  private:
   double min_gain_;
   std::vector<Eigen::Matrix2d> Y_;  // per id: information fused
   std::vector<Eigen::Vector2d> y_;  // per id: information vector fused
+  std::vector<int> epoch_;          // per id: the epoch of Y_, y_ (-1: none)
 };
 
 }  // namespace elaslam
