@@ -131,6 +131,29 @@ std::vector<std::vector<std::uint8_t>> run_team(const TeamConfig& c, const std::
   return out;
 }
 
+/// Robot 2 of the team run uninterrupted, restarted once before frame `once`, and
+/// restarted before every frame: the same messages in every frame and the same final
+/// state. Returns the uninterrupted run's messages; `state`: its final state; `held`:
+/// the notices the every-frame files carried.
+std::vector<std::vector<std::uint8_t>> restarts_change_nothing(const TeamConfig& c, int once, std::string* state,
+                                                               int* held = nullptr) {
+  const auto frames = sensor_frames(c);
+  std::string state_once, state_every;
+  const auto a = run_team(c, frames, [](int) { return false; }, state);
+  const auto b = run_team(c, frames, [once](int k) { return k == once; }, &state_once);
+  const auto every = run_team(c, frames, [](int k) { return k > 0; }, &state_every, held);
+  EXPECT_EQ(a.size(), static_cast<std::size_t>(c.scenario.frames));
+  EXPECT_EQ(b.size(), a.size());
+  EXPECT_EQ(every.size(), a.size());
+  for (std::size_t k = 0; k < a.size() && k < b.size() && k < every.size(); ++k) {
+    EXPECT_EQ(a[k], b[k]) << "frame " << k << ", restarted once before frame " << once;
+    EXPECT_EQ(a[k], every[k]) << "frame " << k << ", restarted before every frame";
+  }
+  EXPECT_EQ(*state, state_once);
+  EXPECT_EQ(*state, state_every);
+  return a;
+}
+
 // GIVEN a seeded team run WHEN robot 2 is saved after frame 59 and a fresh node
 // loaded from the file runs frames 60..149 (and, more demanding, when it is
 // restarted so before every frame) THEN every message it publishes and its final
@@ -138,22 +161,9 @@ std::vector<std::vector<std::uint8_t>> run_team(const TeamConfig& c, const std::
 TEST(RobotState, RestoredNodeContinuesBitIdentically) {
   for (Mode mode : {Mode::kEla, Mode::kConsensus, Mode::kEkf}) {
     SCOPED_TRACE(to_string(mode));
-    const TeamConfig c = paper(mode, 7);
-    const auto frames = sensor_frames(c);
-    std::string state_a, state_b, state_c;
+    std::string state;
     int held = 0;
-    const auto a = run_team(c, frames, [](int) { return false; }, &state_a);
-    const auto b = run_team(c, frames, [](int k) { return k == 60; }, &state_b);
-    const auto every = run_team(c, frames, [](int k) { return k > 0; }, &state_c, &held);
-    ASSERT_EQ(a.size(), 150u);
-    ASSERT_EQ(b.size(), a.size());
-    ASSERT_EQ(every.size(), a.size());
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      EXPECT_EQ(a[k], b[k]) << "frame " << k;
-      EXPECT_EQ(a[k], every[k]) << "frame " << k;
-    }
-    EXPECT_EQ(state_a, state_b);
-    EXPECT_EQ(state_a, state_c);
+    restarts_change_nothing(paper(mode, 7), 60, &state, &held);
     // The files carried notices held for a frame robot 2 had not done yet.
     if (mode != Mode::kEkf) {
       EXPECT_GT(held, 0);
@@ -218,20 +228,8 @@ TEST(RobotState, ARestartedRobotKeepsWhatTheTeamMapGaveIt) {
   TeamConfig c = paper(Mode::kEla, 7);
   c.robot.team_map_fuse = true;
   c.main.team_map_period_frames = 10;
-  const auto frames = sensor_frames(c);
-  std::string state_a, state_b, state_every;
-  const auto a = run_team(c, frames, [](int) { return false; }, &state_a);
-  const auto b = run_team(c, frames, [](int k) { return k == 65; }, &state_b);
-  const auto every = run_team(c, frames, [](int k) { return k > 0; }, &state_every);
-  ASSERT_EQ(a.size(), 150u);
-  ASSERT_EQ(b.size(), a.size());
-  ASSERT_EQ(every.size(), a.size());
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    EXPECT_EQ(a[k], b[k]) << "frame " << k;
-    EXPECT_EQ(a[k], every[k]) << "frame " << k;
-  }
-  EXPECT_EQ(state_a, state_b);
-  EXPECT_EQ(state_a, state_every);
+  std::string state_a;
+  const auto a = restarts_change_nothing(c, 65, &state_a);
   // The team's map mattered: the channel holds what it fused, and without the
   // team map robot 2 publishes other poses.
   const json st = json::parse(state_a)["state"];
@@ -241,7 +239,7 @@ TEST(RobotState, ARestartedRobotKeepsWhatTheTeamMapGaveIt) {
   alone.robot.team_map_fuse = false;
   alone.main.team_map_period_frames = 0;
   std::string state_alone;
-  EXPECT_NE(run_team(alone, frames, [](int) { return false; }, &state_alone), a);
+  EXPECT_NE(run_team(alone, sensor_frames(alone), [](int) { return false; }, &state_alone), a);
 
   // Damaged parts are refused, naming the key; the node stays as it was.
   RobotNode other(c.robot, kRobot);
