@@ -199,8 +199,6 @@ std::string check_global_map(const global_map_t& m, const MessageLimits& l, int 
     *reason = Refusal::kImplausible;
     if (std::string p = check_position(g.x, g.y, l, "position"); !p.empty()) return "landmark " + std::to_string(g.id) + " " + p;
     if (std::string p = check_cov2(g.cov, l, "cov"); !p.empty()) return "landmark " + std::to_string(g.id) + " " + p;
-    *reason = Refusal::kMalformed;
-    if (g.status_frame < -1) return "landmark " + std::to_string(g.id) + " " + contract::got("status_frame below -1", g.status_frame);
   }
   previous = -1;
   for (int k = 0; k < m.num_moving; ++k) {

@@ -539,7 +539,7 @@ bool RobotNode::on_team_map(const global_map_t& msg, std::string* why) {
     const global_landmark_t& l = msg.landmarks[static_cast<std::size_t>(k)];
     TeamPending& p = team_pending_[static_cast<std::size_t>(l.id)];
     if (!p.valid) ++team_pending_count_;
-    p = {true, msg.frame, Eigen::Vector2d(l.x, l.y), get_cov2(l.cov), l.status_frame};
+    p = {true, msg.frame, Eigen::Vector2d(l.x, l.y), get_cov2(l.cov)};
   }
   ++counters_.team_map_chunks;
   apply_team_estimates();
@@ -552,7 +552,7 @@ void RobotNode::apply_team_estimates() {
   for (std::size_t id = 0; id < team_pending_.size(); ++id) {
     TeamPending& p = team_pending_[id];
     if (!p.valid || p.frame >= last_frame_) continue;
-    team_due_.push_back({static_cast<int>(id), p.position, p.cov, p.epoch});
+    team_due_.push_back({static_cast<int>(id), p.position, p.cov});
     p.valid = false;
     --team_pending_count_;
   }

@@ -215,7 +215,7 @@ json RobotStateAccess::save_node(const RobotNode& n) {
       const auto& p = n.team_pending_[id];
       if (p.valid)
         pending.push_back({{"id", static_cast<int>(id)}, {"frame", p.frame}, {"position", to_json(p.position)},
-                           {"cov", to_json(p.cov)}, {"epoch", p.epoch}});
+                           {"cov", to_json(p.cov)}});
     }
     out["team_map"] = {{"incarnation", n.team_map_incarnation_}, {"version", n.team_map_version_}, {"pending", std::move(pending)}};
   }
@@ -363,7 +363,6 @@ void RobotStateAccess::load_node(const json& s, RobotNode* n) {
                                        std::max(n->last_frame_, 0) + n->options_.max_frame_gap));
       p.position = vec2(need(e, w, "position"), w + ".position", n->options_.limits.world_bound);
       p.cov = cov2(need(e, w, "cov"), w + ".cov", n->options_.limits);
-      p.epoch = static_cast<int>(whole(need(e, w, "epoch"), w + ".epoch", -1, kMaxFrame));
       p.valid = true;
       ++n->team_pending_count_;
     }
@@ -479,7 +478,7 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
     const json& c = channel[k];
     const int id = static_cast<int>(whole(need(c, w, "id"), w + ".id", 0, r->options_.ekf.max_landmark_id - 1));
     if (r->team_.epoch(id) >= 0 || r->team_.fused_information(id).any()) fail(w + ".id", std::to_string(id) + " appears twice");
-    const int epoch = static_cast<int>(whole(need(c, w, "epoch"), w + ".epoch", -1, kMaxFrame));
+    const int epoch = static_cast<int>(whole(need(c, w, "epoch"), w + ".epoch", -1, kMaxCount));
     const json& yy = array(need(c, w, "Y"), w + ".Y", 4, 4);
     Eigen::Matrix2d Y;
     for (int i = 0; i < 4; ++i) Y(i / 2, i % 2) = real(yy[static_cast<std::size_t>(i)], w + ".Y[" + std::to_string(i) + "]", -kMaxVariance, kMaxVariance);

@@ -53,7 +53,6 @@ struct MapEvent {
   int frame = 0;
   Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
-  int epoch = -1;  // main's frame of the landmark's last change of status (TeamChannel)
 };
 
 /// What happened in one frame.
@@ -78,7 +77,6 @@ struct TeamEstimate {
   int landmark_id = -1;
   Eigen::Vector2d position = Eigen::Vector2d::Zero();  // [m] W
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();        // [m^2]
-  int epoch = -1;  // main's frame of the landmark's last change of status (TeamChannel)
 };
 
 /// The team map's effect on this robot (RobotNode reports them).
@@ -138,6 +136,7 @@ class Robot {
   /// the own one. Its pose is the robot's pose (POSE).
   const EkfSlam& estimate() const { return aided_ ? *aided_ : ekf_; }
   const TeamCounters& team_counters() const { return team_counters_; }
+  const TeamChannel& team_channel() const { return team_; }
   const LMap& lmap() const { return lmap_; }
   const RobotOptions& options() const { return options_; }
   int robot_id() const { return robot_id_; }

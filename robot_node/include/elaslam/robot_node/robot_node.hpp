@@ -229,7 +229,6 @@ class RobotNode {
     int frame = 0;
     Eigen::Vector2d position = Eigen::Vector2d::Zero();
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-    int epoch = -1;  // global_landmark_t.status_frame
   };
   std::vector<TeamPending> team_pending_;  // per landmark id (robot.team_map.fuse only)
   std::vector<TeamEstimate> team_due_;     // scratch: those due now

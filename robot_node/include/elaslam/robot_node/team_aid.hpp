@@ -18,14 +18,21 @@
 // covariance that grew) are not fused; a rule that never double counts.
 //
 // The channel outlives the landmark's stay in the aided filter. A landmark that
-// leaves it (evicted for room, found moving) takes its own estimate along, but what
-// the team's estimate taught the robot's pose and the other landmarks stays. While
-// main_robot's estimate goes on from the same data, its next team estimate is still
-// only worth its increment; forgetting the channel would fuse all of it again. Each
-// team estimate carries an epoch, main's frame of its last change of status
-// (global_landmark_t.status_frame): a new epoch is the team starting the landmark
-// afresh (it moved, and came back), from data the robot never had, and the channel
-// starts again too. Fixed memory; no allocation after construction.
+// leaves it (evicted for room) takes its own estimate along, but what the team's
+// estimate taught the robot's pose and the other landmarks stays. While main_robot's
+// estimate goes on from the same data, its next team estimate is still only worth
+// its increment; forgetting the channel would fuse all of it again. What changes the
+// data is a move: main drops every robot's estimate of a landmark found moving and
+// starts it afresh when it comes back. So the channel counts under an epoch, the
+// number of times the robot has known the landmark to move (its own finding or a
+// notice: LMapEntry::times_moving); a new epoch starts the channel again. The epoch
+// is the robot's own, not main's (global_landmark_t.status_frame would do in a
+// steady team, but a main_robot restarted without its state re-stamps every
+// landmark, and every robot would then fuse the team's whole map again). A move
+// the robot never learned of leaves the channel as it was: the team's new estimate
+// then counts as less information than was fused and waits until it has more,
+// which under-fuses and never double counts. Fixed memory; no allocation after
+// construction.
 #pragma once
 
 #include <vector>
@@ -48,7 +55,7 @@ class TeamChannel {
   /// smaller ones wait until they add up (it bounds the filter work per team map).
   TeamChannel(int max_landmark_id, double min_gain);
 
-  /// A team estimate (g, G) of landmark `id` of `epoch` (main's status_frame), whose
+  /// A team estimate (g, G) of landmark `id` in `epoch` (see above), whose
   /// current estimate in the aided filter has covariance P_ll and mean l. True with
   /// the increment to fuse in `out`; false when there is nothing worth fusing (or G
   /// is not a covariance). An epoch other than the one fused so far counts from zero.
