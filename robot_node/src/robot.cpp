@@ -480,8 +480,8 @@ bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
   }
   TeamIncrement inc;
   // The epoch: how many times this robot has known the landmark to move (team_aid.hpp).
-  if (!team_.offer(e.landmark_id, lmap_[e.landmark_id].times_moving, e.position, e.cov, aided_->landmark(e.landmark_id), aided_->landmark_cov(e.landmark_id),
-                   &inc))
+  if (!team_.offer(e.landmark_id, lmap_[e.landmark_id].times_moving, e.position, e.cov, aided_->landmark(e.landmark_id),
+                   aided_->landmark_cov(e.landmark_id), &inc))
     return false;
   const UpdateReport r = aided_->update_position(e.landmark_id, inc.z, inc.R);
   if (r.status != EkfStatus::kOk) {
