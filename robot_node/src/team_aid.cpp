@@ -48,7 +48,7 @@ bool TeamChannel::offer(int id, int epoch, const Eigen::Vector2d& g, const Eigen
   const Eigen::Matrix2d Y_new = llt.solve(Eigen::Matrix2d::Identity());
   const Eigen::Vector2d y_new = Y_new * g;
   const auto i = static_cast<std::size_t>(id);
-  const bool same = epoch == epoch_[i];  // else the team started the landmark afresh
+  const bool same = epoch == epoch_[i];  // else the landmark moved since: the team's data are new
   const Eigen::Matrix2d Y_f = same ? Y_[i] : Eigen::Matrix2d::Zero();
   const Eigen::Matrix2d dY = 0.5 * ((Y_new - Y_f) + (Y_new - Y_f).transpose());
   const Eigen::Vector2d dy = y_new - (same ? y_[i] : Eigen::Vector2d::Zero());
