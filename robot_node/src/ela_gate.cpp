@@ -179,6 +179,8 @@ ElaGate::ElaGate(const RobotOptions& options)
   c_.resize(n);
   d2_.reserve(n);
   mask_.reserve(n);
+  kept_.reserve(n);
+  kept_d2_.reserve(n);
   verdicts_.reserve(n);
   records_.reserve(n);  // every observation of a frame has at most one record
 }
@@ -249,11 +251,61 @@ bool ElaGate::worse(int a, int b) const {
 // the others' ELAs: the worst one is set aside and the rest re-tested, until all
 // that remain agree (one moving neighbour would otherwise shift every other
 // landmark's ELA by its displacement / (n - 1) and flag them too).
+//
+// Setting aside the worst first can go wrong when several movers have gone far the
+// same way (after frames missed: a restart, a radio outage, where the movers were
+// not caught as they went): they pull the static landmarks' ELAs, the statics come
+// out worst and are set aside one by one, and the movers remain, agreeing with each
+// other. So when more landmarks were set aside than remain, the set-aside ones are
+// judged among themselves the same way; if more of them agree with each other than
+// remained, they are the reference (static landmarks are the majority, paper
+// section 3), and a landmark of the first survivors rejoins them if it agrees with
+// them (as consensus re-tests a landmark outside its clique).
 void ElaGate::judge_eq16(const EkfSlam& ekf) {
   const int n = view_size();
   d2_.assign(view_.size(), 0.0);
   if (n >= 2) prepare_eq16(ekf);
-  int active = n;
+  int active = settle_eq16(n);
+  const int aside = n - active;
+  if (aside >= 2 && aside > active) {
+    kept_ = mask_;
+    kept_d2_ = d2_;
+    for (std::size_t i = 0; i < mask_.size(); ++i) mask_[i] = kept_[i] ? 0 : 1;
+    prepare_eq16(ekf);
+    const int others = settle_eq16(aside);
+    if (others > active) {
+      ++regroups_;
+      active = others;
+      for (int i = 0; i < n; ++i) {
+        const auto ui = static_cast<std::size_t>(i);
+        if (!kept_[ui]) continue;
+        d2_[ui] = eq16_d2(i);
+        if (d2_[ui] <= ela_threshold_) {
+          mask_[ui] = 1;
+          ++active;
+        }
+      }
+    } else {  // the first survivors stand
+      mask_ = kept_;
+      d2_ = kept_d2_;
+      prepare_eq16(ekf);
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto ui = static_cast<std::size_t>(i);
+    if (active < 2 && mask_[ui]) {
+      decide_alone(i);
+    } else {
+      decide(i, {view_[ui].id, GateKind::kMulti, d2_[ui], ela_threshold_, mask_[ui] != 0}, false);
+    }
+  }
+}
+
+// Eq 16 over the active set (mask_, `active` landmarks, totals prepared): set aside
+// the worst landmark outside its ELA until all that remain agree or fewer than two
+// remain. Returns how many remain; d2_ holds each landmark's last d2.
+int ElaGate::settle_eq16(int active) {
+  const int n = view_size();
   while (active >= 2) {
     int worst = -1;
     for (int i = 0; i < n; ++i)
@@ -266,14 +318,7 @@ void ElaGate::judge_eq16(const EkfSlam& ekf) {
     set_aside_eq16(worst);
     --active;
   }
-  for (int i = 0; i < n; ++i) {
-    const auto ui = static_cast<std::size_t>(i);
-    if (active < 2 && mask_[ui]) {
-      decide_alone(i);
-    } else {
-      decide(i, {view_[ui].id, GateKind::kMulti, d2_[ui], ela_threshold_, mask_[ui] != 0}, false);
-    }
-  }
+  return active;
 }
 
 // Everything eq 16 needs for the view, once per frame (ela_multi_d2 spells out the

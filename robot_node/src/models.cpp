@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/LU>
+
 namespace elaslam {
 
 double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C) {
@@ -50,6 +52,28 @@ Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise&
       std::max(noise.var_rot_per_rad * std::abs(increment.theta) + noise.var_rot_per_m * distance,
                kMinOdometryVariance);
   return Eigen::Vector3d(var_trans, var_trans, var_rot).asDiagonal();
+}
+
+Eigen::Matrix3d gap_odometry_covariance(const Pose2& increment, int steps, const OdometryNoise& noise) {
+  const int k = std::min(steps, kMaxGapSteps);
+  if (k <= 1) return odometry_covariance(increment, noise);
+  // k equal steps u (turn th / k each) compose to sum_{i<k} R(i th / k) t_u: solve
+  // M t_u = t for the step's translation.
+  const double turn = increment.theta / k;
+  Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
+  for (int i = 0; i < k; ++i) M += rotation(i * turn);
+  const Eigen::FullPivLU<Eigen::Matrix2d> lu(M);
+  if (!lu.isInvertible()) return odometry_covariance(increment, noise);
+  const Eigen::Vector2d t = lu.solve(Eigen::Vector2d(increment.x, increment.y));
+  const Pose2 step{t.x(), t.y(), turn};
+  const Eigen::Matrix3d U = odometry_covariance(step, noise);
+  Eigen::Matrix3d P = Eigen::Matrix3d::Zero(), F_x, F_u;
+  Pose2 at;  // the path so far, in the increment's coordinates
+  for (int i = 0; i < k; ++i) {
+    at = motion(at, step, &F_x, &F_u);
+    P = F_x * P * F_x.transpose() + F_u * U * F_u.transpose();
+  }
+  return 0.5 * (P + P.transpose());
 }
 
 Eigen::Matrix3d dead_reckoning_cov(const Eigen::Matrix3d& P0, int steps, double step_m, double turn_rad,

@@ -127,8 +127,10 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     const Eigen::Matrix3d U = Eigen::Vector3d(step * step, step * step, turn * turn).asDiagonal();
     mirror_predict(Pose2{}, U, s);
   } else {
+    // Frames missed since the last one (in.frame - last_frame_ > 1): the increment
+    // spans them all, and its noise is theirs compounded.
     const Pose2 increment = between(last_odometer_, in.odometer);
-    mirror_predict(increment, odometry_covariance(increment, in.noise), s);
+    mirror_predict(increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise), s);
   }
   last_odometer_ = in.odometer;
 }

@@ -19,7 +19,7 @@ namespace elaslam {
 namespace {
 
 struct Tally {
-  long frames = 0, events[5] = {0, 0, 0, 0, 0}, notices = 0, snapshots = 0, team_chunks = 0;
+  long frames = 0, missed = 0, events[5] = {0, 0, 0, 0, 0}, notices = 0, snapshots = 0, team_chunks = 0;
 };
 
 TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
@@ -57,6 +57,13 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       test::NoAllocRegion region;
       for (std::size_t f = 0; f < frames.size(); ++f) {
         RobotNode& node = robots[f % static_cast<std::size_t>(R)];
+        // Robot 2 misses frames 64-67 (a restart, an outage): the gap's prediction (a
+        // longer jump is held for confirmation first: node.confirm_jump_frames).
+        const auto frame = static_cast<int>(f / static_cast<std::size_t>(R));
+        if (f % static_cast<std::size_t>(R) == 1 && frame >= 64 && frame < 68) {
+          ++t.missed;
+          continue;
+        }
         if (node.on_sensor(frames[f], 0) != RobotNode::Verdict::kProcessed) continue;
         ++t.frames;
         for (const auto& e : node.event_msgs()) {
@@ -79,7 +86,7 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       }
     }
     EXPECT_EQ(test::allocations_in_region(), 0);
-    EXPECT_EQ(t.frames, static_cast<long>(frames.size()));
+    EXPECT_EQ(t.frames + t.missed, static_cast<long>(frames.size()));
     // The run exercised the paths it claims to cover.
     EXPECT_GT(t.events[landmark_event_t::ADD], 50);
     EXPECT_GT(t.events[landmark_event_t::UPDATE], 300);  // rate-limited: node.update_period_frames
@@ -92,6 +99,11 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     for (const auto& r : robots) evictions += r.counters().evictions;
     if (capacity > 0) {
       EXPECT_GT(evictions, 5);
+    }
+    long regroups = 0;
+    for (const auto& r : robots) regroups += r.robot().gate().regroups();
+    if (mode == Mode::kEla) {
+      EXPECT_GT(regroups, 0);  // eq 16's set-aside landmarks outvoted the kept ones (ElaGate::judge_eq16)
     }
     if (mode == Mode::kEla || mode == Mode::kConsensus) {
       EXPECT_GT(t.events[landmark_event_t::MOVING], 10);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
@@ -242,6 +243,50 @@ TEST(EkfModels, OdometryCovarianceFlooredWhenStanding) {
   EXPECT_GT(U.determinant(), 0.0);  // positive definite
   // Zero noise model also gives the floor, not a singular U.
   EXPECT_EQ(odometry_covariance({1.0, 0.0, 0.1}, OdometryNoise{})(2, 2), 1e-12);
+}
+
+// Frames missed: one increment spans k frames. Its covariance is the k steps'
+// noise compounded along the arc, checked against 20,000 dead-reckoned arcs whose
+// every step has the model's noise (what the simulator and a real odometer do):
+// 10 s missed at 10 Hz with config/mrclam.yaml's noise, driving 1.5 m and turning
+// 1 rad. The single-step covariance of the whole chord, used before, misses half
+// the lateral variance and all of its correlation with the heading.
+TEST(EkfModels, GapOdometryCovarianceIsTheStepsCompounded) {
+  const OdometryNoise noise{0.0085, 0.0094, 0.0079};  // config/mrclam.yaml's
+  const int k = 100;
+  const Pose2 step{0.015, 0.0, 0.01};  // 10 s at 10 Hz: 1.5 m, turning 1 rad
+  Pose2 increment;
+  for (int i = 0; i < k; ++i) increment = compose(increment, step);
+  const Eigen::Matrix3d G = gap_odometry_covariance(increment, k, noise);
+  const Eigen::Matrix3d chord = odometry_covariance(increment, noise);
+  // Monte Carlo: each step measured with noise N(0, U(step)).
+  std::mt19937_64 rng(20261204);
+  std::normal_distribution<double> n01;
+  const Eigen::Matrix3d L = odometry_covariance(step, noise).llt().matrixL();
+  const int samples = 20000;
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (int s = 0; s < samples; ++s) {
+    Pose2 measured;
+    for (int i = 0; i < k; ++i) {
+      const Eigen::Vector3d e = L * Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
+      measured = compose(measured, Pose2{step.x + e.x(), step.y + e.y(), step.theta + e.z()});
+    }
+    const Eigen::Vector3d d(measured.x - increment.x, measured.y - increment.y, wrap_angle(measured.theta - increment.theta));
+    C += d * d.transpose() / samples;
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(G(r, c), C(r, c), 0.04 * std::sqrt(C(r, r) * C(c, c))) << r << c << "\n" << G << "\n" << C;
+  // What one step over the chord misses: 54 % of the lateral variance, and the
+  // lateral error's correlation with the heading's (0.55).
+  EXPECT_LT(chord(1, 1), 0.6 * C(1, 1));
+  EXPECT_GT(C(1, 2), 0.4 * std::sqrt(C(1, 1) * C(2, 2)));
+  EXPECT_EQ(chord(1, 2), 0.0);
+  // One frame: the step's own covariance, exactly.
+  EXPECT_EQ(gap_odometry_covariance(increment, 1, noise), chord);
+  EXPECT_EQ(gap_odometry_covariance(increment, 0, noise), chord);
+  // Standing still through a gap: the floor, k times, still positive definite.
+  EXPECT_GT(gap_odometry_covariance(Pose2{}, 50, noise).determinant(), 0.0);
 }
 
 }  // namespace

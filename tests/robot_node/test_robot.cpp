@@ -695,5 +695,36 @@ TEST(Consistency, InAStaticWorldTheMonitorStaysQuiet) {
   EXPECT_LE(inconsistent, frames / 200);
 }
 
+// Frames 1-9 missed: frame 10's odometer increment spans ten frames, and the
+// prediction adds their noise compounded along the arc (gap_odometry_covariance),
+// not one frame's noise over the chord.
+TEST(RobotGap, AnIncrementOverMissedFramesCarriesTheirCompoundedNoise) {
+  const OdometryNoise noise{0.0085, 0.0094, 0.0079};
+  const Pose2 start{1.0, 2.0, 0.5};
+  Pose2 odometer = start;
+  for (int i = 0; i < 10; ++i) odometer = compose(odometer, Pose2{0.1, 0.0, 0.05});
+  for (int gap : {1, 10}) {
+    Robot r(test::robot_options(Mode::kEla), 1);
+    FrameInput in = test::frame_from(0, start, start, {}, {});
+    in.noise = noise;
+    r.process(in);
+    const Eigen::Matrix3d P0 = r.filter().pose_cov();
+    in.frame = gap;
+    in.odometer = odometer;
+    r.process(in);
+    const Pose2 increment = between(start, odometer);
+    Eigen::Matrix3d F_x, F_u;
+    motion(start, increment, &F_x, &F_u);
+    const Eigen::Matrix3d expected = F_x * P0 * F_x.transpose() + F_u * gap_odometry_covariance(increment, gap, noise) * F_u.transpose();
+    EXPECT_LT((r.filter().pose_cov() - expected).cwiseAbs().maxCoeff(), 1e-12) << gap << "\n" << r.filter().pose_cov();
+    if (gap == 10) {  // more than the chord's one-frame noise, across the path
+      const Eigen::Matrix3d chord = F_x * P0 * F_x.transpose() + F_u * odometry_covariance(increment, noise) * F_u.transpose();
+      const double position = r.filter().pose_cov().topLeftCorner<2, 2>().trace();
+      const double chord_position = chord.topLeftCorner<2, 2>().trace();
+      EXPECT_GT(position, 1.2 * chord_position);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace elaslam

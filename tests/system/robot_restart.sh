@@ -11,25 +11,27 @@
 #            over from its odometer with the late-start prior): for comparison only.
 # Then: robot 2's log says "resumed from FILE at frame F" with F >= KILL_FRAME, and
 # its mean pose error (evaluate, metrics.json robots[].error_mean) is within RATIO
-# of the uninterrupted run's. RATIO is 3.5, not 1.5 (until 2026-12-04): the frames
-# the robot misses while its process restarts (4-9 at 20 Hz, set by timing) cost
-# that much by themselves. In process, with no restart at all, robot 2 skipping
-# frames 64..64+g of seed 3 ends at 0.026-0.035 m for g <= 7 and 0.099 m for g = 9
-# (uninterrupted 0.031 m, ratio 3.1); seed 3 failed the 1.5 bound on unloaded CI
-# with 9 frames missed (docs/faults.md, "What a gap costs"). Prints the figures per seed. Last, a stale state file
+# of the uninterrupted run's. RATIO is 2: the frames the robot misses while its
+# process restarts (4-9 at 20 Hz, set by timing) cost something by themselves. In
+# process, with no restart at all, robot 2 of seeds 1-6 missing 2-12 frames from
+# frame 64 ends within 1.32 times its uninterrupted error (test_frame_gap,
+# FrameGap.AFewFramesMissedCostLittle). RATIO was 3.5 from 2026-12-03 to -04: then
+# seed 3 missing 9 frames cost 3.1 times, and failed the 1.5 bound on unloaded CI;
+# eq 16 now re-tests what it set aside after a gap (docs/faults.md, "What a gap
+# costs"). Prints the figures per seed. Last, a stale state file
 # (the previous run's last frame) at the start of a new run is dropped after 10
 # refused frames and the robot runs on. And a robot killed twice right after its
 # resume, before any frame, skips its seq ahead twice (a resume saves at once); and
 # a running robot whose sensor source starts over starts fresh.
 # Needs root and ip netns (exit 77 otherwise); no Python venv (the state file is
 # read with the system python3's json).
-#   [SEEDS="1 2 3"] [KILL_FRAME=60] [RATIO=3.5] tests/system/robot_restart.sh BUILD_DIR
+#   [SEEDS="1 2 3"] [KILL_FRAME=60] [RATIO=2] tests/system/robot_restart.sh BUILD_DIR
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 CONFIG="$ROOT/config/paper.yaml"
 SEEDS=${SEEDS:-"1 2 3"}
 KILL_FRAME=${KILL_FRAME:-60}
-RATIO=${RATIO:-3.5}
+RATIO=${RATIO:-2}
 SIM_ARGS=(--rate 20)
 
 # The frame of a robot state file (-1 while there is none or it is being replaced).

@@ -116,6 +116,9 @@ class ElaGate {
   void record(const GateRecord& g) { records_.push_back(g); }
   /// This frame's records: the landmarks in view first (view order), then the rest.
   const std::vector<GateRecord>& records() const { return records_; }
+  /// Frames so far in which eq 16's set-aside landmarks outnumbered and outvoted
+  /// the kept ones (judge_eq16) and became the reference (tests, diagnostics).
+  long regroups() const { return regroups_; }
   /// Mode consensus: the solver of this frame's view (tests, diagnostics).
   const ConsensusSolver& consensus() const { return solver_; }
 
@@ -123,6 +126,7 @@ class ElaGate {
   void judge_eq16(const EkfSlam& ekf);
   void prepare_eq16(const EkfSlam& ekf);
   void set_aside_eq16(int m);
+  int settle_eq16(int active);
   double eq16_d2(int i) const;
   void judge_consensus(const EkfSlam& ekf);
   void set_joint_prior(const EkfSlam& ekf);
@@ -138,12 +142,15 @@ class ElaGate {
   double drift_scale_;      // 1 - lambda^2: the covariance of the sum is I / (1 - lambda^2)
   double drift_threshold_;  // chi2(drift_gate_probability, 2 dof)
   bool candidate_drift_;
+  long regroups_ = 0;
   ConsensusSolver solver_;
   // Per frame, reserved at construction (one entry per landmark in view).
   std::vector<InView> view_;
   std::vector<UpdateReport> prior_;  // innovation against this frame's prior
   std::vector<double> d2_;           // eq 16 d2
   std::vector<std::uint8_t> mask_;   // who shapes the others' ELAs (eq 16 survivors / the clique)
+  std::vector<std::uint8_t> kept_;   // judge_eq16: the first survivors, while the set-aside ones are re-tested
+  std::vector<double> kept_d2_;      // and their d2
   std::vector<ElaVerdict> verdicts_;
   std::vector<GateRecord> records_;  // view first, then candidates / classic observations
   std::vector<Eigen::Matrix<double, 2, 3>> Hx_;  // per landmark in view: the observation's Jacobians

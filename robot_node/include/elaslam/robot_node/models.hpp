@@ -36,6 +36,17 @@ Pose2 motion(const Pose2& pose, const Pose2& increment, Eigen::Matrix3d* F_x = n
 /// A small floor keeps U positive definite for a standing robot.
 Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise& noise);
 
+/// Covariance of an odometer increment that spans `steps` frames (frames were
+/// missed: a restart, a radio outage): the increment taken as `steps` equal steps of
+/// a constant-curvature arc, each with its own noise (odometry_covariance), compounded
+/// in the increment's coordinates (eq 5 per step). A heading error early in the gap
+/// swings the rest of the path, and the arc is longer than its chord: one noise for
+/// the whole chord understates both. steps <= 1 (or an arc with no such split)
+/// gives odometry_covariance(increment). steps is capped at kMaxGapSteps.
+/// Allocates nothing.
+constexpr int kMaxGapSteps = 1000;
+Eigen::Matrix3d gap_odometry_covariance(const Pose2& increment, int steps, const OdometryNoise& noise);
+
 /// The pose covariance of dead reckoning from a start known to within P0, after
 /// `steps` odometer increments of step_m [m] and turn_rad [rad] each: eq 5 applied
 /// `steps` times on a straight path (the lever arm of a heading error is largest

@@ -126,6 +126,7 @@ class Robot {
   // ---- outputs of the last frame ----------------------------------------------
   const std::vector<MapEvent>& events() const { return events_; }
   const std::vector<GateRecord>& gate_records() const { return gate_.records(); }
+  const ElaGate& gate() const { return gate_; }
   const ConsistencyMonitor& consistency() const { return monitor_; }
 
   // ---- state ------------------------------------------------------------------
