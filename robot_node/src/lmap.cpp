@@ -47,6 +47,7 @@ void LMap::set_status(int id, LandmarkStatus s, int frame) {
   if (e.status != s) e.status_frame = frame;
   e.status = s;
   e.archived = false;  // whatever it becomes, it is handled in the filter from now on
+  e.checked = false;   // and has not been judged with another since
 }
 
 void LMap::restart_streak(LMapEntry* e, int sightings) {

@@ -179,16 +179,25 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
       gate_.add_to_view(o.landmark_id, o.z);  // not the archived ones (restore_archived, below)
   }
   gate_.judge_view(ekf_, &lmap_);
-  // 3, inside: correct the filter (eqs 7-13), in view order.
-  for (int k = 0; k < gate_.view_size(); ++k)
-    if (gate_.verdict(k).inside) correct(gate_.in_view(k).id, gate_.in_view(k).z, s);
+  // 3, inside: correct the filter (eqs 7-13), in view order; with lone_needs_check,
+  //    a landmark judged alone only if it has once agreed with another (checked).
+  for (int k = 0; k < gate_.view_size(); ++k) {
+    const ElaVerdict verdict = gate_.verdict(k);
+    if (!verdict.inside) continue;
+    const int id = gate_.in_view(k).id;
+    if (options_.lone_needs_check && verdict.alone && !lmap_[id].checked) {
+      ++s->num_unchecked;
+      continue;
+    }
+    correct(id, gate_.in_view(k).z, s);
+  }
   // 3, outside: rejected; the `moving_after`-th out-of-ELA verdict in a row makes
   //    it MOVING: out of the filter, re-anchored as a candidate where it is now.
   for (int k = 0; k < gate_.view_size(); ++k) {
     const InView& v = gate_.in_view(k);
     const ElaVerdict verdict = gate_.verdict(k);
     if (verdict.inside) {
-      lmap_.inside_ela(v.id);
+      lmap_.inside_ela(v.id, !verdict.alone);
       continue;
     }
     ++s->num_rejected;

@@ -56,6 +56,7 @@ void parse(config::Reader& r, RobotOptions* o) {
     e.read_optional("candidate_gap_frames", &o->candidate_gap_frames, 1, 1000);
     e.read("moving_after", &o->moving_after, 1, 1000);
     e.read_optional("lone_verdicts", &o->lone_verdicts);
+    e.read_optional("lone_needs_check", &o->lone_needs_check);
     e.read("missing_frames", &o->missing_frames, 0, 1000);
     e.read("sensor_range_m", &o->sensor_range, 0.01, 1000.0);
     e.read("fov_margin_m", &o->fov_margin, 0.0, 1000.0);

@@ -158,7 +158,7 @@ bool is_default(const LMapEntry& e) {
     if (e.*f.second != d.*f.second) return false;
   for (const auto& f : kEntryVecs)
     if (e.*f.field != d.*f.field) return false;
-  return e.status == d.status && e.cov == d.cov;
+  return e.status == d.status && e.cov == d.cov && e.checked == d.checked;
 }
 
 LandmarkStatus parse_status(const json& v, const std::string& where) {
@@ -243,6 +243,7 @@ json RobotStateAccess::save_lmap(const LMap& m) {
     for (const auto& f : kEntryInts) j[f.name] = e.*f.field;
     for (const auto& f : kEntryBools) j[f.first] = e.*f.second;
     if (e.archived) j["archived"] = true;  // absent: false (and in files of before issue 18)
+    if (e.checked) j["checked"] = true;    // absent: false (and in files of before 2026-12-04)
     for (const auto& f : kEntryVecs) j[f.name] = to_json(e.*f.field);
     entries.push_back(std::move(j));
   }
@@ -509,6 +510,7 @@ void RobotStateAccess::load_lmap(const json& s, Robot* r) {
     for (const auto& f : kEntryInts) e.*f.field = static_cast<int>(whole(need(j, w, f.name), w + "." + f.name, f.lo, kMaxFrame));
     for (const auto& f : kEntryBools) e.*f.second = boolean(need(j, w, f.first), w + "." + f.first);
     if (j.contains("archived")) e.archived = boolean(j["archived"], w + ".archived");
+    if (j.contains("checked")) e.checked = boolean(j["checked"], w + ".checked");
     for (const auto& f : kEntryVecs)
       e.*f.field = vec2(need(j, w, f.name), w + "." + f.name, f.bound > 0.0 ? f.bound : r->options_.limits.world_bound);
     r->lmap_.restore(id, e);

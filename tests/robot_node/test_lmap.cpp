@@ -80,7 +80,7 @@ TEST(LMap, AStaticLandmarkFoundMovingIsMovingOrReanchoredAndReturnsAfterReturnFr
   sightings_until_confirmed(&m, 3, 0);
   m.confirm(3, 2);
   EXPECT_FALSE(m.outside_ela(3));
-  m.inside_ela(3);  // the streak is of consecutive verdicts
+  m.inside_ela(3, false);  // the streak is of consecutive verdicts
   EXPECT_FALSE(m.outside_ela(3));
   EXPECT_TRUE(m.outside_ela(3));
   m.found_moving(3, 5, /*reanchored=*/true);

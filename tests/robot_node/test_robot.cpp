@@ -726,5 +726,58 @@ TEST(RobotGap, AnIncrementOverMissedFramesCarriesTheirCompoundedNoise) {
   }
 }
 
+// robot.ela.lone_needs_check. A robot drives along x with exact odometry and sees
+// one landmark alone, which stands for its three confirming sightings and then
+// creeps along y at 1 cm per frame (a robot driving by, as in MRCLAM). Without the
+// rule it corrects the pose every frame and drags it along; with it the landmark
+// corrects only with the sighting that confirms it, having never agreed with
+// another landmark. Once it has agreed with another in a frame (checked), it
+// corrects alone too.
+TEST(RobotLone, ALandmarkOnlyEverSeenAloneDoesNotDragThePose) {
+  for (bool rule : {false, true}) {
+    SCOPED_TRACE(rule ? "lone_needs_check on" : "lone_needs_check off");
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.lone_needs_check = rule;
+    o.lone_verdicts = false;
+    o.drift_memory = 0.0;  // the creep is for the pose to follow, not for a test to catch
+    Robot r(o, 1);
+    std::vector<Eigen::Vector2d> lms{{3.0, 0.5}};
+    Pose2 truth;
+    int corrections = 0;
+    for (int f = 0; f < 80; ++f) {
+      truth.x = 0.02 * f;
+      if (f >= 3) lms[0].y() += 0.01;
+      FrameInput in = test::frame_from(f, truth, truth, lms, {0});
+      in.noise = {1e-3, 1e-3, 1e-3};
+      corrections += r.process(in).num_accepted;
+    }
+    const double error = std::hypot(r.filter().pose().x - truth.x, r.filter().pose().y - truth.y);
+    if (rule) {
+      EXPECT_EQ(corrections, 1);  // the sighting that confirms it (Robot::confirm), before it creeps
+      EXPECT_LT(error, 1e-9);
+      EXPECT_FALSE(r.lmap()[0].checked);
+    } else {
+      EXPECT_GT(corrections, 70);
+      EXPECT_GT(error, 0.1);  // dragged along with the landmark
+    }
+  }
+  // Seen once with a second landmark that agrees, it is checked and corrects alone.
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.lone_needs_check = true;
+  Robot r(o, 1);
+  const std::vector<Eigen::Vector2d> lms{{3.0, 0.5}, {2.0, -1.0}};
+  for (int f = 0; f < 3; ++f) r.process(test::frame_from(f, Pose2{}, Pose2{}, lms, {0}));
+  ASSERT_EQ(r.lmap()[0].status, LandmarkStatus::kStatic);
+  EXPECT_EQ(r.process(test::frame_from(3, Pose2{}, Pose2{}, lms, {0})).num_unchecked, 1);
+  for (int f = 4; f < 7; ++f) r.process(test::frame_from(f, Pose2{}, Pose2{}, lms, {0, 1}));  // 1 confirmed
+  EXPECT_FALSE(r.lmap()[0].checked);  // 1 was a candidate, not in eq 16's view
+  r.process(test::frame_from(7, Pose2{}, Pose2{}, lms, {0, 1}));
+  EXPECT_TRUE(r.lmap()[0].checked);
+  EXPECT_TRUE(r.lmap()[1].checked);
+  const FrameSummary alone = r.process(test::frame_from(8, Pose2{}, Pose2{}, lms, {0}));
+  EXPECT_EQ(alone.num_accepted, 1);
+  EXPECT_EQ(alone.num_unchecked, 0);
+}
+
 }  // namespace
 }  // namespace elaslam

@@ -218,6 +218,22 @@ TEST(RobotState, TheConsistencyMonitorSurvivesARestart) {
   EXPECT_NE(why.find("node.inconsistent_frame"), std::string::npos) << why;
 }
 
+// With robot.ela.lone_needs_check (config/mrclam.yaml) a landmark judged alone
+// corrects the pose only once it has agreed with another (LMapEntry::checked): the
+// state file keeps which have (key "checked", absent: false). At 80 % dynamism
+// robot 2 often has one static landmark in view, so the flag decides corrections.
+TEST(RobotState, ARestartedRobotKeepsWhichLandmarksHaveAgreedWithAnother) {
+  TeamConfig c = paper(Mode::kEla, 7);
+  c.robot.lone_needs_check = true;
+  c.scenario.dynamism_percent = 80.0;
+  std::string state;
+  restarts_change_nothing(c, 65, &state);
+  const json st = json::parse(state);
+  int checked = 0;
+  for (const auto& e : st["state"]["lmap"]) checked += e.value("checked", false) ? 1 : 0;
+  EXPECT_GT(checked, 3);
+}
+
 // With the team's map (robot.team_map.fuse, config/mrclam.yaml) the robot's POSE is
 // the aided filter's: the state file keeps that filter, what the team channel has
 // fused into it and the team estimates held for the next frame. Before 2026-12-04

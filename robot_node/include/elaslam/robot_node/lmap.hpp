@@ -54,6 +54,10 @@ struct LMapEntry {
   /// Any status change clears it.
   bool archived = false;
   int times_moving = 0;          // how often it has been found (or told) moving
+  /// STATIC, and since it was (re)confirmed judged consistent together with another
+  /// landmark in the same frame (not alone): robot.ela.lone_needs_check lets only
+  /// such a landmark correct the pose when it is the only one in view.
+  bool checked = false;
   // A candidate's whitened innovations summed over its consistent sightings: white
   // for a static landmark (|sum|^2 / n is chi-square, 2 dof), drifting for a slow
   // mover that each single test would let through.
@@ -119,8 +123,13 @@ class LMap {
   const LMapEntry& add_innovation(int id, const Eigen::Vector2d& whitened);
 
   // ---- mapped (STATIC) landmarks -----------------------------------------------------
-  /// An inside-ELA verdict: the out-of-ELA streak ends.
-  void inside_ela(int id) { at(id).outside_streak = 0; }
+  /// An inside-ELA verdict: the out-of-ELA streak ends. `with_others`: judged with
+  /// other landmarks of the frame that agree (eq 16, the clique), not alone.
+  void inside_ela(int id, bool with_others) {
+    LMapEntry& e = at(id);
+    e.outside_streak = 0;
+    e.checked = e.checked || with_others;
+  }
   /// An out-of-ELA verdict; true when it is the moving_after-th in a row.
   bool outside_ela(int id) { return ++at(id).outside_streak >= rules_.moving_after; }
   /// Expected in view (and not seen) or not; true when it has been missing for

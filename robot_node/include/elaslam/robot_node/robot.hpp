@@ -60,6 +60,7 @@ struct FrameSummary {
   int num_obs = 0;
   int num_accepted = 0;   // corrected the filter
   int num_rejected = 0;   // refused by a gate (outside ELA, innovation gate)
+  int num_unchecked = 0;  // inside, but alone and never judged with another (lone_needs_check)
   int num_added = 0;      // landmarks added to the filter (ADD or RETURN)
   int num_moving = 0;     // landmarks removed as moving (ELA, missing)
   int num_candidates = 0; // observations of landmarks not (yet) in the filter

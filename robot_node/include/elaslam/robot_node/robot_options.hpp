@@ -76,6 +76,12 @@ struct RobotOptions {
   /// Whether a mapped landmark that fails its test while it is the only one in view
   /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.
   bool lone_verdicts = true;
+  /// Whether a mapped landmark judged alone (the only one in view, or the only one
+  /// left) corrects the pose only once it has been judged consistent with another
+  /// landmark in some frame since it was (re)confirmed (LMapEntry::checked). On: a
+  /// landmark only ever seen alone cannot tell its own slow motion from the
+  /// robot's, and dragged the pose along (a robot driving at 0.06 m/s in MRCLAM).
+  bool lone_needs_check = false;
   int missing_frames = 3;               // expected-but-unseen frames before MOVING (0: rule off)
   double sensor_range = 4.0;            // [m] radius of the field of view (D / 2)
   double fov_margin = 0.5;              // [m] "well inside the field of view": range < sensor_range - margin
