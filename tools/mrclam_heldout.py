@@ -327,6 +327,13 @@ def main():
                    help="exchange two subjects' surveyed positions")
     q = sub.add_parser("aligned", help="a map's RMS error after the best rigid alignment")
     q.add_argument("map_csv")
+    # an unknown option is named (exit 2), also before the command or with it missing
+    known = [o for act in ap._actions for o in act.option_strings]
+    for choice in sub.choices.values():
+        known += [o for act in choice._actions for o in act.option_strings]
+    for tok in sys.argv[1:]:
+        if tok.startswith("-") and tok != "-" and not any(k.startswith(tok.split("=", 1)[0]) for k in known):
+            ap.error(f"unrecognized argument: {tok}")
     a = ap.parse_args()
     try:
         return prepare(a) if a.cmd == "prepare" else aligned(a)
