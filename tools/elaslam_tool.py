@@ -76,8 +76,11 @@ def need(module, debian=None):
 
 
 def parse_args(ap):
-    """ap.parse_args(), naming an unknown option (exit 2) even when a required argument is missing too."""
-    known = [s for a in ap._actions for s in a.option_strings]
+    """ap.parse_args(), naming an unknown option (exit 2) even when a required argument is missing too.
+    The options of sub-commands (add_subparsers) count as known."""
+    parsers = [ap] + [c for a in ap._actions for c in (getattr(a, "choices", None) or {}).values()
+                      if isinstance(c, type(ap))]
+    known = [s for p in parsers for a in p._actions for s in a.option_strings]
     for tok in sys.argv[1:]:
         if tok == "--":
             break

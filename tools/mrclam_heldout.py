@@ -34,7 +34,7 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import add_version, need, run_in_venv  # noqa: E402  (standard library only)
+from elaslam_tool import add_version, need, parse_args, run_in_venv  # noqa: E402  (standard library only)
 
 import argparse  # noqa: E402
 
@@ -253,7 +253,7 @@ def prepare(a):
                 break
         if not fit:
             raise DataError(f"robot {r}: its sightings of the surveyed landmarks do not fix its start pose")
-        t0 = fit[0]
+        to_surveyed = fit[0]
         fixes = []
         tc = times[0]
         while tc <= times[-1]:
@@ -264,8 +264,8 @@ def prepare(a):
                 fx, fy = apply(f[0], path[k][1:3])
                 fixes.append((tc, fx, fy, math.remainder(path[k][3] + f[0][0], 2 * math.pi)))
             tc += FIX_EVERY_S
-        sx, sy = apply(t0, (0.0, 0.0))
-        poses, used, resets = localise(np, odo, meas, subject_of, surveyed, (sx, sy, t0[0]), fixes)
+        sx, sy = apply(to_surveyed, (0.0, 0.0))
+        poses, used, resets = localise(np, odo, meas, subject_of, surveyed, (sx, sy, to_surveyed[0]), fixes)
         print(f"robot {r}: start ({poses[0][1]:.3f}, {poses[0][2]:.3f}, {poses[0][3]:.4f}); {used} of {len(meas)} "
               f"sightings used, {len(fixes)} fixes, {resets} resets")
         with open(os.path.join(a.out, f"Robot{r}_Groundtruth.dat"), "w", encoding="utf-8") as f:
@@ -327,14 +327,7 @@ def main():
                    help="exchange two subjects' surveyed positions")
     q = sub.add_parser("aligned", help="a map's RMS error after the best rigid alignment")
     q.add_argument("map_csv")
-    # an unknown option is named (exit 2), also before the command or with it missing
-    known = [o for act in ap._actions for o in act.option_strings]
-    for choice in sub.choices.values():
-        known += [o for act in choice._actions for o in act.option_strings]
-    for tok in sys.argv[1:]:
-        if tok.startswith("-") and tok != "-" and not any(k.startswith(tok.split("=", 1)[0]) for k in known):
-            ap.error(f"unrecognized argument: {tok}")
-    a = ap.parse_args()
+    a = parse_args(ap)
     try:
         return prepare(a) if a.cmd == "prepare" else aligned(a)
     except DataError as e:
