@@ -231,6 +231,7 @@ std::vector<std::string> write_runs(const Args& a, const DatasetConfig& cfg, con
     nlohmann::json j = metrics_json(info, run.result);
     j["dataset"] = dataset_json(run.barcodes ? *src.with : *src.without, so, a.dataset_dir, dr);
     j["robot_barcode_corrections"] = run.robot_corrections;
+    j["landmarks_where_a_robot_was"] = run.result.occupied;  // main.body_radius_m
     const std::string dir = a.report ? a.out_dir + "/" + run.mode + (run.barcodes ? "_barcodes" : "") : a.out_dir;
     write_outputs(dir, j, run.result);
     dirs.push_back(dir);
@@ -240,6 +241,7 @@ std::vector<std::string> write_runs(const Args& a, const DatasetConfig& cfg, con
     std::cout << "  dead reckoning RMS:";
     for (const auto& d : dr) std::cout << " robot " << d.id << ' ' << f3(d.error_rms);
     std::cout << "\n  robot-barcode observations that corrected a pose: " << run.robot_corrections << "\n";
+    std::cout << "  landmarks taken as moving where a robot was (main.body_radius_m): " << run.result.occupied << "\n";
   }
   if (a.report) {
     write_report(a.out_dir + "/report.md", src.any(), dr, runs, command);

@@ -26,6 +26,7 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   o->max_seq_jump = seq_jump;
   r.read_optional("team_map_period_frames", &o->team_map_period_frames, 0, 100000);
   r.read_optional("moving_repeat_s", &o->moving_repeat_s, 0.0, 3600.0);
+  r.read_optional("body_radius_m", &o->body_radius_m, 0.0, 10.0);
   parse(r, &o->limits);
 }
 
@@ -180,6 +181,24 @@ void GlobalMap::remove_as_moving(int id, int robot_id, int frame, std::vector<No
   for (auto& e : g.by_robot) e.valid = false;  // deleted from the map
   if (notices && !unconfirmed) notices->push_back({id, robot_id, frame});
   ++version_;
+}
+
+int GlobalMap::occupy(int robot_id, int frame, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov,
+                      std::vector<Notice>* notices) {
+  const double radius = options_.body_radius_m;
+  if (!(radius > 0.0)) return 0;
+  int found = 0;
+  for (int id = 0; id < max_landmark_id(); ++id) {
+    const GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
+    if (g.status != GlobalStatus::kStatic) continue;
+    // Closer than the body, and the estimates sharp enough to tell: a robot whose
+    // pose is uncertain (or a landmark seen once from afar) proves nothing.
+    if ((g.fused - position).squaredNorm() >= radius * radius) continue;
+    if ((cov + g.fused_cov).trace() / 2.0 >= radius * radius) continue;
+    remove_as_moving(id, robot_id, frame, notices);
+    ++found;
+  }
+  return found;
 }
 
 bool GlobalMap::missed_events(int robot_id, std::int64_t seq) {

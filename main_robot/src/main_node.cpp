@@ -397,6 +397,11 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
     ++counters_.stale_poses;
     return -1;
   }
+  // Where the robot is, no static landmark can be (off while main.body_radius_m is 0).
+  const Eigen::Vector2d position(m.x, m.y);
+  Eigen::Matrix2d position_cov;
+  position_cov << m.cov[0][0], m.cov[0][1], m.cov[1][0], m.cov[1][1];
+  counters_.occupied += map_.occupy(m.robot_id, m.frame, position, position_cov, &pending_);
   // The POSE goes out before its frame's events: the frame is finished when events
   // up to its event_seq are applied. Held until then; an older held POSE is let go
   // now (its events are late or lost: the map is not held back more than a frame).

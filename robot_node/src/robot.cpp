@@ -413,7 +413,9 @@ double Robot::map_mean_diag() const {
 
 // Step 5 (between frames): main_robot says the landmark moves.
 bool Robot::apply_notice(int landmark_id, int frame) {
-  if (!lmap_.valid_id(landmark_id)) return false;
+  // ekf is the paper's baseline: every landmark static, also one the team (or main's
+  // body rule, main.body_radius_m) found moving.
+  if (options_.mode == Mode::kEkf || !lmap_.valid_id(landmark_id)) return false;
   const bool in_filter = ekf_.has_landmark(landmark_id);
   const bool held = in_filter && lmap_[landmark_id].status == LandmarkStatus::kStatic;
   const bool removed = in_filter && mirror_remove(landmark_id) == EkfStatus::kOk;

@@ -33,6 +33,13 @@ void remove_moving(const FrameData& f, sensor_frame_t* s) {
   contract::set_count(&s->obs, &s->num_obs, kept);
 }
 
+// The ekf baseline takes every landmark as static: its main makes no finding of its
+// own either (main.body_radius_m off; its robots ignore notices too, Robot::apply_notice).
+GlobalMapOptions for_mode(GlobalMapOptions o, Mode mode) {
+  if (mode == Mode::kEkf) o.body_radius_m = 0.0;
+  return o;
+}
+
 }  // namespace
 
 TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
@@ -166,7 +173,7 @@ InProcessTeam::InProcessTeam(const RobotOptions& robot_options, const GlobalMapO
       oracle_(oracle),
       num_robots_(frames.num_robots()),
       main_shell_(bus_, quiet("main_robot")),
-      main_(main_options),
+      main_(for_mode(main_options, robot_options.mode)),
       main_ports_(main_shell_, main_),
       world_(bus_, quiet("team")) {
   const auto R = static_cast<std::size_t>(num_robots_);
@@ -270,6 +277,7 @@ RunResult InProcessTeam::finish() {
     if (id >= 0 && id < static_cast<int>(out.truth_present.size())) out.truth_present[static_cast<std::size_t>(id)] = 1;
   }
   out.bus_messages = bus_.published();
+  out.occupied = main_.counters().occupied;
   return out;
 }
 

@@ -386,6 +386,83 @@ TEST(MainNode, BadMessagesAreCountedAndDropped) {
   EXPECT_EQ(node.map().to_json(), state);
 }
 
+// main.body_radius_m: a static landmark cannot be where a robot's body is. One the map
+// holds closer to a robot's reported position than the body radius, both estimates
+// sharp enough to tell, is taken as moving (found by that robot); nothing else is.
+TEST(GlobalMap, AStaticLandmarkWhereARobotIsIsTakenAsMoving) {
+  GlobalMapOptions o = options();
+  o.body_radius_m = 0.17;
+  GlobalMap m(o);
+  m.apply(ev(1, 1, landmark_event_t::ADD, 3, 1.0, 2.0, 0.0025), nullptr);   // sigma 5 cm
+  m.apply(ev(1, 2, landmark_event_t::ADD, 4, 3.0, 2.0, 0.0025), nullptr);
+  m.apply(ev(1, 3, landmark_event_t::ADD, 5, 5.0, 2.0, 0.04), nullptr);     // sigma 20 cm: seen from afar
+  m.apply(ev(1, 4, landmark_event_t::ADD, 6, 7.0, 2.0, 0.0025), nullptr);
+  const Eigen::Matrix2d sharp = Eigen::Matrix2d::Identity() * 1e-4;
+  std::vector<Notice> notices;
+  // Robot 2 at 0.18 m from landmark 3 (outside its body), at 0.16 m from none.
+  EXPECT_EQ(m.occupy(2, 10, {1.18, 2.0}, sharp, &notices), 0);
+  // ... at 0.16 m from landmark 4 (inside its body): moving, found by robot 2.
+  EXPECT_EQ(m.occupy(2, 11, {3.0, 2.16}, sharp, &notices), 1);
+  EXPECT_EQ(m.entry(4).status, GlobalStatus::kMoving);
+  EXPECT_EQ(m.entry(4).moving_by, 2);
+  EXPECT_EQ(m.entry(4).status_frame, 11);
+  EXPECT_EQ(m.entry(4).contributors(), 0);  // deleted from the map
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_EQ(notices[0].landmark_id, 4);
+  EXPECT_EQ(notices[0].detected_by, 2);
+  EXPECT_EQ(notices[0].frame, 11);
+  // Already moving: not again, no second notice.
+  EXPECT_EQ(m.occupy(2, 12, {3.0, 2.0}, sharp, &notices), 0);
+  // Landmark 5 is too uncertain to tell (sqrt(trace / 2) = 0.2 m > 0.17 m): kept.
+  EXPECT_EQ(m.occupy(3, 12, {5.0, 2.0}, sharp, &notices), 0);
+  EXPECT_EQ(m.entry(5).status, GlobalStatus::kStatic);
+  // So is a robot whose own position is that uncertain (sigma 0.2 m), on landmark 6.
+  EXPECT_EQ(m.occupy(3, 12, {7.0, 2.0}, Eigen::Matrix2d::Identity() * 0.04, &notices), 0);
+  EXPECT_EQ(m.entry(6).status, GlobalStatus::kStatic);
+  EXPECT_EQ(notices.size(), 1u);
+  // Off (0, the default): nothing, even right on a landmark.
+  GlobalMap off(options());
+  off.apply(ev(1, 1, landmark_event_t::ADD, 3, 1.0, 2.0, 0.0025), nullptr);
+  EXPECT_EQ(off.occupy(2, 10, {1.0, 2.0}, sharp, &notices), 0);
+  EXPECT_EQ(off.entry(3).status, GlobalStatus::kStatic);
+}
+
+// The rule runs on every accepted POSE of a new frame, and its finding goes out as a
+// DYNAMIC_NOTICE; a POSE that is refused or stale finds nothing.
+TEST(MainNode, APoseOnAStaticLandmarkSendsANotice) {
+  GlobalMapOptions o = options();
+  o.body_radius_m = 0.17;
+  o.limits.team_mask = 0b11;  // robots 1 and 2
+  MainNode node(o);
+  node.on_event(msg_event(1, 1, landmark_event_t::ADD, 3));  // at (1, 2), var 0.01
+  ASSERT_EQ(node.map().entry(3).status, GlobalStatus::kStatic);
+  pose_estimate_t p = test::pose_msg(2, 5);
+  p.x = 1.0;
+  p.y = 2.0;
+  pose_estimate_t outside = p;
+  outside.robot_id = 3;  // not in the team: refused
+  EXPECT_EQ(node.on_pose(outside), -1);
+  EXPECT_EQ(node.counters().occupied, 0);
+  node.on_pose(p);
+  EXPECT_EQ(node.counters().occupied, 1);
+  EXPECT_EQ(node.map().entry(3).status, GlobalStatus::kMoving);
+  const auto& n = node.take_notices(100);
+  ASSERT_EQ(n.size(), 1u);
+  EXPECT_EQ(n[0].landmark_id, 3);
+  EXPECT_EQ(n[0].detected_by, 2);
+  EXPECT_EQ(n[0].frame, 5);
+  // RETURNed by robot 1, then the same POSE again (a late duplicate): ignored.
+  node.on_event(test::event_msg(1, 2, landmark_event_t::RETURN, 3, 6));
+  ASSERT_EQ(node.map().entry(3).status, GlobalStatus::kStatic);
+  node.on_pose(p);
+  EXPECT_EQ(node.counters().stale_poses, 1);
+  EXPECT_EQ(node.counters().occupied, 1);
+  // Robot 2's next frame, still there: moving again.
+  p.frame = 7;
+  node.on_pose(p);
+  EXPECT_EQ(node.counters().occupied, 2);
+}
+
 TEST(MainNode, NoticesGetSequenceNumbersAndMapMessageListsMoving) {
   MainNode node(options());
   node.on_event(msg_event(1, 1, landmark_event_t::ADD, 3));

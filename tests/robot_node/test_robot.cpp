@@ -428,6 +428,17 @@ TEST_F(RobotPaths, MissingRuleWithAConeAndADetectionProbability) {
   EXPECT_EQ(r.lmap()[3].status, LandmarkStatus::kStatic);
 }
 
+// ekf is the baseline that takes every landmark as static: a notice (another robot's
+// finding, or main's body rule, main.body_radius_m) changes nothing in it.
+TEST_F(RobotPaths, EkfIgnoresEveryNotice) {
+  Robot r(test::robot_options(Mode::kEkf), 1);
+  confirm_all(r);
+  ASSERT_TRUE(r.filter().has_landmark(1));
+  EXPECT_FALSE(r.apply_notice(1, frame_));
+  EXPECT_TRUE(r.filter().has_landmark(1));
+  EXPECT_EQ(r.lmap()[1].status, LandmarkStatus::kStatic);
+}
+
 TEST_F(RobotPaths, DynamicNoticeRemovesWithoutEventAndReturnNeedsReturnFrames) {
   Robot r(test::robot_options(Mode::kEla), 1);
   confirm_all(r);

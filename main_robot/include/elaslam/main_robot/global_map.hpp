@@ -51,6 +51,9 @@ struct GlobalMapOptions {
   /// repaired within it); 0: with every GLOBAL_MAP. Process and in-process alike
   /// (MainNode::moving_set_due); docs/decisions.md "GLOBAL_MOVING".
   double moving_repeat_s = 1.0;  // [s]
+  /// A robot's body radius [m]: a STATIC landmark found where a robot is is taken as
+  /// moving (GlobalMap::occupy). 0: off (the simulator's robots have no body).
+  double body_radius_m = 0.0;
 };
 void parse(config::Reader& r, GlobalMapOptions* o);
 
@@ -180,6 +183,18 @@ class GlobalMap {
   /// information, for r's team map). False, outputs unchanged, when no other robot
   /// holds a usable estimate.
   bool fused_without(int id, int robot_id, Eigen::Vector2d* position, Eigen::Matrix2d* cov) const;
+
+  /// Robot `robot_id` reported its position (`position`, covariance `cov` [m^2]) at
+  /// `frame`. A STATIC landmark cannot be where a robot's body is: every STATIC one
+  /// whose fused position lies within body_radius_m of it, the two estimates together
+  /// resolving that distance (sqrt(trace(cov + fused_cov) / 2) < body_radius_m), is
+  /// deleted as moving, found by that robot at `frame` (a notice goes out). MRCLAM's
+  /// robots carry barcodes: another robot standing still is mapped as a landmark, and
+  /// steers poses once it drives off (docs/decisions.md "A landmark where a robot
+  /// is"). Returns how many; 0 while body_radius_m is 0 (off). No allocation beyond
+  /// `notices`.
+  int occupy(int robot_id, int frame, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov,
+             std::vector<Notice>* notices);
 
   const GlobalEntry& entry(int id) const { return entries_[static_cast<std::size_t>(id)]; }
   int max_landmark_id() const { return static_cast<int>(entries_.size()); }

@@ -42,6 +42,7 @@ struct MainCounters {
   std::int64_t stale_incarnation = 0;    // messages of an older incarnation refused (replay, second sender)
   std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, refused
   std::int64_t stale_poses = 0;          // POSEs of a frame already held or finished (late, repeated): ignored
+  std::int64_t occupied = 0;             // STATIC landmarks found where a robot was (main.body_radius_m): now moving
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
 };
@@ -74,7 +75,9 @@ class MainNode {
   /// has finished when that advanced with this call, else -1: the moment to publish
   /// GLOBAL_MAP for that frame. A POSE of a stale incarnation returns -1; so does an
   /// invalid one (counted; `why` says why): from outside limits.team, a position or
-  /// covariance outside limits, a frame jump not confirmed yet.
+  /// covariance outside limits, a frame jump not confirmed yet. A POSE of a new frame
+  /// also takes every STATIC landmark where the robot's body is as moving
+  /// (GlobalMap::occupy, main.body_radius_m; counted in MainCounters::occupied).
   int on_pose(const pose_estimate_t& msg, std::string* why = nullptr);
   /// A robot sends its POSE before the frame's events and snapshot; the POSE says up
   /// to which event seq the frame goes (event_seq) and whether a snapshot follows

@@ -103,7 +103,8 @@ class Robot {
   FrameSummary process(const FrameInput& in);
 
   /// A dynamic notice from main_robot: drop the landmark as moving (step 5).
-  /// Returns true when the robot held it in its filter. Emits no event.
+  /// Returns true when the robot held it in its filter. Emits no event. Mode ekf (the
+  /// baseline that takes every landmark as static) ignores every notice: false.
   bool apply_notice(int landmark_id, int frame);
 
   /// The estimates of one team map that are due (TEAM_MAP_<r>, the map without this

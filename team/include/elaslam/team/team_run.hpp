@@ -60,6 +60,8 @@ struct RunResult {
   long long bus_messages = 0;  // messages published on the in-process transport
   // Observations that corrected a robot's pose (all robots), by landmark id.
   std::vector<long> corrections_by_landmark;
+  // Landmarks main took as moving because a robot was where they were (main.body_radius_m).
+  long long occupied = 0;
 };
 
 /// Where the frames come from: the simulator or a recorded dataset. Frames are
