@@ -40,6 +40,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     // The team map fused into a second filter (robot.team_map), every 5 frames.
     c.robot.team_map_fuse = true;
     c.main.team_map_period_frames = 5;
+    // main's body rule on (main.body_radius_m): the simulated robots drive through
+    // landmarks, so it fires here (off in config/paper.yaml for that reason).
+    c.main.body_radius_m = 0.3;
     // Every sensor frame of the run, made before the region (the simulator is not
     // part of a robot's frame path).
     sim::World world(c.scenario);
@@ -66,6 +69,7 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
         }
         if (node.on_sensor(frames[f], 0) != RobotNode::Verdict::kProcessed) continue;
         ++t.frames;
+        main.on_pose(node.pose_msg());  // (POSE first, as a robot sends it)
         for (const auto& e : node.event_msgs()) {
           ++t.events[e.kind];
           main.on_event(e);
@@ -109,6 +113,7 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       EXPECT_GT(t.events[landmark_event_t::MOVING], 10);
       EXPECT_GT(t.events[landmark_event_t::RETURN], 0);
       EXPECT_GT(t.notices, 10);
+      EXPECT_GT(main.counters().occupied, 0);  // GlobalMap::occupy found some
     }
   }
 }
