@@ -51,6 +51,8 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
     std::fprintf(stderr, "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
     return false;
   }
+  if (const std::string advice = config_advice(*o); !advice.empty())
+    std::fprintf(stderr, "robot_node %d: warning: %s\n", a.robot, advice.c_str());
   if (!o->limits.in_team(a.robot)) {  // its own team would refuse every message it sends
     std::fprintf(stderr, "robot_node: --robot %d is not in robot.limits.team (%s) of %s\n", a.robot,
                  team_text(o->limits.team_mask).c_str(), cfg->path.c_str());

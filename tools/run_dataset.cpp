@@ -159,6 +159,14 @@ int parse_args(int argc, char** argv, Args* a) {
 bool configure(Args* a, DatasetConfig* cfg, std::vector<std::string>* modes) {
   a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
   *cfg = load_dataset_config(a->config_path);
+  for (Mode m : {Mode::kEla, Mode::kConsensus}) {  // the modes it concerns (run or not)
+    RobotOptions ro = cfg->robot;
+    ro.mode = m;
+    if (const std::string advice = config_advice(ro); !advice.empty()) {
+      std::fprintf(stderr, "run_dataset: warning: %s\n", advice.c_str());
+      break;
+    }
+  }
   mrclam::Options& o = cfg->dataset;
   std::string why;
   if (!a->robots_text.empty() && !mrclam::parse_robot_list(a->robots_text, &o.robots, &why)) {

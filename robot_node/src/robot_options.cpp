@@ -112,6 +112,13 @@ void parse(config::Reader& r, RobotOptions* o) {
     r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");
 }
 
+std::string config_advice(const RobotOptions& o) {
+  if (o.lone_needs_check && !o.team_map_fuse && (o.mode == Mode::kEla || o.mode == Mode::kConsensus))
+    return "robot.ela.lone_needs_check is on while robot.team_map.fuse is off: a robot without the team map "
+           "needs every lone correction (docs/mrclam.md): turn lone_needs_check off, or the team map on";
+  return "";
+}
+
 RobotOptions load_robot_options(const std::string& path, std::string* effective_yaml) {
   config::Document doc = config::Document::from_file(path);
   RobotOptions o;

@@ -132,6 +132,12 @@ struct RobotOptions {
 /// Read the `robot:` section (see config/paper.yaml for every key and its unit).
 void parse(config::Reader& r, RobotOptions* o);
 
+/// Settings that are valid together but known to work badly, as one line of advice
+/// for stderr ("" when none): `ela.lone_needs_check` on while `team_map.fuse` is off
+/// (a robot alone needs every lone correction; on MRCLAM dataset1 one robot
+/// diverged to 1.8 m that way: docs/mrclam.md), in a mode that uses it.
+std::string config_advice(const RobotOptions& o);
+
 /// Load the `robot:` section of a config file; other sections are allowed.
 /// Throws config::ConfigError listing every problem.
 RobotOptions load_robot_options(const std::string& path, std::string* effective_yaml = nullptr);
