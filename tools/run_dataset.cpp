@@ -159,14 +159,10 @@ int parse_args(int argc, char** argv, Args* a) {
 bool configure(Args* a, DatasetConfig* cfg, std::vector<std::string>* modes) {
   a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
   *cfg = load_dataset_config(a->config_path);
-  for (Mode m : {Mode::kEla, Mode::kConsensus}) {  // the modes it concerns (run or not)
-    RobotOptions ro = cfg->robot;
-    ro.mode = m;
-    if (const std::string advice = config_advice(ro); !advice.empty()) {
-      std::fprintf(stderr, "run_dataset: warning: %s\n", advice.c_str());
-      break;
-    }
-  }
+  RobotOptions detecting = cfg->robot;  // the advice concerns ela and consensus alike, run or not
+  detecting.mode = Mode::kEla;
+  if (const std::string advice = config_advice(detecting); !advice.empty())
+    std::fprintf(stderr, "run_dataset: warning: %s\n", advice.c_str());
   mrclam::Options& o = cfg->dataset;
   std::string why;
   if (!a->robots_text.empty() && !mrclam::parse_robot_list(a->robots_text, &o.robots, &why)) {

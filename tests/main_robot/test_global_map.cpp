@@ -399,7 +399,7 @@ TEST(GlobalMap, AStaticLandmarkWhereARobotIsIsTakenAsMoving) {
   m.apply(ev(1, 4, landmark_event_t::ADD, 6, 7.0, 2.0, 0.0025), nullptr);
   const Eigen::Matrix2d sharp = Eigen::Matrix2d::Identity() * 1e-4;
   std::vector<Notice> notices;
-  // Robot 2 at 0.18 m from landmark 3 (outside its body), at 0.16 m from none.
+  // Robot 2 at 0.18 m from landmark 3: outside its body, nothing taken.
   EXPECT_EQ(m.occupy(2, 10, {1.18, 2.0}, sharp, &notices), 0);
   // ... at 0.16 m from landmark 4 (inside its body): moving, found by robot 2.
   EXPECT_EQ(m.occupy(2, 11, {3.0, 2.16}, sharp, &notices), 1);
