@@ -615,6 +615,35 @@ EkfStatus EkfSlam::restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, c
   return EkfStatus::kOk;
 }
 
+EkfStatus EkfSlam::assign(const EkfSlam& other) {
+  if (&other == this) return EkfStatus::kOk;
+  if (other.options_.capacity != options_.capacity || other.options_.max_landmark_id != options_.max_landmark_id)
+    return EkfStatus::kBadInput;
+  other.settle();
+  settle();
+  const Index old_dim = state_dim(), dim = other.state_dim();
+  for (int slot = 0; slot < num_landmarks_; ++slot) id_to_slot_[static_cast<std::size_t>(slot_to_id_[static_cast<std::size_t>(slot)])] = -1;
+  for (int slot = 0; slot < other.num_landmarks_; ++slot) {
+    const int id = other.slot_to_id_[static_cast<std::size_t>(slot)];
+    slot_to_id_[static_cast<std::size_t>(slot)] = id;
+    id_to_slot_[static_cast<std::size_t>(id)] = slot;
+  }
+  for (int slot = other.num_landmarks_; slot < num_landmarks_; ++slot) slot_to_id_[static_cast<std::size_t>(slot)] = -1;
+  num_landmarks_ = other.num_landmarks_;
+  x_.head(dim) = other.x_.head(dim);
+  // The lower triangle (and the robot block) is what is current; the inactive part
+  // of P stays zero (reset, remove_landmark).
+  for (Index c = 0; c < dim; ++c) P_.col(c).segment(c, dim - c) = other.P_.col(c).segment(c, dim - c);
+  P_.topLeftCorner<kR, kR>() = other.P_.topLeftCorner<kR, kR>();
+  if (old_dim > dim) {
+    x_.segment(dim, old_dim - dim).setZero();
+    P_.block(dim, 0, old_dim - dim, old_dim).setZero();
+    P_.block(0, dim, old_dim, old_dim - dim).setZero();
+  }
+  upper_stale_ = true;
+  return EkfStatus::kOk;
+}
+
 bool EkfSlam::has_landmark(int id) const { return slot_of(id) >= 0; }
 
 int EkfSlam::slot_of(int id) const {

@@ -15,6 +15,22 @@ std::size_t Robot::event_capacity(const RobotOptions& o) {
   return static_cast<std::size_t>(3 * o.max_observations + o.ekf.capacity + 8);
 }
 
+namespace {
+
+// Candidates exist in modes ela and consensus only.
+int history_window(const RobotOptions& o) {
+  return o.mode == Mode::kEla || o.mode == Mode::kConsensus ? o.candidate_history_frames : 0;
+}
+
+// Operations a frame can apply to a filter: two predictions, per observation an
+// update or a remove and an add, per held landmark a removal (missing, notices) or a
+// team increment; the window's frames and the current one.
+int history_ops(const RobotOptions& o) {
+  return (history_window(o) + 1) * (3 * o.max_observations + 2 * o.ekf.capacity + 8);
+}
+
+}  // namespace
+
 const char* to_string(EventKind k) {
   switch (k) {
     case EventKind::kAdd: return "ADD";
@@ -29,6 +45,8 @@ Robot::Robot(const RobotOptions& options, int robot_id)
     : options_(options),
       robot_id_(robot_id),
       ekf_(options.ekf),
+      history_(options.ekf, history_window(options), history_ops(options)),
+      aided_history_(options.ekf, options.team_map_fuse ? history_window(options) : 0, history_ops(options)),
       team_(options.team_map_fuse ? options.ekf.max_landmark_id : 0, options.team_map_min_gain),
       lmap_(options.ekf.max_landmark_id, lifecycle_rules(options)),
       gate_(options),
@@ -58,6 +76,7 @@ FrameSummary Robot::process(const FrameInput& in) {
   gate_.clear();
   updated_.clear();
   s.num_obs = in.num_obs;
+  history_frame_ = in.frame;
   predict(in, &s);
   last_frame_ = in.frame;
   for (int k = 0; k < in.num_obs; ++k) lmap_.seen(in.obs[static_cast<std::size_t>(k)].landmark_id, in.frame);
@@ -119,6 +138,7 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     if (aided_) aided_->reset(in.odometer, P0);
     team_.clear();
     initialised_ = true;
+    restart_history();
   } else if (in.reanchor) {
     // A new odometer origin: no increment, and the frames since the last one driven
     // anywhere within the vehicle's bounds.
@@ -210,6 +230,14 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   // 1-2. New landmarks and candidates.
   lmap_.set_few_static(s->num_accepted < 3);
   handle_candidates(in, s);
+  // Confirmed candidates' earlier sightings, into the filters (FilterHistory).
+  s->filter_faults += history_.end_frame(in.frame, &ekf_);
+  if (aided_) s->filter_faults += aided_history_.end_frame(in.frame, &*aided_);
+}
+
+void Robot::restart_history() {
+  history_.restart(ekf_);
+  if (aided_) aided_history_.restart(*aided_);
 }
 
 void Robot::correct(int id, const RangeBearing& z, FrameSummary* s) {
@@ -264,6 +292,8 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
 // from now on, starting with this frame's sighting.
 void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   const bool returned = lmap_.confirm(id, last_frame_);
+  history_.upgrade(id);
+  aided_history_.upgrade(id);
   if (mirror_update(id, z, false, s).status == EkfStatus::kOk) {
     ++s->num_accepted;
   } else {
@@ -427,8 +457,18 @@ bool Robot::apply_notice(int landmark_id, int frame) {
 
 EkfStatus Robot::mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s) {
   const EkfStatus st = ekf_.predict(increment, U);
-  if (st != EkfStatus::kOk) ++s->filter_faults;
-  if (aided_ && aided_->predict(increment, U) != EkfStatus::kOk) ++s->filter_faults;
+  if (st != EkfStatus::kOk) {
+    ++s->filter_faults;
+  } else {
+    history_.predict(history_frame_, increment, U);
+  }
+  if (aided_) {
+    if (aided_->predict(increment, U) != EkfStatus::kOk) {
+      ++s->filter_faults;
+    } else {
+      aided_history_.predict(history_frame_, increment, U);
+    }
+  }
   return st;
 }
 
@@ -436,26 +476,53 @@ EkfStatus Robot::mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U
 // aided one: the decision was taken).
 UpdateReport Robot::mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s) {
   const UpdateReport r = ekf_.update(id, z, gate);
-  if (aided_ && r.status == EkfStatus::kOk && aided_->update(id, z, false).status != EkfStatus::kOk) ++s->filter_faults;
+  if (r.status != EkfStatus::kOk) return r;
+  history_.update(history_frame_, id, z);
+  if (aided_) {
+    if (aided_->update(id, z, false).status != EkfStatus::kOk) {
+      ++s->filter_faults;
+    } else {
+      aided_history_.update(history_frame_, id, z);
+    }
+  }
   return r;
 }
 
 void Robot::mirror_update_landmark_only(int id, const RangeBearing& z, FrameSummary* s) {
-  if (ekf_.update_landmark_only(id, z).status != EkfStatus::kOk) ++s->filter_faults;
-  if (aided_ && aided_->update_landmark_only(id, z).status != EkfStatus::kOk) ++s->filter_faults;
+  if (ekf_.update_landmark_only(id, z).status != EkfStatus::kOk) {
+    ++s->filter_faults;
+  } else {
+    history_.update_landmark_only(history_frame_, id, z);
+  }
+  if (!aided_) return;
+  if (aided_->update_landmark_only(id, z).status != EkfStatus::kOk) {
+    ++s->filter_faults;
+  } else {
+    aided_history_.update_landmark_only(history_frame_, id, z);
+  }
 }
 
 EkfStatus Robot::mirror_add(int id, const RangeBearing& z, FrameSummary* s) {
   const EkfStatus st = ekf_.add_landmark(id, z);
+  if (st != EkfStatus::kOk) return st;
+  history_.add(history_frame_, id, z);
   // The team channel is kept (team_aid.hpp): what the team's estimate taught the
   // pose and map before the landmark left stays in the aided filter.
-  if (aided_ && st == EkfStatus::kOk && aided_->add_landmark(id, z) != EkfStatus::kOk) ++s->filter_faults;
+  if (aided_) {
+    if (aided_->add_landmark(id, z) != EkfStatus::kOk) {
+      ++s->filter_faults;
+    } else {
+      aided_history_.add(history_frame_, id, z);
+    }
+  }
   return st;
 }
 
 EkfStatus Robot::mirror_remove(int id) {
   const EkfStatus st = ekf_.remove_landmark(id);
-  if (aided_) aided_->remove_landmark(id);  // kUnknownLandmark when its add had failed: nothing to remove
+  if (st == EkfStatus::kOk) history_.remove(history_frame_, id);
+  // kUnknownLandmark when its add had failed: nothing to remove.
+  if (aided_ && aided_->remove_landmark(id) == EkfStatus::kOk) aided_history_.remove(history_frame_, id);
   return st;
 }
 
@@ -501,6 +568,7 @@ bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
     ++team_counters_.refused;
     return false;
   }
+  aided_history_.update_position(history_frame_, e.landmark_id, inc.z, inc.R);
   team_.commit(e.landmark_id, inc);
   ++team_counters_.fused;
   team_counters_.nis_sum += r.d2;

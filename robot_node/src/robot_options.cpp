@@ -51,6 +51,7 @@ void parse(config::Reader& r, RobotOptions* o) {
     e.read_optional("return_backoff", &o->return_backoff);
     e.read_optional("candidate_updates", &o->candidate_updates);
     e.read_optional("candidate_drift_test", &o->candidate_drift_test);
+    e.read_optional("candidate_history_frames", &o->candidate_history_frames, 0, 100);
     e.read_optional("drift_memory", &o->drift_memory, 0.0, 0.99);
     e.read_optional("drift_gate_probability", &o->drift_gate_probability, 0.5, 1.0 - 1e-12);
     e.read_optional("candidate_gap_frames", &o->candidate_gap_frames, 1, 1000);

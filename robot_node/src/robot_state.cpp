@@ -179,6 +179,9 @@ struct RobotStateAccess {
  private:
   static json save_node(const RobotNode& n);
   static json save_filter(const EkfSlam& f);
+  static json save_history(const FilterHistory& h);
+  static void load_history(const json& h, const std::string& key, const EkfSlam& current, const Robot& r,
+                           FilterHistory* out);
   static json save_lmap(const LMap& m);
   static void check_header(const json& s, const RobotNode& n);
   static void load_node(const json& s, RobotNode* n);
@@ -186,6 +189,7 @@ struct RobotStateAccess {
   static void parse_filter(const json& f, const std::string& key, const Robot& r, Eigen::VectorXd* x,
                            Eigen::MatrixXd* P, std::vector<int>* slot_ids);
   static void load_filter(const json& s, Robot* r);
+  static void load_histories(const json& s, Robot* r);
   static void load_lmap(const json& s, Robot* r);
   static void check_consistency(const Robot& r);
 };
@@ -234,6 +238,33 @@ json RobotStateAccess::save_filter(const EkfSlam& f) {
   return {{"slot_ids", ids}, {"mean", mean}, {"cov_lower", lower}};
 }
 
+// The filter history (robot.ela.candidate_history_frames): the lagged filter and the
+// operations since, each [kind, frame, id, values...] with the values its kind uses.
+json RobotStateAccess::save_history(const FilterHistory& h) {
+  json ops = json::array();
+  for (int k = 0; k < h.held(); ++k) {
+    const FilterHistory::Op& op = h.op(k);
+    json j = json::array({FilterHistory::to_string(op.kind), op.frame, op.id});
+    switch (op.kind) {
+      case FilterHistory::Kind::kPredict:
+        j.push_back(json::array({op.increment.x, op.increment.y, op.increment.theta}));
+        j.push_back(json::array({op.U(0, 0), op.U(0, 1), op.U(0, 2), op.U(1, 0), op.U(1, 1), op.U(1, 2), op.U(2, 0),
+                                 op.U(2, 1), op.U(2, 2)}));
+        break;
+      case FilterHistory::Kind::kUpdate:
+      case FilterHistory::Kind::kLandmarkOnly:
+      case FilterHistory::Kind::kAdd: j.push_back(json::array({op.z.range, op.z.bearing})); break;
+      case FilterHistory::Kind::kPosition:
+        j.push_back(to_json(op.p));
+        j.push_back(to_json(op.R));
+        break;
+      case FilterHistory::Kind::kRemove: break;
+    }
+    ops.push_back(std::move(j));
+  }
+  return {{"lagged", save_filter(*h.lagged())}, {"ops", std::move(ops)}};
+}
+
 json RobotStateAccess::save_lmap(const LMap& m) {
   json entries = json::array();
   for (int id = 0; id < m.size(); ++id) {
@@ -274,7 +305,11 @@ json RobotStateAccess::save(const RobotNode& n) {
                            {"Y", to_json(r.team_.fused_information(id))},
                            {"y", to_json(r.team_.fused_vector(id))}});
     robot["aided"] = {{"filter", save_filter(*r.aided_)}, {"channel", std::move(channel)}};
+    if (r.aided_history_.enabled()) robot["aided"]["history"] = save_history(r.aided_history_);
   }
+  // The filter history (robot.ela.candidate_history_frames): optional, absent in files
+  // of before 2026-12-04 (the history then starts over from the filter).
+  if (r.history_.enabled()) robot["history"] = save_history(r.history_);
   return {{"robot_id", n.robot_id_},
           {"mode", to_string(o.mode)},
           {"capacity", o.ekf.capacity},
@@ -496,6 +531,97 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
   }
 }
 
+// A history saved by save_history under `key`: its lagged filter and its operations,
+// each checked; replayed on the lagged filter they must give the saved filter
+// `current` (else the file is inconsistent).
+void RobotStateAccess::load_history(const json& h, const std::string& key, const EkfSlam& current, const Robot& r,
+                                    FilterHistory* out) {
+  Eigen::VectorXd x;
+  Eigen::MatrixXd P;
+  std::vector<int> slot_ids;
+  parse_filter(need(h, key, "lagged"), key + ".lagged", r, &x, &P, &slot_ids);
+  const json& ops = array(need(h, key, "ops"), key + ".ops", 0, static_cast<std::size_t>(out->capacity()));
+  const double bound = r.options_.limits.world_bound;
+  const int max_id = r.options_.ekf.max_landmark_id - 1;
+  std::vector<FilterHistory::Op> parsed;
+  int previous = r.last_frame_ - out->window() - 1;
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    const std::string w = key + ".ops[" + std::to_string(k) + "]";
+    const json& j = array(ops[k], w, 3, 5);
+    FilterHistory::Op op;
+    const json& kind = j[0];
+    bool known = false;
+    for (const auto kd : {FilterHistory::Kind::kPredict, FilterHistory::Kind::kUpdate, FilterHistory::Kind::kLandmarkOnly,
+                          FilterHistory::Kind::kPosition, FilterHistory::Kind::kAdd, FilterHistory::Kind::kRemove})
+      if (kind.is_string() && kind.get<std::string>() == FilterHistory::to_string(kd)) op.kind = kd, known = true;
+    if (!known) fail(w + "[0] (kind)", kind.dump() + " is not an operation");
+    op.frame = static_cast<int>(whole(j[1], w + "[1] (frame)", previous, r.last_frame_));
+    previous = op.frame;
+    const bool predict = op.kind == FilterHistory::Kind::kPredict;
+    op.id = static_cast<int>(whole(j[2], w + "[2] (id)", predict ? -1 : 0, predict ? -1 : max_id));
+    const std::size_t values = predict || op.kind == FilterHistory::Kind::kPosition ? 2
+                               : op.kind == FilterHistory::Kind::kRemove         ? 0
+                                                                                  : 1;
+    if (j.size() != 3 + values) fail(w, "has " + std::to_string(j.size()) + " entries, a " + FilterHistory::to_string(op.kind) + " has " + std::to_string(3 + values));
+    switch (op.kind) {
+      case FilterHistory::Kind::kPredict: {
+        const json& u = array(j[3], w + "[3] (increment)", 3, 3);
+        op.increment = {real(u[0], w + "[3][0]", -bound, bound), real(u[1], w + "[3][1]", -bound, bound),
+                        real(u[2], w + "[3][2]", -kPi - kAngleSlack, kPi + kAngleSlack)};
+        const json& U = array(j[4], w + "[4] (U)", 9, 9);
+        for (int e = 0; e < 9; ++e)
+          op.U(e / 3, e % 3) = real(U[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
+        const double scale = std::max(op.U.trace(), 1e-300);
+        if ((op.U.diagonal().array() < 0.0).any()) fail(w + "[4] (U)", "negative variance");
+        if ((op.U - op.U.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail(w + "[4] (U)", "not symmetric");
+        break;
+      }
+      case FilterHistory::Kind::kUpdate:
+      case FilterHistory::Kind::kLandmarkOnly:
+      case FilterHistory::Kind::kAdd: {
+        const json& z = array(j[3], w + "[3] (range, bearing)", 2, 2);
+        op.z = {real(z[0], w + "[3][0] (range)", 1e-9, bound), real(z[1], w + "[3][1] (bearing)", -kPi - kAngleSlack, kPi + kAngleSlack)};
+        break;
+      }
+      case FilterHistory::Kind::kPosition: {
+        op.p = vec2(j[3], w + "[3] (position)", bound);
+        const json& R = array(j[4], w + "[4] (R)", 4, 4);
+        for (int e = 0; e < 4; ++e)
+          op.R(e / 2, e % 2) = real(R[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
+        if (!(op.R(0, 0) > 0.0) || !(op.R.determinant() > 0.0) || std::fabs(op.R(0, 1) - op.R(1, 0)) > 1e-9 * op.R.trace())
+          fail(w + "[4] (R)", "not symmetric positive definite");
+        break;
+      }
+      case FilterHistory::Kind::kRemove: break;
+    }
+    parsed.push_back(op);
+  }
+  if (out->restore(x, P, slot_ids, parsed) != EkfStatus::kOk) fail(key + ".lagged.slot_ids", "a landmark id appears twice");
+  // The lagged filter and the operations must give the saved filter.
+  EkfSlam replay(r.options_.ekf);
+  replay.assign(*out->lagged());
+  for (std::size_t k = 0; k < parsed.size(); ++k)
+    if (!FilterHistory::apply(parsed[k], &replay))
+      fail(key + ".ops[" + std::to_string(k) + "]", "the lagged filter refuses it");
+  bool same = replay.num_landmarks() == current.num_landmarks();
+  for (int slot = 0; same && slot < current.num_landmarks(); ++slot) same = replay.id_at(slot) == current.id_at(slot);
+  if (same) {
+    const double scale = std::max(1.0, current.covariance().cwiseAbs().maxCoeff());
+    same = (replay.mean() - current.mean()).cwiseAbs().maxCoeff() <= 1e-6 * std::max(1.0, current.mean().cwiseAbs().maxCoeff()) &&
+           (replay.covariance() - current.covariance()).cwiseAbs().maxCoeff() <= 1e-6 * scale;
+  }
+  if (!same) fail(key, "its lagged filter and operations do not give the saved filter");
+}
+
+void RobotStateAccess::load_histories(const json& s, Robot* r) {
+  r->restart_history();
+  const json& robot = need(s, "state", "robot");
+  if (r->history_.enabled() && robot.contains("history"))
+    load_history(robot.at("history"), "robot.history", r->ekf_, *r, &r->history_);
+  if (r->aided_ && r->aided_history_.enabled() && robot.contains("aided") && robot.at("aided").contains("history"))
+    load_history(robot.at("aided").at("history"), "robot.aided.history", *r->aided_, *r, &r->aided_history_);
+}
+
 void RobotStateAccess::load_lmap(const json& s, Robot* r) {
   const json& entries = array(need(s, "state", "lmap"), "lmap", 0, static_cast<std::size_t>(r->lmap_.size()));
   std::vector<std::uint8_t> seen(static_cast<std::size_t>(r->lmap_.size()), 0);
@@ -542,6 +668,7 @@ void RobotStateAccess::load(const json& s, RobotNode* scratch) {
   load_node(s, scratch);
   load_robot(s, &scratch->robot_, scratch->last_frame_);
   load_filter(s, &scratch->robot_);
+  load_histories(s, &scratch->robot_);
   load_lmap(s, &scratch->robot_);
   check_consistency(scratch->robot_);
 }

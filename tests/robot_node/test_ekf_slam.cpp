@@ -254,6 +254,41 @@ TEST(EkfSlam, PositionUpdateMatchesTheDenseUpdate) {
   EXPECT_GE(checked, 200);
 }
 
+// assign (FilterHistory's rebuild): a copy of another filter, whatever the two held
+// before (more landmarks or fewer); both then go on identically. Capacity or id
+// range that differ are refused.
+TEST(EkfSlam, AssignMakesAnExactCopy) {
+  const EkfOptions o = small_options(false);
+  for (const bool grow : {true, false}) {
+    SCOPED_TRACE(grow ? "into a filter with fewer landmarks" : "into one with more");
+    EkfSlam big(o), small(o);
+    RandomWorld wb(0xB16), ws(0x5A11);
+    big.reset(wb.truth, 1e-4 * Eigen::Matrix3d::Identity());
+    small.reset(ws.truth, 1e-4 * Eigen::Matrix3d::Identity());
+    for (int k = 0; k < 120; ++k) random_operation(wb, big, nullptr, o.capacity);
+    for (int k = 0; k < 8; ++k) random_operation(ws, small, nullptr, o.capacity);
+    ASSERT_GT(big.num_landmarks(), small.num_landmarks() + 3);
+    EkfSlam& a = grow ? big : small;  // the source
+    EkfSlam& b = grow ? small : big;  // the copy
+    ASSERT_EQ(b.assign(a), EkfStatus::kOk);
+    EXPECT_EQ(b.mean(), a.mean());
+    EXPECT_EQ(b.covariance(), a.covariance());
+    for (int id = 0; id < o.max_landmark_id; ++id) EXPECT_EQ(b.slot_of(id), a.slot_of(id)) << "id " << id;
+    // The same operations on both from here: the same filter to the last digit.
+    RandomWorld w1(0xC0FFEE), w2(0xC0FFEE);
+    for (int k = 0; k < 100; ++k) {
+      random_operation(w1, a, nullptr, o.capacity);
+      random_operation(w2, b, nullptr, o.capacity);
+    }
+    EXPECT_EQ(b.mean(), a.mean());
+    EXPECT_EQ(b.covariance(), a.covariance());
+  }
+  EkfOptions other = o;
+  other.capacity += 1;
+  EkfSlam c(other), d(o);
+  EXPECT_EQ(c.assign(d), EkfStatus::kBadInput);
+}
+
 // A filter at the origin holding landmark 3 only: for the refusal tests.
 EkfSlam filter_with_landmark_3() {
   EkfSlam ekf(small_options(true));

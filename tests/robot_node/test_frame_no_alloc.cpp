@@ -114,6 +114,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       EXPECT_GT(t.events[landmark_event_t::RETURN], 0);
       EXPECT_GT(t.notices, 10);
       EXPECT_GT(main.counters().occupied, 0);  // GlobalMap::occupy found some
+      std::int64_t rebuilds = 0;  // robot.ela.candidate_history_frames (on in config/paper.yaml)
+      for (const auto& r : robots) rebuilds += r.robot().history().rebuilds();
+      EXPECT_GT(rebuilds, 50);
     }
   }
 }

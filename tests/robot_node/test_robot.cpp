@@ -67,6 +67,48 @@ TEST_F(RobotPaths, NewBecomesCandidateThenStaticAfterConfirmFrames) {
   EXPECT_EQ(count_events(r, EventKind::kUpdate), 6);
 }
 
+// candidate_history_frames (FilterHistory): once confirmed, a candidate's earlier
+// sightings correct the robot as they would have had it been mapped at once. Six
+// landmarks seen from frame 0, noisy, on a moving robot: after the confirming frame
+// ela's filter is ekf's (which maps at first sighting) to rounding; without the
+// history it is not (the candidates' first sightings corrected only themselves).
+TEST_F(RobotPaths, WithHistoryAConfirmedCandidateCorrectsAsIfMappedAtOnce) {
+  for (const int history : {2, 0}) {
+    SCOPED_TRACE("candidate_history_frames " + std::to_string(history));
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.candidate_history_frames = history;
+    Robot ela(o, 1), ekf(test::robot_options(Mode::kEkf), 1);
+    std::mt19937_64 rng_a(11), rng_b(11);
+    Pose2 truth{0.0, 0.0, 0.0}, odometer{0.0, 0.0, 0.0};
+    for (int k = 0; k < 3; ++k) {
+      ela.process(test::frame_from(k, truth, odometer, lms_, test::all_ids(6), &rng_a));
+      ekf.process(test::frame_from(k, truth, odometer, lms_, test::all_ids(6), &rng_b));
+      truth = compose(truth, Pose2{0.1, 0.0, 0.05});
+      odometer = compose(odometer, Pose2{0.1, 0.002, 0.048});  // the odometer errs
+    }
+    for (int i = 0; i < 6; ++i) ASSERT_EQ(ela.lmap()[i].status, LandmarkStatus::kStatic) << "landmark " << i;
+    // Compared by id (the two filters' slots may differ).
+    const EkfSlam& a = ela.filter();
+    const EkfSlam& b = ekf.filter();
+    ASSERT_EQ(a.num_landmarks(), 6);
+    ASSERT_EQ(b.num_landmarks(), 6);
+    double d = std::max({std::fabs(a.pose().x - b.pose().x), std::fabs(a.pose().y - b.pose().y),
+                         std::fabs(a.pose().theta - b.pose().theta), (a.pose_cov() - b.pose_cov()).cwiseAbs().maxCoeff()});
+    for (int i = 0; i < 6; ++i) {
+      d = std::max({d, (a.landmark(i) - b.landmark(i)).cwiseAbs().maxCoeff(),
+                    (a.pose_landmark_cov(i) - b.pose_landmark_cov(i)).cwiseAbs().maxCoeff()});
+      for (int j = 0; j < 6; ++j) d = std::max(d, (a.landmark_cross_cov(i, j) - b.landmark_cross_cov(i, j)).cwiseAbs().maxCoeff());
+    }
+    if (history > 0) {
+      EXPECT_LT(d, 1e-12);
+      EXPECT_EQ(ela.history().rebuilds(), 1);
+      EXPECT_EQ(ela.history().upgraded(), 6);  // one earlier sighting each (frame 1)
+    } else {
+      EXPECT_GT(d, 1e-4);
+    }
+  }
+}
+
 TEST_F(RobotPaths, InconsistentCandidateIsReanchored) {
   Robot r(test::robot_options(Mode::kEla), 1);
   step(r, {0});

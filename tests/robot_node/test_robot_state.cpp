@@ -470,6 +470,7 @@ TEST_F(RobotStateCorrupt, InconsistentSlotsAreRefused) {
       if (e["id"] == id) e["status"] = "moving";
   }), "in the filter but moving");
   expect_refused(edited([](json& s) {  // a static landmark outside the filter: drop slot 0 of the filter
+    s["robot"].erase("history");  // (whose check would find the filter edited first)
     const int dim = static_cast<int>(s["filter"]["mean"].size());
     s["filter"]["slot_ids"].erase(0);
     json& m = s["filter"]["mean"];
@@ -487,6 +488,29 @@ TEST_F(RobotStateCorrupt, InconsistentSlotsAreRefused) {
       if (e["id"] == id) e["archived"] = true;
   }), "archived but in the filter");
   expect_refused(edited([](json& s) { s["lmap"][0]["archived"] = "yes"; }), "lmap[0].archived");
+}
+
+// The filter history (robot.ela.candidate_history_frames, on in config/paper.yaml):
+// every operation checked, and the whole must lead to the saved filter.
+TEST_F(RobotStateCorrupt, ABadHistoryIsRefused) {
+  ASSERT_TRUE(doc_["state"]["robot"].contains("history"));
+  const json& ops = doc_["state"]["robot"]["history"]["ops"];
+  ASSERT_GT(ops.size(), 10u);
+  std::size_t update = 0;  // the first update
+  while (update < ops.size() && ops[update][0] != "update") ++update;
+  ASSERT_LT(update, ops.size());
+  const std::string at = "robot.history.ops[" + std::to_string(update) + "]";
+  expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update][0] = "teleport"; }), at + "[0] (kind)");
+  expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update][1] = 1000000; }), at + "[1] (frame)");
+  expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update][2] = 100000; }), at + "[2] (id)");
+  expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update][3][0] = -1.0; }), at + "[3][0] (range)");
+  expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update].push_back(1.0); }), at);
+  // Well-formed, but not what happened: the replay misses the saved filter.
+  expect_refused(edited([&](json& s) {
+    s["robot"]["history"]["ops"][update][3][0] = s["robot"]["history"]["ops"][update][3][0].get<double>() + 0.5;
+  }), "robot.history: its lagged filter and operations do not give the saved filter");
+  expect_refused(edited([](json& s) { s["robot"]["history"]["ops"].erase(0); }), "do not give the saved filter");
+  expect_refused(edited([](json& s) { s["robot"]["history"]["lagged"]["mean"][0] = "x"; }), "robot.history.lagged.mean[0]");
 }
 
 // A robot whose filter evicts (config/large.yaml, its filter cut to 24 slots):

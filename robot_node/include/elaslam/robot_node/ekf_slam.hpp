@@ -160,6 +160,11 @@ class EkfSlam {
   /// The chi-square threshold used by the gate (2 dof, options.gate_probability).
   double gate_threshold() const { return gate_threshold_; }
 
+  /// Become a copy of `other` (same capacity and id range; kBadInput otherwise,
+  /// filter unchanged): its mean, covariance and landmarks. O(n^2) in the active
+  /// state of both, never the capacity's; allocates nothing (FilterHistory).
+  EkfStatus assign(const EkfSlam& other);
+
   // ---- state file (robot_state.cpp) -------------------------------------------
   /// Replace the whole state by a saved one: mean x (dim(n)), covariance P (dim(n)
   /// square, symmetric; the caller has checked it), slot_ids[slot] = landmark id in

@@ -17,6 +17,7 @@
 #include "elaslam/robot_node/consistency.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
 #include "elaslam/robot_node/ela_gate.hpp"
+#include "elaslam/robot_node/filter_history.hpp"
 #include "elaslam/robot_node/lmap.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/team_aid.hpp"
@@ -141,6 +142,8 @@ class Robot {
   const TeamCounters& team_counters() const { return team_counters_; }
   const TeamChannel& team_channel() const { return team_; }
   const LMap& lmap() const { return lmap_; }
+  /// The own filter's history (options.candidate_history_frames).
+  const FilterHistory& history() const { return history_; }
   const RobotOptions& options() const { return options_; }
   int robot_id() const { return robot_id_; }
   bool initialised() const { return initialised_; }
@@ -196,6 +199,13 @@ class Robot {
   // With team_map_fuse: the aided filter, the same operations on the same landmarks
   // as ekf_ plus the team's increments (the mirror_* helpers keep them together).
   std::optional<EkfSlam> aided_;
+  // Their histories (candidate_history_frames), fed by the mirror_* helpers and
+  // fuse_team_estimate; history_frame_: the frame their operations belong to.
+  FilterHistory history_;
+  FilterHistory aided_history_;
+  int history_frame_ = 0;
+  /// Both filters' histories start over from the filters as they are now.
+  void restart_history();
   TeamChannel team_;
   TeamCounters team_counters_;
   double team_gate_threshold_ = 0.0;  // chi2 quantile, 2 dof, of team_map_gate_probability

@@ -40,6 +40,11 @@ struct RobotOptions {
   /// Also test the running sum of a candidate's whitened innovations (a slow mover
   /// drifts consistently; a static landmark's innovations average out).
   bool candidate_drift_test = false;
+  /// Frames of filter history kept (FilterHistory, modes ela and consensus; 0: off):
+  /// when a candidate is confirmed, its sightings of the last N frames correct the
+  /// robot and the map as they would have had it been trusted from the start
+  /// (docs/decisions.md, "Confirmation without loss").
+  int candidate_history_frames = 0;
   /// Drift test of STATIC landmarks: their whitened innovations summed with this
   /// forgetting factor (0: off); the sum's chi-square test failing counts as an
   /// out-of-ELA verdict.

@@ -1,0 +1,131 @@
+// FilterHistory: a lagged copy of the filter and the operations since (filter_history.hpp).
+#include "elaslam/robot_node/filter_history.hpp"
+
+#include <algorithm>
+
+namespace elaslam {
+
+FilterHistory::FilterHistory(const EkfOptions& options, int window_frames, int max_ops)
+    : window_(std::max(0, window_frames)) {
+  if (window_ == 0) return;
+  lagged_.emplace(options);
+  ops_.resize(static_cast<std::size_t>(std::max(1, max_ops)));
+}
+
+FilterHistory::Op& FilterHistory::push(Kind kind, int frame, int id) {
+  if (count_ == static_cast<int>(ops_.size())) commit_oldest();
+  Op& op = at(count_++);
+  op.kind = kind;
+  op.frame = frame;
+  op.id = id;
+  return op;
+}
+
+void FilterHistory::predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U) {
+  if (!enabled()) return;
+  Op& op = push(Kind::kPredict, frame, -1);
+  op.increment = increment;
+  op.U = U;
+}
+
+void FilterHistory::update(int frame, int id, const RangeBearing& z) {
+  if (enabled()) push(Kind::kUpdate, frame, id).z = z;
+}
+
+void FilterHistory::update_landmark_only(int frame, int id, const RangeBearing& z) {
+  if (enabled()) push(Kind::kLandmarkOnly, frame, id).z = z;
+}
+
+void FilterHistory::update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) {
+  if (!enabled()) return;
+  Op& op = push(Kind::kPosition, frame, id);
+  op.p = z;
+  op.R = R;
+}
+
+void FilterHistory::add(int frame, int id, const RangeBearing& z) {
+  if (enabled()) push(Kind::kAdd, frame, id).z = z;
+}
+
+void FilterHistory::remove(int frame, int id) {
+  if (enabled()) push(Kind::kRemove, frame, id);
+}
+
+void FilterHistory::restart(const EkfSlam& current) {
+  if (!enabled()) return;
+  lagged_->assign(current);
+  head_ = 0;
+  count_ = 0;
+  dirty_ = false;
+}
+
+int FilterHistory::upgrade(int id) {
+  int n = 0;
+  for (int k = 0; k < count_; ++k) {
+    Op& op = at(k);
+    if (op.kind == Kind::kLandmarkOnly && op.id == id) {
+      op.kind = Kind::kUpdate;
+      ++n;
+    }
+  }
+  if (n > 0) dirty_ = true;
+  upgraded_ += n;
+  return n;
+}
+
+const char* FilterHistory::to_string(Kind k) {
+  switch (k) {
+    case Kind::kPredict: return "predict";
+    case Kind::kUpdate: return "update";
+    case Kind::kLandmarkOnly: return "landmark_only";
+    case Kind::kPosition: return "position";
+    case Kind::kAdd: return "add";
+    case Kind::kRemove: return "remove";
+  }
+  return "?";
+}
+
+EkfStatus FilterHistory::restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids,
+                                 const std::vector<Op>& ops) {
+  if (!enabled() || ops.size() > ops_.size()) return EkfStatus::kBadInput;
+  const EkfStatus st = lagged_->restore(x, P, slot_ids);
+  if (st != EkfStatus::kOk) return st;
+  head_ = 0;
+  count_ = static_cast<int>(ops.size());
+  std::copy(ops.begin(), ops.end(), ops_.begin());
+  dirty_ = false;
+  return EkfStatus::kOk;
+}
+
+bool FilterHistory::apply(const Op& op, EkfSlam* f) {
+  switch (op.kind) {
+    case Kind::kPredict: return f->predict(op.increment, op.U) == EkfStatus::kOk;
+    case Kind::kUpdate: return f->update(op.id, op.z, false).status == EkfStatus::kOk;
+    case Kind::kLandmarkOnly: return f->update_landmark_only(op.id, op.z).status == EkfStatus::kOk;
+    case Kind::kPosition: return f->update_position(op.id, op.p, op.R).status == EkfStatus::kOk;
+    case Kind::kAdd: return f->add_landmark(op.id, op.z) == EkfStatus::kOk;
+    case Kind::kRemove: return f->remove_landmark(op.id) == EkfStatus::kOk;
+  }
+  return false;
+}
+
+void FilterHistory::commit_oldest() {
+  apply(at(0), &*lagged_);  // a refusal leaves the lagged filter as it was, as it left the current one
+  head_ = (head_ + 1) % static_cast<int>(ops_.size());
+  --count_;
+}
+
+int FilterHistory::end_frame(int frame, EkfSlam* current) {
+  if (!enabled()) return 0;
+  while (count_ > 0 && at(0).frame <= frame - window_) commit_oldest();
+  if (!dirty_) return 0;
+  dirty_ = false;
+  ++rebuilds_;
+  current->assign(*lagged_);
+  int refused = 0;
+  for (int k = 0; k < count_; ++k)
+    if (!apply(at(k), current)) ++refused;
+  return refused;
+}
+
+}  // namespace elaslam
