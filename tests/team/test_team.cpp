@@ -259,6 +259,27 @@ TEST(TeamRun, OverridesAreCheckedAgainstTheWholeScenario) {
   EXPECT_THROW(apply_overrides(paper(), o), std::invalid_argument);
 }
 
+// robot.ela.candidate_history_frames is checked like every key: a window beyond 100
+// frames (or negative) stops the start with the key's name.
+TEST(TeamRun, AFilterHistoryOutOfRangeIsRefusedNamingTheKey) {
+  std::ifstream in(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string key = "    candidate_history_frames: 2\n";
+  ASSERT_NE(text.find(key), std::string::npos);
+  for (const char* bad : {"101", "-1", "two"}) {
+    std::string edited = text;
+    edited.replace(edited.find(key), key.size(), std::string("    candidate_history_frames: ") + bad + "\n");
+    const std::string path = ::testing::TempDir() + "history_range.yaml";
+    std::ofstream(path) << edited;
+    try {
+      load_team_config(path);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("candidate_history_frames"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // nan fails every comparison: an override range check written as "refuse when below
 // or above" would let it through into the world (landmarks at nan).
 TEST(TeamRun, NonFiniteOverridesAreRefusedNamingTheValue) {
