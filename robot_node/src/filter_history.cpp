@@ -87,12 +87,16 @@ const char* FilterHistory::to_string(Kind k) {
 
 EkfStatus FilterHistory::restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids,
                                  const std::vector<Op>& ops) {
-  if (!enabled() || ops.size() > ops_.size()) return EkfStatus::kBadInput;
+  if (!enabled()) return EkfStatus::kBadInput;
   const EkfStatus st = lagged_->restore(x, P, slot_ids);
   if (st != EkfStatus::kOk) return st;
+  // More than the ring holds (saved with a longer window): the oldest go into the
+  // lagged filter now, as they would have had the ring been this size.
+  const std::size_t excess = ops.size() > ops_.size() ? ops.size() - ops_.size() : 0;
+  for (std::size_t k = 0; k < excess; ++k) apply(ops[k], &*lagged_);
   head_ = 0;
-  count_ = static_cast<int>(ops.size());
-  std::copy(ops.begin(), ops.end(), ops_.begin());
+  count_ = static_cast<int>(ops.size() - excess);
+  std::copy(ops.begin() + static_cast<std::ptrdiff_t>(excess), ops.end(), ops_.begin());
   dirty_ = false;
   return EkfStatus::kOk;
 }

@@ -30,6 +30,7 @@ constexpr double kMaxIncarnation = 1e18;  // [us] wall clock at a fresh start
 constexpr double kPsdTolerance = 1e-9;    // LDLT pivots >= -tol * max(1, max diag(P))
 constexpr int kMaxFrame = std::numeric_limits<int>::max();
 constexpr int kMinReportedFrame = -1000000;  // LMapEntry::reported_frame's "never"
+constexpr std::size_t kMaxHistoryOps = 1000000;  // robot.history.ops (a ring holds far fewer)
 
 struct StateError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -540,11 +541,13 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
   Eigen::MatrixXd P;
   std::vector<int> slot_ids;
   parse_filter(need(h, key, "lagged"), key + ".lagged", r, &x, &P, &slot_ids);
-  const json& ops = array(need(h, key, "ops"), key + ".ops", 0, static_cast<std::size_t>(out->capacity()));
+  // Any number (a file saved with a longer window than this node's: the excess goes
+  // into the lagged filter), within a structural bound.
+  const json& ops = array(need(h, key, "ops"), key + ".ops", 0, kMaxHistoryOps);
   const double bound = r.options_.limits.world_bound;
   const int max_id = r.options_.ekf.max_landmark_id - 1;
   std::vector<FilterHistory::Op> parsed;
-  int previous = r.last_frame_ - out->window() - 1;
+  int previous = 0;  // frames in order, none after the robot's last
   for (std::size_t k = 0; k < ops.size(); ++k) {
     const std::string w = key + ".ops[" + std::to_string(k) + "]";
     const json& j = array(ops[k], w, 3, 5);

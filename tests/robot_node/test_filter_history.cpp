@@ -3,6 +3,8 @@
 // upgrade the filter is left alone; a full ring commits early and stays exact.
 #include "elaslam/robot_node/filter_history.hpp"
 
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "ekf_test_world.hpp"
@@ -130,6 +132,30 @@ TEST_P(FilterHistoryForms, AFullRingCommitsTheOldestEarlyAndStaysExact) {
   EXPECT_EQ(r.history.upgrade(5), 1);
   EXPECT_EQ(r.history.end_frame(3, &r.current), 0);
   EXPECT_LT(difference(r.current, r.trusted), 1e-9);
+}
+
+// A saved history restored into a smaller ring (a node with a shorter window): the
+// oldest operations go into the lagged filter, and lagged + held still give the
+// filter the history was saved from.
+TEST_P(FilterHistoryForms, RestoredIntoASmallerRingTheOldestGoIntoTheLaggedFilter) {
+  Frames r(GetParam(), 3, 200);
+  for (int k = 1; k < 8; ++k) {
+    r.frame(k, 5, false);
+    r.history.end_frame(k, &r.current);
+  }
+  std::vector<FilterHistory::Op> ops;
+  for (int k = 0; k < r.history.held(); ++k) ops.push_back(r.history.op(k));
+  ASSERT_EQ(ops.size(), 18u);
+  const EkfSlam& lagged = *r.history.lagged();
+  std::vector<int> ids;
+  for (int slot = 0; slot < lagged.num_landmarks(); ++slot) ids.push_back(lagged.id_at(slot));
+  FilterHistory small(r.o, 1, 6);
+  ASSERT_EQ(small.restore(lagged.mean(), lagged.covariance(), ids, ops), EkfStatus::kOk);
+  EXPECT_EQ(small.held(), 6);
+  EkfSlam replay(r.o);
+  replay.assign(*small.lagged());
+  for (int k = 0; k < small.held(); ++k) ASSERT_TRUE(FilterHistory::apply(small.op(k), &replay));
+  EXPECT_LT(difference(replay, r.current), 1e-12);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, FilterHistoryForms, ::testing::Bool(),

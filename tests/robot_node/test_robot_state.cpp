@@ -234,6 +234,39 @@ TEST(RobotState, ARestartedRobotKeepsWhichLandmarksHaveAgreedWithAnother) {
   EXPECT_GT(checked, 3);
 }
 
+// The filter history (robot.ela.candidate_history_frames, 2 in config/paper.yaml) is
+// in the file (RestoredNodeContinuesBitIdentically restarts with it), and a file
+// saved with one window loads into a node configured with another: a shorter
+// window puts the older operations into its lagged filter, none ignores them. The
+// loaded node goes on: the same pose as the saved one at the next frame when the
+// window is the same.
+TEST(RobotState, AFilterHistoryLoadsIntoAnyWindow) {
+  const TeamConfig c = paper(Mode::kEla, 4);
+  ASSERT_EQ(c.robot.candidate_history_frames, 2);
+  const auto frames = sensor_frames(c);
+  const std::size_t R = c.scenario.robots.size();
+  RobotNode node(c.robot, kRobot);
+  for (std::size_t f = kRobot - 1; f < 40 * R; f += R) node.on_sensor(frames[f], 0);
+  const std::string state = save_robot_state(node);
+  const json st = json::parse(state)["state"];
+  ASSERT_TRUE(st["robot"].contains("history"));
+  EXPECT_GT(st["robot"]["history"]["ops"].size(), 10u);
+  const std::size_t next = 40 * R + kRobot - 1;
+  node.on_sensor(frames[next], 0);
+  for (const int window : {2, 1, 0, 5}) {
+    SCOPED_TRACE("window " + std::to_string(window));
+    RobotOptions o = c.robot;
+    o.candidate_history_frames = window;
+    RobotNode other(o, kRobot);
+    std::string why;
+    ASSERT_TRUE(load_robot_state(state, &other, &why)) << why;
+    EXPECT_EQ(other.robot().history().held() > 0, window > 0);
+    EXPECT_LE(other.robot().history().held(), other.robot().history().capacity());
+    EXPECT_EQ(other.on_sensor(frames[next], 0), RobotNode::Verdict::kProcessed);
+    if (window == 2) EXPECT_EQ(published(other), published(node));
+  }
+}
+
 // With the team's map (robot.team_map.fuse, config/mrclam.yaml) the robot's POSE is
 // the aided filter's: the state file keeps that filter, what the team channel has
 // fused into it and the team estimates held for the next frame. Before 2026-12-04

@@ -76,9 +76,9 @@ class FilterHistory {
   const Op& op(int k) const { return ops_[static_cast<std::size_t>((head_ + k) % static_cast<int>(ops_.size()))]; }
   int capacity() const { return static_cast<int>(ops_.size()); }
   /// Replace the history by a saved one: the lagged filter's state (EkfSlam::restore)
-  /// and the operations. kBadInput, history unchanged, when off, when there are more
-  /// operations than the ring holds, or when the lagged filter refuses the state.
-  /// Start-up only (allocates).
+  /// and the operations; when there are more than the ring holds, the oldest are
+  /// applied to the lagged filter. kBadInput when off or when the lagged filter
+  /// refuses the state. Start-up only (allocates).
   EkfStatus restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids,
                     const std::vector<Op>& ops);
   /// Apply one operation to a filter; false when the filter refuses it.
