@@ -73,7 +73,7 @@ class FilterHistory {
   // ---- state file (robot_state.cpp) ----------------------------------------------
   /// The lagged filter (nullptr when off) and the operations held, oldest first.
   const EkfSlam* lagged() const { return lagged_ ? &*lagged_ : nullptr; }
-  const Op& op(int k) const { return ops_[static_cast<std::size_t>((head_ + k) % static_cast<int>(ops_.size()))]; }
+  const Op& op(int k) const { return ops_[index(k)]; }
   int capacity() const { return static_cast<int>(ops_.size()); }
   /// Replace the history by a saved one: the lagged filter's state (EkfSlam::restore)
   /// and the operations; when there are more than the ring holds, the oldest are
@@ -90,7 +90,9 @@ class FilterHistory {
 
  private:
   Op& push(Kind kind, int frame, int id);
-  Op& at(int k) { return ops_[static_cast<std::size_t>((head_ + k) % static_cast<int>(ops_.size()))]; }
+  /// The ring position of the k-th oldest operation held.
+  std::size_t index(int k) const { return static_cast<std::size_t>((head_ + k) % static_cast<int>(ops_.size())); }
+  Op& at(int k) { return ops_[index(k)]; }
   void commit_oldest();
 
   int window_;
