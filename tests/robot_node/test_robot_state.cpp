@@ -263,7 +263,9 @@ TEST(RobotState, AFilterHistoryLoadsIntoAnyWindow) {
     EXPECT_EQ(other.robot().history().held() > 0, window > 0);
     EXPECT_LE(other.robot().history().held(), other.robot().history().capacity());
     EXPECT_EQ(other.on_sensor(frames[next], 0), RobotNode::Verdict::kProcessed);
-    if (window == 2) EXPECT_EQ(published(other), published(node));
+    if (window == 2) {
+      EXPECT_EQ(published(other), published(node));
+    }
   }
 }
 
