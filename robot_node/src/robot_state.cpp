@@ -600,12 +600,14 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
     parsed.push_back(op);
   }
   if (out->restore(x, P, slot_ids, parsed) != EkfStatus::kOk) fail(key + ".lagged.slot_ids", "a landmark id appears twice");
-  // The lagged filter and the operations must give the saved filter.
+  // The lagged filter and the operations held must give the saved filter (restore
+  // has put those beyond the ring into the lagged filter already).
   EkfSlam replay(r.options_.ekf);
   replay.assign(*out->lagged());
-  for (std::size_t k = 0; k < parsed.size(); ++k)
-    if (!FilterHistory::apply(parsed[k], &replay))
-      fail(key + ".ops[" + std::to_string(k) + "]", "the lagged filter refuses it");
+  const std::size_t first_held = parsed.size() - static_cast<std::size_t>(out->held());
+  for (int k = 0; k < out->held(); ++k)
+    if (!FilterHistory::apply(out->op(k), &replay))
+      fail(key + ".ops[" + std::to_string(first_held + static_cast<std::size_t>(k)) + "]", "the lagged filter refuses it");
   bool same = replay.num_landmarks() == current.num_landmarks();
   for (int slot = 0; same && slot < current.num_landmarks(); ++slot) same = replay.id_at(slot) == current.id_at(slot);
   if (same) {

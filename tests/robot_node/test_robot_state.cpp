@@ -267,6 +267,21 @@ TEST(RobotState, AFilterHistoryLoadsIntoAnyWindow) {
       EXPECT_EQ(published(other), published(node));
     }
   }
+  // More operations than the loading node's ring holds (saved with a 100-frame
+  // window, loaded with 1): the oldest go into its lagged filter, and the file still
+  // checks out against the saved filter.
+  TeamConfig wide = c;
+  wide.robot.candidate_history_frames = 100;
+  RobotNode long_history(wide.robot, kRobot);
+  for (std::size_t f = kRobot - 1; f < 120 * R; f += R) long_history.on_sensor(frames[f], 0);
+  RobotOptions narrow = c.robot;
+  narrow.candidate_history_frames = 1;
+  RobotNode loaded(narrow, kRobot);
+  ASSERT_GT(long_history.robot().history().held(), loaded.robot().history().capacity());
+  std::string why;
+  ASSERT_TRUE(load_robot_state(save_robot_state(long_history), &loaded, &why)) << why;
+  EXPECT_EQ(loaded.robot().history().held(), loaded.robot().history().capacity());
+  EXPECT_EQ(loaded.on_sensor(frames[120 * R + kRobot - 1], 0), RobotNode::Verdict::kProcessed);
 }
 
 // With the team's map (robot.team_map.fuse, config/mrclam.yaml) the robot's POSE is
