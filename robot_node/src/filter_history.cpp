@@ -12,43 +12,55 @@ FilterHistory::FilterHistory(const EkfOptions& options, int window_frames, int m
   ops_.resize(static_cast<std::size_t>(std::max(1, max_ops)));
 }
 
-FilterHistory::Op& FilterHistory::push(Kind kind, int frame, int id) {
-  if (count_ == static_cast<int>(ops_.size())) commit_oldest();
-  Op& op = at(count_++);
+namespace {
+
+FilterHistory::Op op_of(FilterHistory::Kind kind, int frame, int id) {
+  FilterHistory::Op op;
   op.kind = kind;
   op.frame = frame;
   op.id = id;
   return op;
 }
 
-void FilterHistory::predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U) {
-  if (!enabled()) return;
-  Op& op = push(Kind::kPredict, frame, -1);
+FilterHistory::Op sighting(FilterHistory::Kind kind, int frame, int id, const RangeBearing& z) {
+  FilterHistory::Op op = op_of(kind, frame, id);
+  op.z = z;
+  return op;
+}
+
+}  // namespace
+
+FilterHistory::Op FilterHistory::predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U) {
+  Op op = op_of(Kind::kPredict, frame, -1);
   op.increment = increment;
   op.U = U;
+  return op;
 }
-
-void FilterHistory::update(int frame, int id, const RangeBearing& z) {
-  if (enabled()) push(Kind::kUpdate, frame, id).z = z;
+FilterHistory::Op FilterHistory::update(int frame, int id, const RangeBearing& z) {
+  return sighting(Kind::kUpdate, frame, id, z);
 }
-
-void FilterHistory::update_landmark_only(int frame, int id, const RangeBearing& z) {
-  if (enabled()) push(Kind::kLandmarkOnly, frame, id).z = z;
+FilterHistory::Op FilterHistory::update_landmark_only(int frame, int id, const RangeBearing& z) {
+  return sighting(Kind::kLandmarkOnly, frame, id, z);
 }
-
-void FilterHistory::update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) {
-  if (!enabled()) return;
-  Op& op = push(Kind::kPosition, frame, id);
+FilterHistory::Op FilterHistory::update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) {
+  Op op = op_of(Kind::kPosition, frame, id);
   op.p = z;
   op.R = R;
+  return op;
+}
+FilterHistory::Op FilterHistory::add(int frame, int id, const RangeBearing& z) { return sighting(Kind::kAdd, frame, id, z); }
+FilterHistory::Op FilterHistory::remove(int frame, int id) { return op_of(Kind::kRemove, frame, id); }
+
+void FilterHistory::record(const Op& op) {
+  if (!enabled()) return;
+  if (count_ == static_cast<int>(ops_.size())) commit_oldest();
+  at(count_++) = op;
 }
 
-void FilterHistory::add(int frame, int id, const RangeBearing& z) {
-  if (enabled()) push(Kind::kAdd, frame, id).z = z;
-}
-
-void FilterHistory::remove(int frame, int id) {
-  if (enabled()) push(Kind::kRemove, frame, id);
+bool FilterHistory::apply_and_record(const Op& op, EkfSlam* f) {
+  if (!apply(op, f)) return false;
+  record(op);
+  return true;
 }
 
 void FilterHistory::restart(const EkfSlam& current) {

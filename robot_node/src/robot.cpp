@@ -76,7 +76,6 @@ FrameSummary Robot::process(const FrameInput& in) {
   gate_.clear();
   updated_.clear();
   s.num_obs = in.num_obs;
-  history_frame_ = in.frame;
   predict(in, &s);
   last_frame_ = in.frame;
   for (int k = 0; k < in.num_obs; ++k) lmap_.seen(in.obs[static_cast<std::size_t>(k)].landmark_id, in.frame);
@@ -116,7 +115,7 @@ void Robot::check_consistency(FrameSummary* s) {
   if (!s->inconsistent || !options_.consistency_recover) return;
   const double xy = options_.recovery_sigma_xy * options_.recovery_sigma_xy;
   const double th = options_.recovery_sigma_theta * options_.recovery_sigma_theta;
-  mirror_predict(Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), s);
+  mirror_predict(last_frame_, Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), s);
   monitor_.restart();
   s->recovered = true;
 }
@@ -145,12 +144,12 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     const double k = std::max(1, in.frame - last_frame_);
     const double step = options_.max_step_m * k, turn = std::min(kPi, options_.max_turn * k);
     const Eigen::Matrix3d U = Eigen::Vector3d(step * step, step * step, turn * turn).asDiagonal();
-    mirror_predict(Pose2{}, U, s);
+    mirror_predict(in.frame, Pose2{}, U, s);
   } else {
     // Frames missed since the last one (in.frame - last_frame_ > 1): the increment
     // spans them all, and its noise is theirs compounded.
     const Pose2 increment = between(last_odometer_, in.odometer);
-    mirror_predict(increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise), s);
+    mirror_predict(in.frame, increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise), s);
   }
   last_odometer_ = in.odometer;
 }
@@ -455,20 +454,15 @@ bool Robot::apply_notice(int landmark_id, int frame) {
 
 // ---- the own and the aided filter (team_aid.hpp) ------------------------------------
 
-EkfStatus Robot::mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s) {
+EkfStatus Robot::mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s) {
+  const FilterHistory::Op op = FilterHistory::predict(frame, increment, U);
   const EkfStatus st = ekf_.predict(increment, U);
-  if (st != EkfStatus::kOk) {
-    ++s->filter_faults;
+  if (st == EkfStatus::kOk) {
+    history_.record(op);
   } else {
-    history_.predict(history_frame_, increment, U);
+    ++s->filter_faults;
   }
-  if (aided_) {
-    if (aided_->predict(increment, U) != EkfStatus::kOk) {
-      ++s->filter_faults;
-    } else {
-      aided_history_.predict(history_frame_, increment, U);
-    }
-  }
+  mirror_to_aided(op, s);
   return st;
 }
 
@@ -477,53 +471,39 @@ EkfStatus Robot::mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U
 UpdateReport Robot::mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s) {
   const UpdateReport r = ekf_.update(id, z, gate);
   if (r.status != EkfStatus::kOk) return r;
-  history_.update(history_frame_, id, z);
-  if (aided_) {
-    if (aided_->update(id, z, false).status != EkfStatus::kOk) {
-      ++s->filter_faults;
-    } else {
-      aided_history_.update(history_frame_, id, z);
-    }
-  }
+  const FilterHistory::Op op = FilterHistory::update(last_frame_, id, z);
+  history_.record(op);
+  mirror_to_aided(op, s);
   return r;
 }
 
 void Robot::mirror_update_landmark_only(int id, const RangeBearing& z, FrameSummary* s) {
-  if (ekf_.update_landmark_only(id, z).status != EkfStatus::kOk) {
-    ++s->filter_faults;
-  } else {
-    history_.update_landmark_only(history_frame_, id, z);
-  }
-  if (!aided_) return;
-  if (aided_->update_landmark_only(id, z).status != EkfStatus::kOk) {
-    ++s->filter_faults;
-  } else {
-    aided_history_.update_landmark_only(history_frame_, id, z);
-  }
+  const FilterHistory::Op op = FilterHistory::update_landmark_only(last_frame_, id, z);
+  if (!history_.apply_and_record(op, &ekf_)) ++s->filter_faults;
+  mirror_to_aided(op, s);
 }
 
 EkfStatus Robot::mirror_add(int id, const RangeBearing& z, FrameSummary* s) {
   const EkfStatus st = ekf_.add_landmark(id, z);
   if (st != EkfStatus::kOk) return st;
-  history_.add(history_frame_, id, z);
+  const FilterHistory::Op op = FilterHistory::add(last_frame_, id, z);
+  history_.record(op);
   // The team channel is kept (team_aid.hpp): what the team's estimate taught the
   // pose and map before the landmark left stays in the aided filter.
-  if (aided_) {
-    if (aided_->add_landmark(id, z) != EkfStatus::kOk) {
-      ++s->filter_faults;
-    } else {
-      aided_history_.add(history_frame_, id, z);
-    }
-  }
+  mirror_to_aided(op, s);
   return st;
 }
 
 EkfStatus Robot::mirror_remove(int id) {
+  const FilterHistory::Op op = FilterHistory::remove(last_frame_, id);
   const EkfStatus st = ekf_.remove_landmark(id);
-  if (st == EkfStatus::kOk) history_.remove(history_frame_, id);
-  // kUnknownLandmark when its add had failed: nothing to remove.
-  if (aided_ && aided_->remove_landmark(id) == EkfStatus::kOk) aided_history_.remove(history_frame_, id);
+  if (st == EkfStatus::kOk) history_.record(op);
+  mirror_to_aided(op, nullptr);  // refused when its add had failed: nothing to remove
   return st;
+}
+
+void Robot::mirror_to_aided(const FilterHistory::Op& op, FrameSummary* s) {
+  if (aided_ && !aided_history_.apply_and_record(op, &*aided_) && s != nullptr) ++s->filter_faults;
 }
 
 bool Robot::team_eligible(int id) const {
@@ -568,7 +548,7 @@ bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
     ++team_counters_.refused;
     return false;
   }
-  aided_history_.update_position(history_frame_, e.landmark_id, inc.z, inc.R);
+  aided_history_.record(FilterHistory::update_position(last_frame_, e.landmark_id, inc.z, inc.R));
   team_.commit(e.landmark_id, inc);
   ++team_counters_.fused;
   team_counters_.nis_sum += r.d2;

@@ -48,21 +48,21 @@ struct Frames {
     const Eigen::Matrix3d U = odometry_covariance(u, kOdoNoise);
     ASSERT_EQ(current.predict(u, U), EkfStatus::kOk);
     trusted.predict(u, U);
-    history.predict(k, u, U);
+    history.record(FilterHistory::predict(k, u, U));
     for (int id = 0; id < 4; ++id) {
       const RangeBearing z = w.sense(id, o);
       ASSERT_EQ(current.update(id, z).status, EkfStatus::kOk);
       trusted.update(id, z);
-      history.update(k, id, z);
+      history.record(FilterHistory::update(k, id, z));
     }
     const RangeBearing z = w.sense(candidate, o);
     if (!current.has_landmark(candidate)) {
       current.add_landmark(candidate, z);
       trusted.add_landmark(candidate, z);
-      history.add(k, candidate, z);
+      history.record(FilterHistory::add(k, candidate, z));
     } else {
       ASSERT_EQ(current.update_landmark_only(candidate, z).status, EkfStatus::kOk);
-      history.update_landmark_only(k, candidate, z);
+      history.record(FilterHistory::update_landmark_only(k, candidate, z));
       if (trust) {
         trusted.update(candidate, z);
       } else {
@@ -170,7 +170,7 @@ TEST(FilterHistory, OffRecordsNothingAndChangesNothing) {
   EkfSlam f(o);
   f.reset({0.0, 0.0, 0.0}, 1e-4 * Eigen::Matrix3d::Identity());
   h.restart(f);
-  h.add(0, 3, {2.0, 0.1});
+  h.record(FilterHistory::add(0, 3, {2.0, 0.1}));
   EXPECT_EQ(h.held(), 0);
   EXPECT_EQ(h.upgrade(3), 0);
   EXPECT_EQ(h.end_frame(5, &f), 0);

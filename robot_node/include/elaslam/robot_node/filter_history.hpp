@@ -34,13 +34,32 @@ class FilterHistory {
   bool enabled() const { return window_ > 0; }
   int window() const { return window_; }
 
-  // ---- operations applied to the current filter (successful ones only) -------------
-  void predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U);
-  void update(int frame, int id, const RangeBearing& z);
-  void update_landmark_only(int frame, int id, const RangeBearing& z);
-  void update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
-  void add(int frame, int id, const RangeBearing& z);
-  void remove(int frame, int id);
+  enum class Kind : std::uint8_t { kPredict, kUpdate, kLandmarkOnly, kPosition, kAdd, kRemove };
+  static const char* to_string(Kind k);
+  /// One operation on a filter: the fields its kind uses.
+  struct Op {
+    Kind kind = Kind::kPredict;
+    int frame = 0;
+    int id = -1;
+    RangeBearing z;                                   // update, landmark-only, add
+    Pose2 increment;                                  // predict
+    Eigen::Matrix3d U = Eigen::Matrix3d::Zero();      // predict
+    Eigen::Vector2d p = Eigen::Vector2d::Zero();      // position
+    Eigen::Matrix2d R = Eigen::Matrix2d::Zero();      // position
+  };
+  static Op predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U);
+  static Op update(int frame, int id, const RangeBearing& z);
+  static Op update_landmark_only(int frame, int id, const RangeBearing& z);
+  static Op update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
+  static Op add(int frame, int id, const RangeBearing& z);
+  static Op remove(int frame, int id);
+
+  /// Apply one operation to a filter; false when the filter refuses it.
+  static bool apply(const Op& op, EkfSlam* f);
+  /// An operation the current filter has applied (successful ones only).
+  void record(const Op& op);
+  /// apply, then record when it succeeded.
+  bool apply_and_record(const Op& op, EkfSlam* f);
 
   /// The current filter was reset or replaced (its first frame, a state file): the
   /// history starts over from it.
@@ -56,20 +75,6 @@ class FilterHistory {
   /// rebuilt filter refused (its health checks; 0 normally).
   int end_frame(int frame, EkfSlam* current);
 
-  enum class Kind : std::uint8_t { kPredict, kUpdate, kLandmarkOnly, kPosition, kAdd, kRemove };
-  static const char* to_string(Kind k);
-  /// One recorded operation: the fields its kind uses.
-  struct Op {
-    Kind kind = Kind::kPredict;
-    int frame = 0;
-    int id = -1;
-    RangeBearing z;                                   // update, landmark-only, add
-    Pose2 increment;                                  // predict
-    Eigen::Matrix3d U = Eigen::Matrix3d::Zero();      // predict
-    Eigen::Vector2d p = Eigen::Vector2d::Zero();      // position
-    Eigen::Matrix2d R = Eigen::Matrix2d::Zero();      // position
-  };
-
   // ---- state file (robot_state.cpp) ----------------------------------------------
   /// The lagged filter (nullptr when off) and the operations held, oldest first.
   const EkfSlam* lagged() const { return lagged_ ? &*lagged_ : nullptr; }
@@ -81,15 +86,11 @@ class FilterHistory {
   /// refuses the state. Start-up only (allocates).
   EkfStatus restore(const Eigen::VectorXd& x, const Eigen::MatrixXd& P, const std::vector<int>& slot_ids,
                     const std::vector<Op>& ops);
-  /// Apply one operation to a filter; false when the filter refuses it.
-  static bool apply(const Op& op, EkfSlam* f);
-
   int held() const { return count_; }
   std::int64_t rebuilds() const { return rebuilds_; }
   std::int64_t upgraded() const { return upgraded_; }
 
  private:
-  Op& push(Kind kind, int frame, int id);
   /// The ring position of the k-th oldest operation held.
   std::size_t index(int k) const { return static_cast<std::size_t>((head_ + k) % static_cast<int>(ops_.size())); }
   Op& at(int k) { return ops_[index(k)]; }

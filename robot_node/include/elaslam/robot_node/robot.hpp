@@ -188,7 +188,10 @@ class Robot {
   bool team_eligible(int id) const;
   /// Fuse what the team estimate adds (TeamChannel); `test`: only when it agrees.
   bool fuse_team_estimate(const TeamEstimate& e, bool test);
-  EkfStatus mirror_predict(const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s);
+  EkfStatus mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s);
+  /// The operation on the aided filter (when there is one), recorded in its history
+  /// when it succeeds, counted in s->filter_faults (when given) when not.
+  void mirror_to_aided(const FilterHistory::Op& op, FrameSummary* s);
   /// An add_landmark's status: false (counted) unless kOk.
   bool added(EkfStatus st, FrameSummary* s);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
@@ -200,10 +203,9 @@ class Robot {
   // as ekf_ plus the team's increments (the mirror_* helpers keep them together).
   std::optional<EkfSlam> aided_;
   // Their histories (candidate_history_frames), fed by the mirror_* helpers and
-  // fuse_team_estimate; history_frame_: the frame their operations belong to.
+  // fuse_team_estimate.
   FilterHistory history_;
   FilterHistory aided_history_;
-  int history_frame_ = 0;
   /// Both filters' histories start over from the filters as they are now.
   void restart_history();
   TeamChannel team_;
