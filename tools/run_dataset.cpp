@@ -236,6 +236,7 @@ std::vector<std::string> write_runs(const Args& a, const DatasetConfig& cfg, con
     j["dataset"] = dataset_json(run.barcodes ? *src.with : *src.without, so, a.dataset_dir, dr);
     j["robot_barcode_corrections"] = run.robot_corrections;
     j["landmarks_where_a_robot_was"] = run.result.occupied;  // main.body_radius_m
+    j["team_map_rounds_left_out"] = run.result.team_map_left_out;  // by robot, main.team_map_check_probability
     const std::string dir = a.report ? a.out_dir + "/" + run.mode + (run.barcodes ? "_barcodes" : "") : a.out_dir;
     write_outputs(dir, j, run.result);
     dirs.push_back(dir);
@@ -246,6 +247,10 @@ std::vector<std::string> write_runs(const Args& a, const DatasetConfig& cfg, con
     for (const auto& d : dr) std::cout << " robot " << d.id << ' ' << f3(d.error_rms);
     std::cout << "\n  robot-barcode observations that corrected a pose: " << run.robot_corrections << "\n";
     std::cout << "  landmarks taken as moving where a robot was (main.body_radius_m): " << run.result.occupied << "\n";
+    std::cout << "  rounds of team maps each robot was left out of (main.team_map_check_probability):";
+    for (std::size_t i = 0; i < run.result.robot_ids.size(); ++i)
+      std::cout << " robot " << run.result.robot_ids[i] << ' ' << run.result.team_map_left_out[i];
+    std::cout << '\n';
   }
   if (a.report) {
     write_report(a.out_dir + "/report.md", src.any(), dr, runs, command);

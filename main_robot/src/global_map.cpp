@@ -1,4 +1,5 @@
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/stats.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 
 #include <algorithm>
@@ -27,6 +28,9 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   r.read_optional("team_map_period_frames", &o->team_map_period_frames, 0, 100000);
   r.read_optional("moving_repeat_s", &o->moving_repeat_s, 0.0, 3600.0);
   r.read_optional("body_radius_m", &o->body_radius_m, 0.0, 10.0);
+  r.read_optional("team_map_check_probability", &o->team_map_check_probability, 0.0, 1.0 - 1e-9);
+  if (o->team_map_check_probability > 0.0 && o->team_map_check_probability < 0.5)
+    r.fail("team_map_check_probability", "must be 0 (off) or at least 0.5 (a gate that refuses most agreeing maps)");
   parse(r, &o->limits);
 }
 
@@ -48,7 +52,10 @@ int GlobalEntry::contributors() const {
 }
 
 GlobalMap::GlobalMap(const GlobalMapOptions& options)
-    : options_(options), entries_(static_cast<std::size_t>(options.max_landmark_id)) {
+    : options_(options),
+      entries_(static_cast<std::size_t>(options.max_landmark_id)),
+      team_check_d2_(options.team_map_check_probability > 0.0 ? chi2_quantile(options.team_map_check_probability, 2)
+                                                              : 0.0) {
   for (auto& s : streams_) s.covered.assign(entries_.size(), 0);
 }
 
@@ -117,18 +124,20 @@ int GlobalMap::count(GlobalStatus s) const {
 // trace-based rule w_r ~ 1/tr(C_r) (Niehsen 2002) rather than an optimisation.
 namespace {
 
-// Information fusion of the valid estimates but robot `skip`'s (0: none), or their
-// covariance intersection with weights by trace. False when none is usable.
-bool fuse_estimates(const std::array<RobotEstimate, kMaxTeamRobots>& by_robot, Fusion fusion, int skip,
+// Information fusion of the valid estimates but those of the robots in `skip` (bit
+// r-1; 0: none), or their covariance intersection with weights by trace. False when
+// none is usable.
+bool fuse_estimates(const std::array<RobotEstimate, kMaxTeamRobots>& by_robot, Fusion fusion, unsigned skip,
                     Eigen::Vector2d* position, Eigen::Matrix2d* cov) {
+  const auto skipped = [skip](std::size_t r) { return ((skip >> r) & 1u) != 0; };
   Eigen::Matrix2d info = Eigen::Matrix2d::Zero();
   Eigen::Vector2d eta = Eigen::Vector2d::Zero();
   double wsum = 0.0;
   for (std::size_t r = 0; r < by_robot.size(); ++r)
-    if (by_robot[r].valid && static_cast<int>(r) + 1 != skip) wsum += 1.0 / std::max(by_robot[r].cov.trace(), 1e-12);
+    if (by_robot[r].valid && !skipped(r)) wsum += 1.0 / std::max(by_robot[r].cov.trace(), 1e-12);
   for (std::size_t r = 0; r < by_robot.size(); ++r) {
     const RobotEstimate& e = by_robot[r];
-    if (!e.valid || static_cast<int>(r) + 1 == skip) continue;
+    if (!e.valid || skipped(r)) continue;
     const Eigen::LLT<Eigen::Matrix2d> llt(e.cov);
     if (llt.info() != Eigen::Success) continue;
     double w = 1.0;
@@ -148,14 +157,50 @@ bool fuse_estimates(const std::array<RobotEstimate, kMaxTeamRobots>& by_robot, F
 
 void GlobalMap::fuse(GlobalEntry& g) const {
   // No usable estimate: keep the last fused one.
-  fuse_estimates(g.by_robot, options_.fusion, 0, &g.fused, &g.fused_cov);
+  fuse_estimates(g.by_robot, options_.fusion, 0u, &g.fused, &g.fused_cov);
+}
+
+unsigned GlobalMap::check_team() {
+  left_out_ = 0;
+  for (auto& t : team_check_) {
+    t.shared = 0;
+    t.disagree = 0;
+    t.left_out = false;
+  }
+  if (!(team_check_d2_ > 0.0)) return 0;
+  for (const GlobalEntry& g : entries_) {
+    if (g.status != GlobalStatus::kStatic) continue;
+    // Each robot's estimate against the fusion of the others' (independent: each
+    // robot's own filter), chi-square with 2 dof.
+    for (std::size_t q = 0; q < g.by_robot.size(); ++q) {
+      const RobotEstimate& e = g.by_robot[q];
+      Eigen::Vector2d p;
+      Eigen::Matrix2d C;
+      if (!e.valid || !fuse_estimates(g.by_robot, options_.fusion, 1u << q, &p, &C)) continue;
+      const Eigen::LLT<Eigen::Matrix2d> llt(C + e.cov);
+      if (llt.info() != Eigen::Success) continue;
+      const Eigen::Vector2d d = e.position - p;
+      ++team_check_[q].shared;
+      if (d.dot(llt.solve(d)) > team_check_d2_) ++team_check_[q].disagree;
+    }
+  }
+  for (std::size_t q = 0; q < team_check_.size(); ++q) {
+    TeamCheck& t = team_check_[q];
+    t.left_out = t.shared >= kTeamCheckMinShared && 2 * t.disagree > t.shared;
+    if (!t.left_out) continue;
+    left_out_ |= 1u << q;
+    ++t.rounds_left_out;
+  }
+  return left_out_;
 }
 
 bool GlobalMap::fused_without(int id, int robot_id, Eigen::Vector2d* position, Eigen::Matrix2d* cov) const {
   if (id < 0 || id >= max_landmark_id()) return false;
   Eigen::Vector2d p;
   Eigen::Matrix2d C;
-  if (!fuse_estimates(entries_[static_cast<std::size_t>(id)].by_robot, options_.fusion, robot_id, &p, &C)) return false;
+  const unsigned own = robot_id >= 1 && robot_id <= kMaxTeamRobots ? 1u << (robot_id - 1) : 0u;
+  const unsigned skip = left_out_ | own;
+  if (!fuse_estimates(entries_[static_cast<std::size_t>(id)].by_robot, options_.fusion, skip, &p, &C)) return false;
   *position = p;
   *cov = C;
   return true;
@@ -456,7 +501,7 @@ bool GlobalMap::from_json(const std::string& text, std::string* why) {
       };
       g.moving_unconfirmed = g.status == GlobalStatus::kMoving && flag("moving_unconfirmed");
       g.history_unknown = flag("history_unknown");
-      if (g.status != GlobalStatus::kStatic || fuse_estimates(g.by_robot, options_.fusion, 0, &g.fused, &g.fused_cov))
+      if (g.status != GlobalStatus::kStatic || fuse_estimates(g.by_robot, options_.fusion, 0u, &g.fused, &g.fused_cov))
         continue;
       if (!l.contains("fused")) {
         g = GlobalEntry{};  // no estimate and no position: as if never mapped

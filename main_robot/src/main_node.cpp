@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "elaslam/common/contract.hpp"
 
@@ -44,6 +45,7 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   // All ids counted as the larger kind of entry: a bound for any mix of the two.
   prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, options.max_landmark_id, 0, &chunk_sizes_, &chunks_);
   spans_.reserve(chunks_.size());
+  alert_.reserve(kAlertCapacity);  // check_team's lines go in without allocating
 }
 
 namespace {
@@ -238,8 +240,8 @@ const std::vector<resync_request_t>& MainNode::take_resyncs(std::int64_t now_uti
 }
 
 std::string MainNode::take_alert() {
-  std::string a;
-  a.swap(alert_);
+  std::string a(alert_);  // a copy: alert_ keeps its reserved capacity
+  alert_.clear();
   return a;
 }
 
@@ -500,7 +502,8 @@ int MainNode::make_team_map(int robot_id, std::int64_t now_utime, int frame) {
 int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_robot, bool moving_only) {
   static_ids_.clear();
   moving_ids_.clear();
-  const int own_bit = exclude_robot > 0 ? 1 << (exclude_robot - 1) : 0;
+  // A team map's estimates leave out r's and those of the robots check_team left out.
+  const int own_bit = exclude_robot > 0 ? (1 << (exclude_robot - 1)) | static_cast<int>(map_.left_out()) : 0;
   Eigen::Vector2d p;
   Eigen::Matrix2d C;
   for (int id = 0; id < map_.max_landmark_id(); ++id) {
@@ -570,7 +573,35 @@ bool MainNode::team_map_due(int frame) {
   if (period <= 0 || frame < 0 || frame <= team_map_frame_) return false;
   if (team_map_frame_ >= 0 && frame / period <= team_map_frame_ / period) return false;
   team_map_frame_ = frame;
+  check_team();
   return true;
+}
+
+// A round of team maps begins: who is left out of it (GlobalMap::check_team). Said
+// when it changes: an alert line, and FAULT_INCONSISTENT in STATUS_MAIN while anyone
+// is left out. The line is formatted into the alert's reserved capacity: no
+// allocation on main's frame path (FrameNoAlloc).
+void MainNode::check_team() {
+  const unsigned before = map_.left_out();
+  const unsigned now = map_.check_team();
+  for (int r = 1; r <= kMaxTeamRobots; ++r) {
+    const unsigned bit = 1u << (r - 1);
+    if (now & bit) ++counters_.team_map_left_out;
+    if ((now & bit) == (before & bit)) continue;
+    const TeamCheck& t = map_.team_check(r);
+    char line[192];
+    const int n =
+        (now & bit)
+            ? std::snprintf(line, sizeof line,
+                            "%srobot %d's map disagrees with the other robots' on %d of %d shared landmarks: left out "
+                            "of their team maps",
+                            alert_.empty() ? "" : "; ", r, t.disagree, t.shared)
+            : std::snprintf(line, sizeof line,
+                            "%srobot %d's map agrees with the other robots' again (%d of %d shared landmarks "
+                            "disagree): back in their team maps",
+                            alert_.empty() ? "" : "; ", r, t.disagree, t.shared);
+    if (n > 0 && alert_.size() + static_cast<std::size_t>(n) <= alert_.capacity()) alert_.append(line);
+  }
 }
 
 node_status_t MainNode::status_msg(std::int64_t now_utime) const {
@@ -588,6 +619,7 @@ node_status_t MainNode::status_msg(std::int64_t now_utime) const {
     if (map_.stream(r).gap_pending) s.fault_flags |= node_status_t::FAULT_UNREPAIRED_GAP;
   }
   if (capacity_fault_) s.fault_flags |= node_status_t::FAULT_CAPACITY;
+  if (map_.left_out() != 0) s.fault_flags |= node_status_t::FAULT_INCONSISTENT;
   for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = counters_.events;
   s.frames_dropped = counters_.gaps;

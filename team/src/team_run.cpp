@@ -278,6 +278,7 @@ RunResult InProcessTeam::finish() {
   }
   out.bus_messages = bus_.published();
   out.occupied = main_.counters().occupied;
+  for (const int id : out.robot_ids) out.team_map_left_out.push_back(main_.map().team_check(id).rounds_left_out);
   return out;
 }
 

@@ -463,6 +463,150 @@ TEST(MainNode, APoseOnAStaticLandmarkSendsANotice) {
   EXPECT_EQ(node.counters().occupied, 2);
 }
 
+// main.team_map_check_probability: before a round of team maps each robot's map is
+// checked against the fusion of the others'. A robot whose estimates disagree on more
+// than half of the (at least 3) landmarks it shares is left out of every team map of
+// that round; one that agrees is not blamed for the one that does not.
+TEST(GlobalMap, ARobotWhoseMapTheOthersRefuseIsLeftOutOfTheirTeamMaps) {
+  GlobalMapOptions o = options();
+  o.team_map_check_probability = 0.9999;  // chi-square (2 dof) 18.42
+  GlobalMap m(o);
+  // Robots 1, 2 and 4 map landmarks 3-7 where they are (sigma 5 cm); robot 3 0.5 m off.
+  std::int64_t seq[5] = {};
+  auto add = [&](int robot, int id, double dx) {
+    m.apply(ev(robot, ++seq[robot], landmark_event_t::ADD, id, id + dx, 0.0, 0.0025), nullptr);
+  };
+  for (int id = 3; id <= 7; ++id)
+    for (int r : {1, 2, 3, 4}) add(r, id, r == 3 ? 0.5 : 0.0);
+  Eigen::Vector2d p;
+  Eigen::Matrix2d C;
+  // Before any check, robot 1's team map holds robot 3's estimate: (0 + 0.5 + 0) / 3.
+  ASSERT_TRUE(m.fused_without(5, 1, &p, &C));
+  EXPECT_NEAR(p.x(), 5.0 + 0.5 / 3.0, 1e-12);
+  // Robot 3 against robots 1, 2, 4: d2 = 0.25 / (0.0025 + 0.0025 / 3) = 75. Robot 1
+  // against 2, 3, 4 (pulled 0.5 / 3 by robot 3): d2 = 8.3, agrees.
+  EXPECT_EQ(m.check_team(), 0b0100u);
+  EXPECT_EQ(m.left_out(), 0b0100u);
+  EXPECT_EQ(m.team_check(3).shared, 5);
+  EXPECT_EQ(m.team_check(3).disagree, 5);
+  EXPECT_TRUE(m.team_check(3).left_out);
+  EXPECT_EQ(m.team_check(3).rounds_left_out, 1);
+  for (int r : {1, 2, 4}) {
+    EXPECT_EQ(m.team_check(r).shared, 5) << r;
+    EXPECT_EQ(m.team_check(r).disagree, 0) << r;
+    EXPECT_FALSE(m.team_check(r).left_out) << r;
+  }
+  // Robot 1's team map: robots 2 and 4 only.
+  ASSERT_TRUE(m.fused_without(5, 1, &p, &C));
+  EXPECT_NEAR(p.x(), 5.0, 1e-12);
+  EXPECT_NEAR(C(0, 0), 0.0025 / 2.0, 1e-15);
+  // Robot 3's own team map: the other three, as always.
+  ASSERT_TRUE(m.fused_without(5, 3, &p, &C));
+  EXPECT_NEAR(p.x(), 5.0, 1e-12);
+  EXPECT_NEAR(C(0, 0), 0.0025 / 3.0, 1e-15);
+  // The global map is not touched: robot 3 is in it.
+  EXPECT_NEAR(m.entry(5).fused.x(), 5.0 + 0.5 / 4.0, 1e-12);
+  // Robot 3 corrects two of its five: 3 of 5 still disagree, still out.
+  m.apply(ev(3, ++seq[3], landmark_event_t::UPDATE, 3, 3.0, 0.0, 0.0025), nullptr);
+  m.apply(ev(3, ++seq[3], landmark_event_t::UPDATE, 4, 4.0, 0.0, 0.0025), nullptr);
+  EXPECT_EQ(m.check_team(), 0b0100u);
+  EXPECT_EQ(m.team_check(3).disagree, 3);
+  EXPECT_EQ(m.team_check(3).rounds_left_out, 2);
+  // A fourth landmark only robots 1 and 3 hold, where they agree: 3 of 6 is not more
+  // than half. Back in.
+  add(1, 8, 0.0);
+  add(3, 8, 0.0);
+  EXPECT_EQ(m.check_team(), 0u);
+  EXPECT_EQ(m.team_check(3).shared, 6);
+  EXPECT_EQ(m.team_check(3).disagree, 3);
+  EXPECT_FALSE(m.team_check(3).left_out);
+  EXPECT_EQ(m.team_check(3).rounds_left_out, 2);  // since start
+  ASSERT_TRUE(m.fused_without(5, 1, &p, &C));
+  EXPECT_NEAR(p.x(), 5.0 + 0.5 / 3.0, 1e-12);
+}
+
+// Fewer than kTeamCheckMinShared shared landmarks judge nobody; a landmark only one
+// robot holds is not shared; MOVING landmarks are not compared; 0 turns it off.
+TEST(GlobalMap, TheTeamCheckNeedsThreeSharedLandmarksAndCanBeOff) {
+  GlobalMapOptions o = options();
+  o.team_map_check_probability = 0.9999;
+  GlobalMap m(o);
+  for (int id = 3; id <= 4; ++id) {
+    m.apply(ev(1, id, landmark_event_t::ADD, id, id, 0.0, 0.0025), nullptr);
+    m.apply(ev(2, id, landmark_event_t::ADD, id, id + 1.0, 0.0, 0.0025), nullptr);  // 1 m apart
+  }
+  m.apply(ev(2, 5, landmark_event_t::ADD, 9, 9.0, 0.0, 0.0025), nullptr);  // robot 2's alone
+  EXPECT_EQ(m.check_team(), 0u);
+  EXPECT_EQ(m.team_check(1).shared, 2);
+  EXPECT_EQ(m.team_check(2).shared, 2);
+  EXPECT_EQ(m.team_check(2).disagree, 2);
+  // A third shared landmark, apart too: both out (two robots cannot tell who is wrong,
+  // and neither takes the other's map).
+  m.apply(ev(1, 5, landmark_event_t::ADD, 5, 5.0, 0.0, 0.0025), nullptr);
+  m.apply(ev(2, 6, landmark_event_t::ADD, 5, 6.0, 0.0, 0.0025), nullptr);
+  EXPECT_EQ(m.check_team(), 0b11u);
+  Eigen::Vector2d p;
+  Eigen::Matrix2d C;
+  EXPECT_FALSE(m.fused_without(5, 1, &p, &C));
+  // Robot 2 finds landmark 5 moving: deleted, no longer compared; 2 shared, both back.
+  m.apply(ev(2, 7, landmark_event_t::MOVING, 5), nullptr);
+  EXPECT_EQ(m.check_team(), 0u);
+  EXPECT_EQ(m.team_check(1).shared, 2);
+  // Off: nobody is judged.
+  GlobalMap off(options());
+  for (int id = 3; id <= 6; ++id) {
+    off.apply(ev(1, id, landmark_event_t::ADD, id, id, 0.0, 0.0025), nullptr);
+    off.apply(ev(2, id, landmark_event_t::ADD, id, id + 1.0, 0.0, 0.0025), nullptr);
+  }
+  EXPECT_EQ(off.check_team(), 0u);
+  EXPECT_EQ(off.team_check(1).shared, 0);
+  ASSERT_TRUE(off.fused_without(5, 1, &p, &C));
+  EXPECT_NEAR(p.x(), 6.0, 1e-12);
+}
+
+// The node: the check runs when a round of team maps is due; the robot left out is
+// named in an alert line and STATUS_MAIN carries FAULT_INCONSISTENT while it is out;
+// the others' team maps neither hold its estimates nor list it as a contributor.
+TEST(MainNode, ARobotLeftOutOfTheTeamMapsIsSaid) {
+  GlobalMapOptions o = options();
+  o.team_map_check_probability = 0.9999;
+  o.team_map_period_frames = 10;
+  MainNode node(o);
+  std::int64_t seq[5] = {};
+  auto send = [&](int robot, int kind, int id, double x) {
+    std::string why;
+    ASSERT_TRUE(node.on_event(test::event_msg(robot, ++seq[robot], kind, id, 0, x, 0.0, 0.0025), &why)) << why;
+  };
+  for (int id = 3; id <= 5; ++id)
+    for (int r : {1, 2, 3}) send(r, landmark_event_t::ADD, id, r == 3 ? id + 0.5 : id);
+  EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  ASSERT_TRUE(node.team_map_due(10));
+  EXPECT_EQ(node.map().left_out(), 0b100u);
+  EXPECT_EQ(node.counters().team_map_left_out, 1);
+  EXPECT_NE(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  EXPECT_EQ(node.take_alert(),
+            "robot 3's map disagrees with the other robots' on 3 of 3 shared landmarks: left out of their team maps");
+  ASSERT_EQ(node.make_team_map(1, 10, 10), 1);
+  const global_map_t& c = node.map_chunk(0);
+  ASSERT_EQ(c.num_landmarks, 3);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(c.landmarks[i].x, c.landmarks[i].id, 1e-12);  // robot 2's alone
+    EXPECT_EQ(c.landmarks[i].contributors, 0b010);
+  }
+  // Robot 3 maps where the others do: back in at the next round, said once.
+  for (int id = 3; id <= 5; ++id) send(3, landmark_event_t::UPDATE, id, id);
+  EXPECT_FALSE(node.team_map_due(15));  // same period
+  ASSERT_TRUE(node.team_map_due(20));
+  EXPECT_EQ(node.map().left_out(), 0u);
+  EXPECT_EQ(node.counters().team_map_left_out, 1);
+  EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
+  EXPECT_EQ(node.take_alert(),
+            "robot 3's map agrees with the other robots' again (0 of 3 shared landmarks disagree): back in their "
+            "team maps");
+  ASSERT_TRUE(node.team_map_due(30));
+  EXPECT_EQ(node.take_alert(), "");
+}
+
 TEST(MainNode, NoticesGetSequenceNumbersAndMapMessageListsMoving) {
   MainNode node(options());
   node.on_event(msg_event(1, 1, landmark_event_t::ADD, 3));

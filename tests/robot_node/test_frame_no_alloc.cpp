@@ -43,6 +43,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     // main's body rule on (main.body_radius_m): the simulated robots drive through
     // landmarks, so it fires here (off in config/paper.yaml for that reason).
     c.main.body_radius_m = 0.3;
+    // main's check of the robots' maps before each round of team maps
+    // (main.team_map_check_probability; GlobalMap::check_team).
+    c.main.team_map_check_probability = 0.9999;
     // Every sensor frame of the run, made before the region (the simulator is not
     // part of a robot's frame path).
     sim::World world(c.scenario);
@@ -98,7 +101,12 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     EXPECT_GT(t.team_chunks, 50);
     long fused = 0;
     for (const auto& r : robots) fused += r.robot().team_counters().fused;
-    EXPECT_GT(fused, 30);
+    EXPECT_GT(fused, 15);  // ekf: 20, its robots left out of each other's maps (below)
+    if (mode == Mode::kEkf) {
+      // ekf's maps, built on moving landmarks, disagree: main leaves robots out of
+      // the team maps and says so (the alert line, formatted without allocating).
+      EXPECT_GT(main.counters().team_map_left_out, 10);
+    }
     std::int64_t evictions = 0;
     for (const auto& r : robots) evictions += r.counters().evictions;
     if (capacity > 0) {

@@ -54,8 +54,26 @@ struct GlobalMapOptions {
   /// A robot's body radius [m]: a STATIC landmark found where a robot is is taken as
   /// moving (GlobalMap::occupy). 0: off (the simulator's robots have no body).
   double body_radius_m = 0.0;
+  /// Before each round of team maps, every robot's map is checked against the
+  /// others': a robot whose estimates disagree with the other robots' fusion beyond
+  /// the chi-square quantile (2 dof) of this probability on more than half (and at
+  /// least kTeamCheckMinShared) of the landmarks they share is left out of the other
+  /// robots' team maps for that round (GlobalMap::check_team; docs/decisions.md "One
+  /// robot's map does not pull the team"). 0: off (config/mrclam.yaml: 0.9999).
+  double team_map_check_probability = 0.0;
 };
 void parse(config::Reader& r, GlobalMapOptions* o);
+
+/// GlobalMap::check_team's verdict on one robot's map.
+struct TeamCheck {
+  int shared = 0;     // STATIC landmarks it and another robot hold a usable estimate of
+  int disagree = 0;   // ... whose estimate the others' fusion refuses
+  bool left_out = false;
+  std::int64_t rounds_left_out = 0;  // rounds of team maps it was left out of, since start
+};
+/// The fewest shared landmarks on which a robot's map is judged (as the robot's own
+/// "lost" rule, Robot::apply_team_map).
+constexpr int kTeamCheckMinShared = 3;
 
 enum class GlobalStatus : std::uint8_t { kAbsent = 0, kStatic = 1, kMoving = 2 };
 
@@ -182,7 +200,19 @@ class GlobalMap {
   /// Landmark `id`'s fusion without robot r's estimate (the other robots' own
   /// information, for r's team map). False, outputs unchanged, when no other robot
   /// holds a usable estimate.
+  /// Robots left out by the last check_team are left out here too: r's team map
+  /// carries neither its own information nor a robot whose map the others refuse.
   bool fused_without(int id, int robot_id, Eigen::Vector2d* position, Eigen::Matrix2d* cov) const;
+
+  /// One round of team maps begins: each robot's map against the fusion of the
+  /// others' (team_map_check_probability; a no-op that leaves nobody out when 0).
+  /// Leave-one-out, not pairwise: one robot against the rest, so a robot that agrees
+  /// with most of the team is not blamed for one that does not. Returns the robots
+  /// left out (bit r-1). O(landmarks x robots^2) 2x2 solves, no allocation.
+  unsigned check_team();
+  /// The robots the last check_team left out (bit r-1).
+  unsigned left_out() const { return left_out_; }
+  const TeamCheck& team_check(int robot_id) const { return team_check_[static_cast<std::size_t>(robot_id - 1)]; }
 
   /// Robot `robot_id` reported its position (`position`, covariance `cov` [m^2]) at
   /// `frame`. A STATIC landmark cannot be where a robot's body is: every STATIC one
@@ -227,6 +257,9 @@ class GlobalMap {
   std::array<RobotStream, kMaxTeamRobots> streams_{};
   std::int64_t version_ = 0;
   int newest_frame_ = -1;
+  double team_check_d2_ = 0.0;  // the chi-square quantile of team_map_check_probability (0: off)
+  unsigned left_out_ = 0;
+  std::array<TeamCheck, kMaxTeamRobots> team_check_{};
 };
 
 }  // namespace elaslam

@@ -43,6 +43,7 @@ struct MainCounters {
   std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, refused
   std::int64_t stale_poses = 0;          // POSEs of a frame already held or finished (late, repeated): ignored
   std::int64_t occupied = 0;             // STATIC landmarks found where a robot was (main.body_radius_m): now moving
+  std::int64_t team_map_left_out = 0;    // robots left out of a round of team maps (GlobalMap::check_team), summed
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
 };
@@ -114,6 +115,7 @@ class MainNode {
   /// True (once) when the team maps of `frame` are due: once per period of
   /// main.team_map_period_frames, at the first frame finished in a period after the
   /// last team map's (its multiple when no POSE is lost), never for an older frame.
+  /// A due round first checks the robots' maps against each other (check_team).
   bool team_map_due(int frame);
   /// Whether robot r has been heard from (a POSE): who gets a team map.
   bool robot_seen(int robot_id) const {
@@ -148,6 +150,7 @@ class MainNode {
   /// The incarnation check of every robot message: false when it must be refused.
   bool accept_incarnation(int robot_id, std::int64_t incarnation, int frame);
   void request_resync(int robot_id, std::int8_t reason);
+  void check_team();
   /// Robot `robot_id` (valid) finished `frame`: the newest frame the whole team has
   /// finished when that advanced, else -1.
   int finished_frame(int robot_id, int frame);
@@ -182,6 +185,7 @@ class MainNode {
   std::array<JumpGuard, kMaxTeamRobots> frame_guard_{}, event_guard_{}, snapshot_guard_{};  // per robot
   bool capacity_fault_ = false;  // the last GLOBAL_MAP could not carry the whole map
   std::array<bool, kMaxTeamRobots> alerted_duplicate_{};
+  static constexpr std::size_t kAlertCapacity = 4096;
   std::string alert_;
   // GLOBAL_MAP chunks: a pool sized at construction for the largest map (no allocation).
   ChunkSizes chunk_sizes_;

@@ -62,6 +62,9 @@ struct RunResult {
   std::vector<long> corrections_by_landmark;
   // Landmarks main took as moving because a robot was where they were (main.body_radius_m).
   long long occupied = 0;
+  // Rounds of team maps each robot (by robot index) was left out of, its map refused
+  // by the others' (main.team_map_check_probability, GlobalMap::check_team).
+  std::vector<long long> team_map_left_out;
 };
 
 /// Where the frames come from: the simulator or a recorded dataset. Frames are
