@@ -28,7 +28,7 @@ void parse(config::Reader& r, GlobalMapOptions* o) {
   r.read_optional("team_map_period_frames", &o->team_map_period_frames, 0, 100000);
   r.read_optional("moving_repeat_s", &o->moving_repeat_s, 0.0, 3600.0);
   r.read_optional("body_radius_m", &o->body_radius_m, 0.0, 10.0);
-  r.read_optional("team_map_check_probability", &o->team_map_check_probability, 0.0, 1.0 - 1e-9);
+  r.read_optional("team_map_check_probability", &o->team_map_check_probability, 0.0, 0.999999);
   if (o->team_map_check_probability > 0.0 && o->team_map_check_probability < 0.5)
     r.fail("team_map_check_probability", "must be 0 (off) or at least 0.5 (a gate that refuses most agreeing maps)");
   parse(r, &o->limits);

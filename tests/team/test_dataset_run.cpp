@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "elaslam/team/dataset_run.hpp"
 
@@ -132,6 +133,32 @@ TEST_F(RealSlice, OneRobotsWrongMapDoesNotPullTheOthers) {
     EXPECT_LT(with_check.metrics.robots[i].error_rms, 0.7 * without.metrics.robots[i].error_rms) << "robot " << i + 1;
   EXPECT_LT(with_check.metrics.robots[4].error_rms, 1.1 * without.metrics.robots[4].error_rms);
   EXPECT_LT(mean_of_rms(with_check), 0.8 * mean_of_rms(without));
+}
+
+// main.team_map_check_probability is checked like every key: outside 0 or
+// [0.5, 0.999999], or not a number, stops the start with the key's name; 0 is off.
+TEST(DatasetConfig, ATeamMapCheckProbabilityOutOfRangeIsRefusedNamingTheKey) {
+  std::ifstream in(kConfig);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string key = "  team_map_check_probability: 0.9999\n";
+  ASSERT_NE(text.find(key), std::string::npos);
+  EXPECT_DOUBLE_EQ(load_dataset_config(kConfig).main.team_map_check_probability, 0.9999);
+  const auto with = [&](const std::string& value) {
+    std::string edited = text;
+    edited.replace(edited.find(key), key.size(), "  team_map_check_probability: " + value + "\n");
+    const std::string path = ::testing::TempDir() + "team_check.yaml";
+    std::ofstream(path) << edited;
+    return path;
+  };
+  for (const char* bad : {"0.3", "1.0", "-0.1", ".nan", "yes"}) {
+    try {
+      load_dataset_config(with(bad));
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("main.team_map_check_probability"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(load_dataset_config(with("0")).main.team_map_check_probability, 0.0);
 }
 
 // robot.ela.lone_needs_check without the team map: valid, but on dataset1 one robot
