@@ -590,16 +590,24 @@ void MainNode::check_team() {
     if ((now & bit) == (before & bit)) continue;
     const TeamCheck& t = map_.team_check(r);
     char line[192];
-    const int n =
-        (now & bit)
-            ? std::snprintf(line, sizeof line,
-                            "%srobot %d's map disagrees with the other robots' on %d of %d shared landmarks: left out "
-                            "of their team maps",
-                            alert_.empty() ? "" : "; ", r, t.disagree, t.shared)
-            : std::snprintf(line, sizeof line,
-                            "%srobot %d's map agrees with the other robots' again (%d of %d shared landmarks "
-                            "disagree): back in their team maps",
-                            alert_.empty() ? "" : "; ", r, t.disagree, t.shared);
+    const char* sep = alert_.empty() ? "" : "; ";
+    int n = 0;
+    if (now & bit) {
+      n = std::snprintf(line, sizeof line,
+                        "%srobot %d's map disagrees with the other robots' on %d of %d shared landmarks: left out of "
+                        "their team maps",
+                        sep, r, t.disagree, t.shared);
+    } else if (t.shared < kTeamCheckMinShared) {
+      n = std::snprintf(line, sizeof line,
+                        "%srobot %d's map shares too few landmarks with the other robots' to be judged (%d, fewer "
+                        "than %d): back in their team maps",
+                        sep, r, t.shared, kTeamCheckMinShared);
+    } else {
+      n = std::snprintf(line, sizeof line,
+                        "%srobot %d's map agrees with the other robots' again (%d of %d shared landmarks disagree): "
+                        "back in their team maps",
+                        sep, r, t.disagree, t.shared);
+    }
     if (n > 0 && alert_.size() + static_cast<std::size_t>(n) <= alert_.capacity()) alert_.append(line);
   }
 }

@@ -605,6 +605,19 @@ TEST(MainNode, ARobotLeftOutOfTheTeamMapsIsSaid) {
             "team maps");
   ASSERT_TRUE(node.team_map_due(30));
   EXPECT_EQ(node.take_alert(), "");
+  // Out again; then two of the three landmarks are found moving: too few left to
+  // judge robot 3 by, and it is said so.
+  for (int id = 3; id <= 5; ++id) send(3, landmark_event_t::UPDATE, id, id + 0.5);
+  ASSERT_TRUE(node.team_map_due(40));
+  EXPECT_EQ(node.map().left_out(), 0b100u);
+  node.take_alert();
+  send(1, landmark_event_t::MOVING, 3, 3.0);
+  send(1, landmark_event_t::MOVING, 4, 4.0);
+  ASSERT_TRUE(node.team_map_due(50));
+  EXPECT_EQ(node.map().left_out(), 0u);
+  EXPECT_EQ(node.take_alert(),
+            "robot 3's map shares too few landmarks with the other robots' to be judged (1, fewer than 3): back in "
+            "their team maps");
 }
 
 TEST(MainNode, NoticesGetSequenceNumbersAndMapMessageListsMoving) {
