@@ -78,7 +78,7 @@ void final_line(const MainNode& node) {
                node.map().count(GlobalStatus::kStatic), node.map().count(GlobalStatus::kMoving),
                (long long)node.map().version(), (long long)c.maps_published, (long long)c.map_chunks,
                (long long)c.moving_sets, (long long)c.stale_poses, (long long)c.runs_started,
-               (long long)c.occupied, (long long)c.team_map_left_out);
+               (long long)c.occupied, (long long)node.map().rounds_left_out());
 }
 
 int run(const Args& a) {

@@ -165,7 +165,6 @@ unsigned GlobalMap::check_team() {
   for (auto& t : team_check_) {
     t.shared = 0;
     t.disagree = 0;
-    t.left_out = false;
   }
   if (!(team_check_d2_ > 0.0)) return 0;
   for (const GlobalEntry& g : entries_) {
@@ -186,12 +185,17 @@ unsigned GlobalMap::check_team() {
   }
   for (std::size_t q = 0; q < team_check_.size(); ++q) {
     TeamCheck& t = team_check_[q];
-    t.left_out = t.shared >= kTeamCheckMinShared && 2 * t.disagree > t.shared;
-    if (!t.left_out) continue;
+    if (!(t.shared >= kTeamCheckMinShared && 2 * t.disagree > t.shared)) continue;
     left_out_ |= 1u << q;
     ++t.rounds_left_out;
   }
   return left_out_;
+}
+
+std::int64_t GlobalMap::rounds_left_out() const {
+  std::int64_t n = 0;
+  for (const TeamCheck& t : team_check_) n += t.rounds_left_out;
+  return n;
 }
 
 bool GlobalMap::fused_without(int id, int robot_id, Eigen::Vector2d* position, Eigen::Matrix2d* cov) const {

@@ -503,7 +503,7 @@ int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_rob
   static_ids_.clear();
   moving_ids_.clear();
   // A team map's estimates leave out r's and those of the robots check_team left out.
-  const int own_bit = exclude_robot > 0 ? (1 << (exclude_robot - 1)) | static_cast<int>(map_.left_out()) : 0;
+  const int excluded = exclude_robot > 0 ? (1 << (exclude_robot - 1)) | static_cast<int>(map_.left_out()) : 0;
   Eigen::Vector2d p;
   Eigen::Matrix2d C;
   for (int id = 0; id < map_.max_landmark_id(); ++id) {
@@ -548,7 +548,7 @@ int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_rob
       l.y = p.y();
       for (int r = 0; r < 2; ++r)
         for (int q = 0; q < 2; ++q) l.cov[r][q] = C(r, q);
-      l.contributors = static_cast<std::int16_t>(g.contributors() & ~own_bit);
+      l.contributors = static_cast<std::int16_t>(g.contributors() & ~excluded);
       l.status = global_landmark_t::STATIC;
       l.status_frame = g.status_frame;
     }
@@ -586,7 +586,6 @@ void MainNode::check_team() {
   const unsigned now = map_.check_team();
   for (int r = 1; r <= kMaxTeamRobots; ++r) {
     const unsigned bit = 1u << (r - 1);
-    if (now & bit) ++counters_.team_map_left_out;
     if ((now & bit) == (before & bit)) continue;
     const TeamCheck& t = map_.team_check(r);
     char line[192];

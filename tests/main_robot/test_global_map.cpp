@@ -489,12 +489,12 @@ TEST(GlobalMap, ARobotWhoseMapTheOthersRefuseIsLeftOutOfTheirTeamMaps) {
   EXPECT_EQ(m.left_out(), 0b0100u);
   EXPECT_EQ(m.team_check(3).shared, 5);
   EXPECT_EQ(m.team_check(3).disagree, 5);
-  EXPECT_TRUE(m.team_check(3).left_out);
+  EXPECT_TRUE(m.is_left_out(3));
   EXPECT_EQ(m.team_check(3).rounds_left_out, 1);
   for (int r : {1, 2, 4}) {
     EXPECT_EQ(m.team_check(r).shared, 5) << r;
     EXPECT_EQ(m.team_check(r).disagree, 0) << r;
-    EXPECT_FALSE(m.team_check(r).left_out) << r;
+    EXPECT_FALSE(m.is_left_out(r)) << r;
   }
   // Robot 1's team map: robots 2 and 4 only.
   ASSERT_TRUE(m.fused_without(5, 1, &p, &C));
@@ -519,7 +519,7 @@ TEST(GlobalMap, ARobotWhoseMapTheOthersRefuseIsLeftOutOfTheirTeamMaps) {
   EXPECT_EQ(m.check_team(), 0u);
   EXPECT_EQ(m.team_check(3).shared, 6);
   EXPECT_EQ(m.team_check(3).disagree, 3);
-  EXPECT_FALSE(m.team_check(3).left_out);
+  EXPECT_FALSE(m.is_left_out(3));
   EXPECT_EQ(m.team_check(3).rounds_left_out, 2);  // since start
   ASSERT_TRUE(m.fused_without(5, 1, &p, &C));
   EXPECT_NEAR(p.x(), 5.0 + 0.5 / 3.0, 1e-12);
@@ -582,7 +582,7 @@ TEST(MainNode, ARobotLeftOutOfTheTeamMapsIsSaid) {
   EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
   ASSERT_TRUE(node.team_map_due(10));
   EXPECT_EQ(node.map().left_out(), 0b100u);
-  EXPECT_EQ(node.counters().team_map_left_out, 1);
+  EXPECT_EQ(node.map().rounds_left_out(), 1);
   EXPECT_NE(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
   EXPECT_EQ(node.take_alert(),
             "robot 3's map disagrees with the other robots' on 3 of 3 shared landmarks: left out of their team maps");
@@ -598,7 +598,7 @@ TEST(MainNode, ARobotLeftOutOfTheTeamMapsIsSaid) {
   EXPECT_FALSE(node.team_map_due(15));  // same period
   ASSERT_TRUE(node.team_map_due(20));
   EXPECT_EQ(node.map().left_out(), 0u);
-  EXPECT_EQ(node.counters().team_map_left_out, 1);
+  EXPECT_EQ(node.map().rounds_left_out(), 1);
   EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_INCONSISTENT, 0);
   EXPECT_EQ(node.take_alert(),
             "robot 3's map agrees with the other robots' again (0 of 3 shared landmarks disagree): back in their "

@@ -105,7 +105,7 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     if (mode == Mode::kEkf) {
       // ekf's maps, built on moving landmarks, disagree: main leaves robots out of
       // the team maps and says so (the alert line, formatted without allocating).
-      EXPECT_GT(main.counters().team_map_left_out, 10);
+      EXPECT_GT(main.map().rounds_left_out(), 10);
     }
     std::int64_t evictions = 0;
     for (const auto& r : robots) evictions += r.counters().evictions;

@@ -68,7 +68,6 @@ void parse(config::Reader& r, GlobalMapOptions* o);
 struct TeamCheck {
   int shared = 0;     // STATIC landmarks it and another robot hold a usable estimate of
   int disagree = 0;   // ... whose estimate the others' fusion refuses
-  bool left_out = false;
   std::int64_t rounds_left_out = 0;  // rounds of team maps it was left out of, since start
 };
 /// The fewest shared landmarks on which a robot's map is judged (as the robot's own
@@ -212,6 +211,12 @@ class GlobalMap {
   unsigned check_team();
   /// The robots the last check_team left out (bit r-1).
   unsigned left_out() const { return left_out_; }
+  bool is_left_out(int robot_id) const {
+    return robot_id >= 1 && robot_id <= kMaxTeamRobots && ((left_out_ >> (robot_id - 1)) & 1u) != 0;
+  }
+  /// Rounds of team maps a robot was left out of, summed over the robots (main_robot's
+  /// final line).
+  std::int64_t rounds_left_out() const;
   const TeamCheck& team_check(int robot_id) const { return team_check_[static_cast<std::size_t>(robot_id - 1)]; }
 
   /// Robot `robot_id` reported its position (`position`, covariance `cov` [m^2]) at

@@ -43,7 +43,6 @@ struct MainCounters {
   std::int64_t stale_snapshots = 0;      // snapshot chunks older than one applied, refused
   std::int64_t stale_poses = 0;          // POSEs of a frame already held or finished (late, repeated): ignored
   std::int64_t occupied = 0;             // STATIC landmarks found where a robot was (main.body_radius_m): now moving
-  std::int64_t team_map_left_out = 0;    // robots left out of a round of team maps (GlobalMap::check_team), summed
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
 };
