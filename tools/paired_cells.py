@@ -9,7 +9,11 @@ two-sided paired t-test at 5 %. A cell-metric is won when the mean difference is
 below zero (the sweep's "cells won" rule); it is a significant win or loss when
 |t| is above the critical value for n - 1 degrees of freedom.
 
-Usage: tools/paired_cells.py DIR [--a ela] [--b ekf]
+Several sweeps (DIR DIR ...; other --seed-base, the same grid) are pooled: each
+cell then has every sweep's runs. A seed run twice in a cell with one mode (the
+same seed base twice) is refused: it would count one run as two.
+
+Usage: tools/paired_cells.py DIR [DIR ...] [--a ela] [--b ekf]
 """
 import argparse
 import collections
@@ -36,27 +40,33 @@ def t_critical(dof):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     add_version(ap)
-    ap.add_argument("dir", help="a sweep's output directory (its runs.csv)")
+    ap.add_argument("dirs", nargs="+", metavar="DIR",
+                    help="a sweep's output directory (its runs.csv); several are pooled")
     ap.add_argument("--a", default="ela", help="mode A (default ela)")
     ap.add_argument("--b", default="ekf", help="mode B (default ekf)")
     args = parse_args(ap)
-    path = f"{args.dir}/runs.csv"
-    try:
-        with open(path, newline="") as f:
-            rows = list(csv.DictReader(f))
-    except OSError as e:
-        sys.exit(f"paired_cells.py: cannot read {path}: {e.strerror}")
     runs = collections.defaultdict(dict)
     metrics = None
-    for i, r in enumerate(rows, start=2):
+    for d in args.dirs:
+        path = f"{d}/runs.csv"
         try:
-            key = (int(r["dynamism"]), float(r["speed"]), int(r["seed"]))
-            mode = r["mode"]
-        except (KeyError, TypeError, ValueError):
-            sys.exit(f"paired_cells.py: {path}:{i}: not a sweep's runs.csv row (mode, dynamism, speed, seed)")
-        if metrics is None:
-            metrics = ["landmark_error"] + sorted(k for k in r if k.startswith("robot") and k.endswith("_error"))
-        runs[key][mode] = r
+            with open(path, newline="") as f:
+                rows = list(csv.DictReader(f))
+        except OSError as e:
+            sys.exit(f"paired_cells.py: cannot read {path}: {e.strerror}")
+        for i, r in enumerate(rows, start=2):
+            try:
+                key = (int(r["dynamism"]), float(r["speed"]), int(r["seed"]))
+                mode = r["mode"]
+            except (KeyError, TypeError, ValueError):
+                sys.exit(f"paired_cells.py: {path}:{i}: not a sweep's runs.csv row (mode, dynamism, speed, seed)")
+            if metrics is None:
+                metrics = ["landmark_error"] + sorted(k for k in r if k.startswith("robot") and k.endswith("_error"))
+            if mode in runs[key]:
+                sys.exit(f"paired_cells.py: {path}:{i}: seed {key[2]} of mode {mode} at {key[0]} % / {key[1]} m/s "
+                         "is already in (the same seed base twice?)")
+            runs[key][mode] = r
+    path = " ".join(f"{d}/runs.csv" for d in args.dirs)
     if metrics is None:
         sys.exit(f"paired_cells.py: {path} has no runs")
     diffs = collections.defaultdict(list)
