@@ -96,6 +96,10 @@ int run(const Args& a) {
     std::fflush(stdout);
     return transport::check_team_key(a.transport, cfg.path, "main_robot");
   }
+  // From here a SIGINT / SIGTERM is an orderly stop at whatever point it comes (the
+  // loop below sees it first thing): whoever stops the node once it has said it
+  // runs (a test, systemd, run_team.sh) gets the clean exit, never death by the signal.
+  transport::install_stop_handlers();
   int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
   const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::auth::kSenderMain, "main_robot", &open_rc);
   if (!lcm) return open_rc;
@@ -110,7 +114,6 @@ int run(const Args& a) {
   }
   std::fprintf(stderr, "main_robot: %s, config %s (%s), lcm=%s\n", cli::version_line("main_robot").c_str(),
                cfg.path.c_str(), cfg.origin.c_str(), transport::describe_url(a.transport.lcm_url).c_str());
-  transport::install_stop_handlers();
   using Clock = transport::NodeShell::Clock;
   const auto map_period_us = static_cast<std::int64_t>(1e6 / o.publish_rate_hz);
   shell.every(std::chrono::microseconds(map_period_us), [&] { ports.publish_map_if_quiet(map_period_us); });

@@ -229,6 +229,10 @@ int run(const Args& a) {
     std::fflush(stdout);
     return transport::check_team_key(a.transport, cfg.path, "robot_node " + std::to_string(a.robot));
   }
+  // From here a SIGINT / SIGTERM is an orderly stop at whatever point it comes (the
+  // loop below sees it first thing): whoever stops the node once it has said it
+  // runs (a test, systemd, run_team.sh) gets the clean exit, never death by the signal.
+  transport::install_stop_handlers();
   const std::string name = "robot_node " + std::to_string(a.robot);
   int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
   const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), name, &open_rc);
@@ -244,7 +248,6 @@ int run(const Args& a) {
   std::fprintf(stderr, "%s: %s, config %s (%s), mode=%s lcm=%s\n", name.c_str(), cli::version_line("robot_node").c_str(),
                cfg.path.c_str(), cfg.origin.c_str(), to_string(o.mode), transport::describe_url(a.transport.lcm_url).c_str());
   if (a.verbose) std::fprintf(stderr, "%s\n", effective.c_str());
-  transport::install_stop_handlers();
   shell.every(std::chrono::milliseconds(static_cast<int>(a.status_period_s * 1000)), [&] { ports.publish_status(); });
   shell.every(transport::NodeShell::Clock::duration::zero(), [&] { keeper.turn(); });
   const bool transport_failed = shell.spin(100) == transport::NodeShell::Exit::kTransportError;
