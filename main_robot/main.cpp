@@ -96,10 +96,7 @@ int run(const Args& a) {
     std::fflush(stdout);
     return transport::check_team_key(a.transport, cfg.path, "main_robot");
   }
-  // From here a SIGINT / SIGTERM is an orderly stop at whatever point it comes (the
-  // loop below sees it first thing): whoever stops the node once it has said it
-  // runs (a test, systemd, run_team.sh) gets the clean exit, never death by the signal.
-  transport::install_stop_handlers();
+  transport::install_stop_handlers();  // before LCM and the start line (process.hpp)
   int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
   const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::auth::kSenderMain, "main_robot", &open_rc);
   if (!lcm) return open_rc;

@@ -229,10 +229,7 @@ int run(const Args& a) {
     std::fflush(stdout);
     return transport::check_team_key(a.transport, cfg.path, "robot_node " + std::to_string(a.robot));
   }
-  // From here a SIGINT / SIGTERM is an orderly stop at whatever point it comes (the
-  // loop below sees it first thing): whoever stops the node once it has said it
-  // runs (a test, systemd, run_team.sh) gets the clean exit, never death by the signal.
-  transport::install_stop_handlers();
+  transport::install_stop_handlers();  // before LCM and the start line (process.hpp)
   const std::string name = "robot_node " + std::to_string(a.robot);
   int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
   const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), name, &open_rc);

@@ -37,17 +37,13 @@ def t_critical(dof):
     return T975[dof - 1] if dof <= len(T975) else 1.96
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_version(ap)
-    ap.add_argument("dirs", nargs="+", metavar="DIR",
-                    help="a sweep's output directory (its runs.csv); several are pooled")
-    ap.add_argument("--a", default="ela", help="mode A (default ela)")
-    ap.add_argument("--b", default="ekf", help="mode B (default ekf)")
-    args = parse_args(ap)
+def read_runs(dirs):
+    """The sweeps' runs pooled: {(dynamism, speed, seed): {mode: row}} and the
+    metrics to compare (from the first row). Exits with file:line on a bad row or
+    on a seed that is already in for its mode."""
     runs = collections.defaultdict(dict)
     metrics = None
-    for d in args.dirs:
+    for d in dirs:
         path = f"{d}/runs.csv"
         try:
             with open(path, newline="") as f:
@@ -66,9 +62,21 @@ def main():
                 sys.exit(f"paired_cells.py: {path}:{i}: seed {key[2]} of mode {mode} at {key[0]} % / {key[1]} m/s "
                          "is already in (the same seed base twice?)")
             runs[key][mode] = r
-    path = " ".join(f"{d}/runs.csv" for d in args.dirs)
     if metrics is None:
-        sys.exit(f"paired_cells.py: {path} has no runs")
+        sys.exit(f"paired_cells.py: {' '.join(f'{d}/runs.csv' for d in dirs)} has no runs")
+    return runs, metrics
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_version(ap)
+    ap.add_argument("dirs", nargs="+", metavar="DIR",
+                    help="a sweep's output directory (its runs.csv); several are pooled")
+    ap.add_argument("--a", default="ela", help="mode A (default ela)")
+    ap.add_argument("--b", default="ekf", help="mode B (default ekf)")
+    args = parse_args(ap)
+    runs, metrics = read_runs(args.dirs)
+    sources = " ".join(f"{d}/runs.csv" for d in args.dirs)  # what the messages below name
     diffs = collections.defaultdict(list)
     for (dyn, speed, _), by_mode in runs.items():
         if args.a not in by_mode or args.b not in by_mode:
@@ -77,11 +85,11 @@ def main():
             try:
                 d = float(by_mode[args.a][m]) - float(by_mode[args.b][m])
             except (KeyError, TypeError, ValueError):
-                sys.exit(f"paired_cells.py: {path}: no number for {m}")
+                sys.exit(f"paired_cells.py: {sources}: no number for {m}")
             if math.isfinite(d):
                 diffs[(dyn, speed, m)].append(d)
     if not diffs:
-        sys.exit(f"paired_cells.py: {path} has no seed run in both {args.a} and {args.b}")
+        sys.exit(f"paired_cells.py: {sources} has no seed run in both {args.a} and {args.b}")
     won = sig_won = lost = sig_lost = 0
     print(f"{args.a} - {args.b}, paired by seed: mean difference, paired t (two-sided 5 %)")
     for (dyn, speed, m), d in sorted(diffs.items()):

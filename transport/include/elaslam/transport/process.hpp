@@ -25,6 +25,10 @@ std::int64_t now_utime();
 /// Set by SIGINT / SIGTERM once install_stop_handlers() ran (a test may set or clear it).
 std::atomic<bool>& stop_flag();
 /// SIGINT and SIGTERM set stop_flag(). No SA_RESTART: a blocking wait returns early.
+/// A node calls it before it opens LCM and says it runs: a stop from then on, at
+/// whatever point it comes, is seen by the node's loop first thing and is the
+/// orderly exit (state saved, exit 0), never death by the signal, for whoever stops
+/// it (a test, systemd, run_team.sh).
 void install_stop_handlers();
 
 struct TransportArgs {
