@@ -37,14 +37,18 @@ def t_critical(dof):
     return T975[dof - 1] if dof <= len(T975) else 1.96
 
 
+def runs_files(dirs):
+    """The runs.csv of each sweep directory, in the order given."""
+    return [f"{d}/runs.csv" for d in dirs]
+
+
 def read_runs(dirs):
     """The sweeps' runs pooled: {(dynamism, speed, seed): {mode: row}} and the
     metrics to compare (from the first row). Exits with file:line on a bad row or
     on a seed that is already in for its mode."""
     runs = collections.defaultdict(dict)
     metrics = None
-    for d in dirs:
-        path = f"{d}/runs.csv"
+    for path in runs_files(dirs):
         try:
             with open(path, newline="") as f:
                 rows = list(csv.DictReader(f))
@@ -63,7 +67,7 @@ def read_runs(dirs):
                          "is already in (the same seed base twice?)")
             runs[key][mode] = r
     if metrics is None:
-        sys.exit(f"paired_cells.py: {' '.join(f'{d}/runs.csv' for d in dirs)} has no runs")
+        sys.exit(f"paired_cells.py: {' '.join(runs_files(dirs))} has no runs")
     return runs, metrics
 
 
@@ -76,7 +80,7 @@ def main():
     ap.add_argument("--b", default="ekf", help="mode B (default ekf)")
     args = parse_args(ap)
     runs, metrics = read_runs(args.dirs)
-    sources = " ".join(f"{d}/runs.csv" for d in args.dirs)  # what the messages below name
+    sources = " ".join(runs_files(args.dirs))  # what the messages below name
     diffs = collections.defaultdict(list)
     for (dyn, speed, _), by_mode in runs.items():
         if args.a not in by_mode or args.b not in by_mode:
