@@ -125,10 +125,11 @@ for r in "${R[@]}"; do
   PIDS+=($!)
 done
 if [ -n "$VIEW_PORT" ]; then
+  : >"$OUT/logs/viewer.log"  # exists before the viewer runs: the sed below never meets a missing file (set -e)
   "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} "${G_ARGS[@]}" \
     >"$OUT/logs/viewer.log" 2>&1 &
   VIEWER_PID=$!
-  for _ in $(seq 50); do grep -q '^viewer: http' "$OUT/logs/viewer.log" 2>/dev/null && break; sleep 0.1; done
+  for _ in $(seq 50); do grep -q '^viewer: http' "$OUT/logs/viewer.log" && break; sleep 0.1; done
   url=$(sed -n 's/^viewer: //p' "$OUT/logs/viewer.log")
   [ -n "$url" ] && echo "replay_team.sh: the viewer: $url" >&2 ||
     { echo "replay_team.sh: the viewer did not start: $(tail -n 1 "$OUT/logs/viewer.log")" >&2; VIEWER_PID=""; }

@@ -393,12 +393,15 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     WATCH_PID=$!
   fi
   if [ -n "$VIEW_PORT" ]; then  # from the logger's host: it hears every channel; not supervised
+    # The log exists before the viewer starts: the background job opens it only when
+    # it is scheduled, and reading a missing file ends this script (set -e) silently.
+    : >"$OUT/logs/viewer.log"
     $($where log) "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} \
       "${KEY_ARGS[@]}" >"$OUT/logs/viewer.log" 2>&1 &
     VIEWER_PID=$!
     local url=""
     for _ in $(seq 50); do
-      url=$(sed -n 's/^viewer: \(http[^ ]*\)$/\1/p' "$OUT/logs/viewer.log" 2>/dev/null)
+      url=$(sed -n 's/^viewer: \(http[^ ]*\)$/\1/p' "$OUT/logs/viewer.log")
       [ -n "$url" ] || ! kill -0 "$VIEWER_PID" 2>/dev/null || { sleep 0.1; continue; }
       break
     done

@@ -26,6 +26,7 @@ HERE="$ROOT/tests/system"
 if [ "${1:-}" = "--inside" ]; then
   BUILD="$2" LOG="$3" OUT="$4"
   mkdir -p "$OUT"
+  : > "$OUT/viewer.out"  # exists before the viewer runs: the sed below never meets a missing file (set -e)
   "$BUILD/bin/viewer" --config "$ROOT/config/paper.yaml" --port 0 > "$OUT/viewer.out" 2> "$OUT/viewer.err" &
   VIEWER=$!
   trap 'kill -KILL $VIEWER 2>/dev/null || true' EXIT
@@ -93,7 +94,8 @@ wait "$TEAM" || {
   rc=1
 }
 grep -q "the viewer: http://127.0.0.1:$VPORT/" "$OUT/team.txt" || { echo "viewer: FAIL run_team.sh printed no viewer URL"; rc=1; }
-first="${frames[0]:-none}" last="${frames[${#frames[@]}-1]:-none}"
+first=none last=none  # no look at all: the failure below, not a bash error on an empty array
+[ "${#frames[@]}" -eq 0 ] || { first="${frames[0]}"; last="${frames[-1]}"; }
 echo "viewer: run_team.sh --view: ${#frames[@]} looks from the host, first (frame robots) $first, last $last"
 read -r f1 _ <<<"$first"; read -r f2 n2 <<<"$last"
 [ "${#frames[@]}" -ge 2 ] && [ "${f2:-0}" -gt "${f1:-0}" ] && [ "${n2:-0}" -eq 3 ] ||
