@@ -103,6 +103,8 @@ trap 'echo "replay_team.sh: interrupted" >&2; exit 130' INT TERM
 read -r -a R <<<"$ROBOTS"
 # shellcheck source=tools/lcm_groups.sh
 . "$ROOT/tools/lcm_groups.sh"
+# shellcheck source=tools/viewer_url.sh
+. "$ROOT/tools/viewer_url.sh"
 # Channel groups as the nodes will open them (the config may ask for them).
 G_ARGS=()
 [ "$GROUPED" -eq 0 ] || G_ARGS=(--channel-groups)
@@ -125,12 +127,10 @@ for r in "${R[@]}"; do
   PIDS+=($!)
 done
 if [ -n "$VIEW_PORT" ]; then
-  : >"$OUT/logs/viewer.log"  # exists before the viewer runs: the sed below never meets a missing file (set -e)
   "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} "${G_ARGS[@]}" \
     >"$OUT/logs/viewer.log" 2>&1 &
   VIEWER_PID=$!
-  for _ in $(seq 50); do grep -q '^viewer: http' "$OUT/logs/viewer.log" && break; sleep 0.1; done
-  url=$(sed -n 's/^viewer: //p' "$OUT/logs/viewer.log")
+  url=$(wait_viewer_url "$OUT/logs/viewer.log" "$VIEWER_PID")
   [ -n "$url" ] && echo "replay_team.sh: the viewer: $url" >&2 ||
     { echo "replay_team.sh: the viewer did not start: $(tail -n 1 "$OUT/logs/viewer.log")" >&2; VIEWER_PID=""; }
 fi

@@ -321,6 +321,8 @@ make_host() {
 # add_loss HOST: drop LOSS % of the host's incoming UDP packets (tools/loss_rule.sh).
 # shellcheck source=tools/loss_rule.sh
 . "$ROOT/tools/loss_rule.sh"
+# shellcheck source=tools/viewer_url.sh
+. "$ROOT/tools/viewer_url.sh"
 # With --loss-scope radio a robot's host does not drop what the simulator sends (its
 # SENSOR frames: on a robot they come from its own drivers, not over the radio).
 add_loss() {
@@ -393,18 +395,11 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     WATCH_PID=$!
   fi
   if [ -n "$VIEW_PORT" ]; then  # from the logger's host: it hears every channel; not supervised
-    # The log exists before the viewer starts: the background job opens it only when
-    # it is scheduled, and reading a missing file ends this script (set -e) silently.
-    : >"$OUT/logs/viewer.log"
     $($where log) "$BIN/viewer" --config "$CONFIG" --port "$VIEW_PORT" ${VIEW_NS:+--http-netns "$VIEW_NS"} \
       "${KEY_ARGS[@]}" >"$OUT/logs/viewer.log" 2>&1 &
     VIEWER_PID=$!
-    local url=""
-    for _ in $(seq 50); do
-      url=$(sed -n 's/^viewer: \(http[^ ]*\)$/\1/p' "$OUT/logs/viewer.log")
-      [ -n "$url" ] || ! kill -0 "$VIEWER_PID" 2>/dev/null || { sleep 0.1; continue; }
-      break
-    done
+    local url
+    url=$(wait_viewer_url "$OUT/logs/viewer.log" "$VIEWER_PID")
     if [ -n "$url" ]; then
       echo "run_team.sh: the viewer: $url" >&2
     else

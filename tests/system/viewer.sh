@@ -21,17 +21,18 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
+# shellcheck source=tools/viewer_url.sh
+. "$ROOT/tools/viewer_url.sh"
 
 # --- step 2, inside the replay namespace: viewer.sh --inside BUILD LOG OUT
 if [ "${1:-}" = "--inside" ]; then
   BUILD="$2" LOG="$3" OUT="$4"
   mkdir -p "$OUT"
-  : > "$OUT/viewer.out"  # exists before the viewer runs: the sed below never meets a missing file (set -e)
   "$BUILD/bin/viewer" --config "$ROOT/config/paper.yaml" --port 0 > "$OUT/viewer.out" 2> "$OUT/viewer.err" &
   VIEWER=$!
   trap 'kill -KILL $VIEWER 2>/dev/null || true' EXIT
-  for _ in $(seq 100); do grep -q '^viewer: http' "$OUT/viewer.out" && break; sleep 0.1; done
-  URL=$(sed -n 's/^viewer: \(http[^ ]*\)\/$/\1/p' "$OUT/viewer.out")
+  URL=$(wait_viewer_url "$OUT/viewer.out" "$VIEWER" 100)
+  URL="${URL%/}"
   [ -n "$URL" ] || { echo "viewer: no URL"; cat "$OUT/viewer.err"; exit 1; }
   lcm-logplayer "$LOG" > "$OUT/logplayer.log" 2>&1 &
   PLAYER=$!
