@@ -4,18 +4,21 @@
 // the installed default (common/cli.hpp).
 // Subscribes LMAP_EVENT(S), LMAP_SNAPSHOT, POSE_<r>; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
 // STATUS_MAIN. A thin shell: MainNode on the node shell (MainPorts, main_node.hpp),
-// exactly as the in-process team run runs it. The map is saved to --state atomically
-// (write, then rename) on change at a bounded rate and at shutdown, and reloaded at start.
+// exactly as the in-process team run runs it. The map is saved to --state, sealed and
+// atomically (map_state.hpp), on change at a bounded rate and at shutdown, and
+// reloaded at start; a file it refuses is moved aside to PATH.corrupt and main starts
+// with an empty map (exit 2 stays for configuration errors: systemd does not restart it).
 #include <chrono>
 #include <cstdio>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
-#include "elaslam/common/atomic_file.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/map_state.hpp"
 #include "elaslam/transport/auth_transport.hpp"
+#include "elaslam/transport/incarnation.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -40,45 +43,18 @@ GlobalMapOptions load_options(const std::string& path) {
   return o;
 }
 
-/// files::write_atomic: a temporary made by mkstemp beside it (never a planted link
-/// followed), fsync'ed, renamed over, the directory fsync'ed. Says so when it failed.
-void save_state(const GlobalMap& map, const std::string& path) {
-  std::string why;
-  if (files::write_atomic(path, map.to_json(), &why)) return;
-  std::fprintf(stderr, "main_robot: cannot save %s: %s\n", path.c_str(), why.c_str());
-}
-
-/// The saved map, when --state names a file that exists; false (said why) when it
-/// cannot be read or does not hold (from_json checks it like a message).
-bool resume(const std::string& path, GlobalMap* map) {
-  std::string text, why;
-  bool missing = false;
-  if (path.empty()) return true;
-  if (!files::read_all(path, &text, &why, &missing)) {
-    if (missing) return true;
-    std::fprintf(stderr, "main_robot: cannot load state %s: %s\n", path.c_str(), why.c_str());
-    return false;
-  }
-  if (!map->from_json(text, &why)) {
-    std::fprintf(stderr, "main_robot: cannot load state %s: %s\n", path.c_str(), why.c_str());
-    return false;
-  }
-  std::fprintf(stderr, "main_robot: resumed from %s (version %lld, %d static, %d moving)\n", path.c_str(),
-               (long long)map->version(), map->count(GlobalStatus::kStatic), map->count(GlobalStatus::kMoving));
-  return true;
-}
-
 void final_line(const MainNode& node) {
   const auto& c = node.counters();
   std::fprintf(stderr, "main_robot: events=%lld snapshots=%lld duplicates=%lld gaps=%lld rejected=%lld "
                "decode_errors=%lld notices=%lld static=%d moving=%d version=%lld maps=%lld map_chunks=%lld "
-               "moving_sets=%lld stale_poses=%lld runs_started=%lld occupied=%lld team_map_left_out=%lld\n",
+               "moving_sets=%lld stale_poses=%lld runs_started=%lld occupied=%lld team_map_left_out=%lld "
+               "state_damaged=%lld\n",
                (long long)c.events, (long long)c.snapshots, (long long)c.duplicates, (long long)c.gaps,
                (long long)c.rejected_inputs, (long long)c.decode_errors, (long long)c.notices_sent,
                node.map().count(GlobalStatus::kStatic), node.map().count(GlobalStatus::kMoving),
                (long long)node.map().version(), (long long)c.maps_published, (long long)c.map_chunks,
                (long long)c.moving_sets, (long long)c.stale_poses, (long long)c.runs_started,
-               (long long)c.occupied, (long long)node.map().rounds_left_out());
+               (long long)c.occupied, (long long)node.map().rounds_left_out(), (long long)c.state_damaged);
 }
 
 int run(const Args& a) {
@@ -94,17 +70,34 @@ int run(const Args& a) {
   if (a.check) {  // e.g. after editing /etc/elaslam/elaslam.yaml, before restarting the service
     std::printf("main_robot: %s (%s): valid\n", cfg.path.c_str(), cfg.origin.c_str());
     std::fflush(stdout);
-    return transport::check_team_key(a.transport, cfg.path, "main_robot");
+    return transport::check_transport(a.transport, cfg.path, "main_robot", transport::kSenderMain, true);
   }
   transport::install_stop_handlers();  // before LCM and the start line (process.hpp)
-  int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
-  const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::auth::kSenderMain, "main_robot", &open_rc);
+  std::string note;
+  const std::int64_t incarnation = transport::start_incarnation(a.state, &note);  // a later start: a larger one
+  int open_rc = 1;  // authenticated when the team's keys are configured (transport/process.hpp)
+  StateKey file_key{};
+  bool keyed = false;  // the state file sealed with the node's key of this mission, when it signs
+  const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::kSenderMain, true, incarnation, "main_robot",
+                                       &open_rc, stderr, &file_key, &keyed);
   if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions("main_robot", a.transport.channel_suffix));
   MainNode node(o);
-  node.set_incarnation(transport::now_utime());  // a later start has a larger one (landmark_event_t)
+  node.set_incarnation(incarnation);
   MainPorts<transport::NodeShell> ports(shell, node);
-  if (!resume(a.state, &node.map())) return 2;
+  // Keyed with the node's own key of this mission: an edited file, or one of another
+  // mission, does not verify (docs/security.md "main_robot's state file").
+  const StateKey* state_key = keyed ? &file_key : nullptr;
+  if (!a.state.empty()) {
+    const MapStateLoad loaded = load_map_state(a.state, state_key, &node.map());
+    std::fprintf(stderr, "main_robot: %s\n", loaded.line.c_str());
+    if (loaded.outcome == MapStateOutcome::kFreshAfterDamage) node.count_state_damaged();
+  }
+  const auto save_state = [&] {
+    std::string why;
+    if (!save_map_state(a.state, node.map(), state_key, &why))
+      std::fprintf(stderr, "main_robot: cannot save %s: %s\n", a.state.c_str(), why.c_str());
+  };
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");
     return 1;
@@ -121,14 +114,14 @@ int run(const Args& a) {
   shell.every(Clock::duration::zero(), [&] {  // each turn: saved on change, at most once a save_period
     const auto now = Clock::now();
     if (a.state.empty() || now < next_save || node.map().version() == saved_version) return;
-    save_state(node.map(), a.state);
+    save_state();
     saved_version = node.map().version();
     next_save = now + save_period;
   });
   shell.spin(5);  // a transport failure is logged; the map is still published and saved
   ports.publish_map();
   ports.publish_status();
-  if (!a.state.empty()) save_state(node.map(), a.state);
+  if (!a.state.empty()) save_state();
   final_line(node);
   return 0;
 }

@@ -8,6 +8,7 @@
 // With --state the node's whole state (robot_state.hpp) is saved atomically after
 // processed frames at most every node.state_save_interval_s and at exit, and
 // resumed at start; a corrupt file is moved aside to PATH.corrupt (docs/deployment.md).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
@@ -20,6 +21,7 @@
 #include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
+#include "elaslam/transport/incarnation.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -65,17 +67,14 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
 // Robot::event_capacity, 3 x 64 + capacity + 8, events a frame).
 constexpr std::int64_t kResumeSeqSkip = std::int64_t{1} << 24;
 
-std::int64_t wall_clock_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-
 void save(const std::string& path, const RobotNode& node);
 
 /// The state in `path` when there is one (true: resumed); a corrupt one is moved
 /// aside to PATH.corrupt (said why) and the node starts fresh: a bad file must not
-/// keep a robot down. A fresh start takes a new incarnation (later starts: larger ones).
-bool resume(const std::string& path, RobotNode* node) {
-  node->set_incarnation(wall_clock_us());
+/// keep a robot down. A fresh start takes this start's incarnation (`incarnation`,
+/// transport/incarnation.hpp: later starts have larger ones); a resumed node keeps its own.
+bool resume(const std::string& path, std::int64_t incarnation, RobotNode* node) {
+  node->set_incarnation(incarnation);
   if (path.empty()) return false;
   std::string text, why;
   bool missing = false;
@@ -123,8 +122,8 @@ class StateKeeper {
   static constexpr std::int64_t kMisfitFrames = 10;
   using Clock = std::chrono::steady_clock;
 
-  StateKeeper(std::string path, const RobotOptions& o, RobotNode* node, bool resumed)
-      : path_(std::move(path)), options_(o), node_(node), watching_(resumed),
+  StateKeeper(std::string path, const RobotOptions& o, RobotNode* node, bool resumed, std::int64_t incarnation)
+      : path_(std::move(path)), options_(o), node_(node), watching_(resumed), next_incarnation_(incarnation + 1),
         period_(std::chrono::microseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1e6))),
         next_save_(Clock::now()), saved_frames_(node->counters().frames), frames_at_start_(saved_frames_),
         refused_at_start_(refused()) {}
@@ -156,10 +155,13 @@ class StateKeeper {
                  (long long)kMisfitFrames);
     start_fresh();
   }
-  // A fresh node with a new incarnation (main_robot takes its stream for a restart).
+  // A fresh node with a new incarnation, larger than this start's and any resumed one
+  // (main_robot takes its stream for a restart).
   void start_fresh() {
+    const std::int64_t next = std::max(next_incarnation_, node_->incarnation() + 1);
     *node_ = RobotNode(options_, node_->robot_id());
-    node_->set_incarnation(wall_clock_us());
+    node_->set_incarnation(next);
+    next_incarnation_ = next + 1;
     watching_ = false;
   }
 
@@ -180,6 +182,7 @@ class StateKeeper {
   const RobotOptions options_;
   RobotNode* node_;
   bool watching_;
+  std::int64_t next_incarnation_;
   const Clock::duration period_;
   Clock::time_point next_save_;
   std::int64_t saved_frames_;
@@ -227,23 +230,29 @@ int run(const Args& a) {
                 to_string(o.mode));
     if (a.verbose) std::printf("%s\n", effective.c_str());
     std::fflush(stdout);
-    return transport::check_team_key(a.transport, cfg.path, "robot_node " + std::to_string(a.robot));
+    return transport::check_transport(a.transport, cfg.path, "robot_node " + std::to_string(a.robot),
+                                      static_cast<std::int16_t>(a.robot), true);
   }
   transport::install_stop_handlers();  // before LCM and the start line (process.hpp)
   const std::string name = "robot_node " + std::to_string(a.robot);
-  int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
-  const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), name, &open_rc);
+  std::string note;
+  const std::int64_t incarnation = transport::start_incarnation(a.state, &note);
+  int open_rc = 1;  // authenticated when the team's keys are configured (transport/process.hpp)
+  const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), true, incarnation,
+                                       name, &open_rc);
   if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
   RobotNode node(o, a.robot);
-  StateKeeper keeper(a.state, o, &node, resume(a.state, &node));
+  const bool resumed = resume(a.state, incarnation, &node);
+  StateKeeper keeper(a.state, o, &node, resumed, incarnation);
   RobotPorts<transport::NodeShell> ports(shell, node);
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");
     return 1;
   }
-  std::fprintf(stderr, "%s: %s, config %s (%s), mode=%s lcm=%s\n", name.c_str(), cli::version_line("robot_node").c_str(),
-               cfg.path.c_str(), cfg.origin.c_str(), to_string(o.mode), transport::describe_url(a.transport.lcm_url).c_str());
+  std::fprintf(stderr, "%s: %s, config %s (%s), mode=%s lcm=%s, incarnation %lld (%s)\n", name.c_str(),
+               cli::version_line("robot_node").c_str(), cfg.path.c_str(), cfg.origin.c_str(), to_string(o.mode),
+               transport::describe_url(a.transport.lcm_url).c_str(), static_cast<long long>(incarnation), note.c_str());
   if (a.verbose) std::fprintf(stderr, "%s\n", effective.c_str());
   shell.every(std::chrono::milliseconds(static_cast<int>(a.status_period_s * 1000)), [&] { ports.publish_status(); });
   shell.every(transport::NodeShell::Clock::duration::zero(), [&] { keeper.turn(); });

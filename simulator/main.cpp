@@ -20,6 +20,8 @@
 #include "elaslam/simulator/sim_node.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
+#include "elaslam/transport/incarnation.hpp"
+#include "elaslam/transport/incarnation.hpp"
 #include "elaslam/transport/process.hpp"
 
 namespace {
@@ -96,8 +98,9 @@ bool load(Args* a, ScenarioOptions* o) {
 
 int run(const Args& a, const ScenarioOptions& o) {
   namespace transport = elaslam::transport;
-  int open_rc = 1;  // authenticated when a team key is configured (transport/process.hpp)
-  const auto lcm = transport::open_lcm(a.transport, a.run.config_path, transport::auth::kSenderSimulator, "simulator", &open_rc);
+  int open_rc = 1;  // authenticated when the team's keys are configured (transport/process.hpp)
+  const auto lcm = transport::open_lcm(a.transport, a.run.config_path, transport::kSenderSimulator, true,
+                                       transport::start_incarnation(""), "simulator", &open_rc);
   if (!lcm) return open_rc;
   const std::string& suffix = a.transport.channel_suffix;
   std::cerr << elaslam::cli::version_line("simulator") << ", config " << a.run.config_path << " ("
@@ -121,7 +124,8 @@ int simulator_main(int argc, char** argv) {
   if (args.check) {
     std::cout << "simulator: " << args.run.config_path << " (" << args.config_choice.origin << "): valid\n"
               << elaslam::sim::describe(options) << std::flush;
-    return elaslam::transport::check_team_key(args.transport, args.run.config_path, "simulator");
+    return elaslam::transport::check_transport(args.transport, args.run.config_path, "simulator",
+                                               elaslam::transport::kSenderSimulator, true);
   }
   if (args.list_robots) {
     for (std::size_t i = 0; i < options.robots.size(); ++i) std::printf("%s%d", i ? " " : "", options.robots[i].id);

@@ -92,10 +92,11 @@ struct LogData {
   std::int64_t bytes_skipped = 0;  // [bytes] between events, not an event (a damaged log)
   bool complete = true;            // false: the log ends in a truncated event
   GlobalMapAssembly map_assembly;  // GLOBAL_MAP chunks -> the map of one publication
-  // With the team key (--key-file, team.key_file): events are verified as the nodes
-  // verify them; what a keyed receiver refuses (forged, replayed...) is not evaluated.
+  // With the team's roster (the --config's team.public_keys and mission): events are
+  // verified as the nodes verify them; what they refuse (forged, another mission,
+  // replayed...) is not evaluated.
   std::unique_ptr<LogAuth> auth;
-  std::string key_file;
+  std::string roster;
 };
 
 template <typename Msg>
@@ -200,8 +201,8 @@ bool read_log(const std::string& path, const std::string& suffix, LogData* d, st
   d->bytes_skipped = log->skipped();
   d->complete = log->complete();
   if (d->truth.empty() && d->auth && d->auth->refused() > 0 && d->auth->accepted() == 0) {
-    *why = "no event of " + path + " verifies with the team key " + d->key_file + " (" +
-           std::to_string(d->auth->refused()) + " refused): a team without this key recorded it";
+    *why = "no event of " + path + " verifies with the roster and mission of " + d->roster + " (" +
+           std::to_string(d->auth->refused()) + " refused): another team or mission recorded it";
     return false;
   }
   if (d->truth.empty()) {
@@ -325,7 +326,7 @@ nlohmann::json run_info_json(const run_info_t& m) {
 }
 
 struct Args {
-  std::string log_path, out_dir, config, baseline, mode, channel_suffix, key_file;
+  std::string log_path, out_dir, config, baseline, mode, channel_suffix, mission, roster;
   bool quiet = false;
   double dynamism = -1.0, speed = -1.0;
   long long seed = -1;
@@ -421,7 +422,7 @@ void add_log_figures(const LogData& d, const Assembled& x, nlohmann::json* j) {
   for (const auto& [ch, n] : d.decode_errors) (*j)["decode_errors"][ch] = n;
   for (const auto& [ch, reasons] : d.invalid)
     for (const auto& [why, n] : reasons) (*j)["invalid_messages"][ch][why] = n;
-  (*j)["authentication"] = d.auth ? d.auth->to_json(d.key_file) : nlohmann::json(nullptr);
+  (*j)["authentication"] = d.auth ? d.auth->to_json(d.roster) : nlohmann::json(nullptr);
   (*j)["capacity_faults"] = d.capacity_faults;  // STATUS channels that raised FAULT_CAPACITY
   for (const auto& [ch, counts] : d.refused)
     for (int k = 0; k < kNumRefusals; ++k)
@@ -470,8 +471,8 @@ void print_report(const LogData& d, const Assembled& x, const RunInfo& info, con
     for (const auto& [why, n] : reasons)
       std::cout << "  invalid messages on " << ch << " (" << why << "), not evaluated: " << n << "\n";
   if (d.auth) {
-    std::cout << "  authentication (team key " << d.key_file << "): " << d.auth->accepted() << " events verified, "
-              << d.auth->refused() << " refused and not evaluated\n";
+    std::cout << "  authentication (" << d.roster << ", mission " << transport::mission_text(d.auth->mission())
+              << "): " << d.auth->accepted() << " events verified, " << d.auth->refused() << " refused and not evaluated\n";
     for (const auto& [ch, reasons] : d.auth->refused_by_channel())
       for (const auto& [why, n] : reasons) std::cout << "    refused on " << ch << " (" << why << "): " << n << "\n";
   }
@@ -496,8 +497,10 @@ int parse_args(int argc, char** argv, Args* a) {
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--quiet", a->quiet, "no summary on stdout");
   app.add_option("--channel-suffix", a->channel_suffix, "the team's channel suffix (its processes' --channel-suffix)");
-  app.add_option("--key-file", a->key_file, "the team key: verify every event as the nodes do and leave out what they "
-                                            "would refuse (default: the config's team.key_file; none: trust the log)");
+  app.add_option("--roster", a->roster, "the team's roster file (elaslam-keys team): every event is verified as the "
+                                        "nodes do and what they would refuse is left out (default: the config's "
+                                        "team: section; none: the log is trusted)");
+  app.add_option("--mission", a->mission, "the mission to verify the events of (default: the roster's)");
   // Fallbacks for logs without RUN_INFO / STATUS_ROBOT (recorded before they existed),
   // in the simulator's ranges.
   app.add_option("--mode", a->mode, "mode to record when the robots' STATUS does not say");
@@ -523,7 +526,7 @@ int evaluate_main(int argc, char** argv) {
   TeamConfig file_config;
   if (!a.config.empty()) file_config = load_team_config(a.config);
   LogData d;
-  if (!open_log_auth(a.key_file, a.config, a.channel_suffix, "evaluate", &d.auth, &d.key_file))
+  if (!open_log_auth(a.roster, a.mission, a.config, a.channel_suffix, "evaluate", &d.auth, &d.roster))
     return cli::kExitBadInput;
   std::string why;
   if (!read_log(a.log_path, a.channel_suffix, &d, &why)) {

@@ -29,6 +29,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/contract.hpp"
 
 namespace {
 
@@ -55,7 +56,7 @@ struct Receiver {
   int received = 0;
   void on_message(const lcm::ReceiveBuffer* rb, const std::string&) {
     const std::int64_t now = mono_ns();
-    if (rb->data_size < 16) return;
+    if (rb->data_size < 16 || rb->data_size > elaslam::contract::kMaxMessageBytes) return;  // a cut datagram: -1
     std::int64_t seq = 0, sent = 0;
     std::memcpy(&seq, rb->data, 8);
     std::memcpy(&sent, static_cast<const char*>(rb->data) + 8, 8);

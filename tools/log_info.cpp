@@ -3,7 +3,7 @@
 // recorded (RUN_INFO), the frames it covers and, per robot, what happened to every
 // frame: POSE logged, robot not started yet, frame dropped by the robot, or POSE
 // processed but lost by the recorder (docs/tools.md "log_info").
-//   log_info LOG [--json] [--key-file KEY | --config FILE]
+//   log_info LOG [--json] [--config FILE] [--roster FILE] [--mission M]
 // Exit status: 0 on success, 2 on a bad argument or a file that cannot be read or is
 // not an LCM log (the reason on stderr).
 #include <cstdio>
@@ -23,20 +23,21 @@ namespace {
 int log_info_main(int argc, char** argv) {
   std::string path;
   bool json = false;
-  std::string key_file, config;
+  std::string mission, config, roster;
   CLI::App app{"elaslam log_info: summary of a recorded LCM log (channels, run info, frames per robot)"};
   elaslam::cli::add_version_flag(app, "log_info");
   app.add_option("LOG", path, "LCM log (lcm-logger, mrclam_import)")->required();
   app.add_flag("--json", json, "print the summary as JSON (units in the keys) instead of text");
-  app.add_option("--key-file", key_file, "the team key: verify every event as the nodes do; count and skip what they "
-                                         "would refuse (default: the --config's team.key_file; none: trust the log)");
-  app.add_option("--config", config, "the team's config file, for its team.key_file");
+  app.add_option("--config", config, "the team's config file: with its team.public_keys and mission every event is "
+                                     "verified as the nodes do, what they would refuse counted and skipped");
+  app.add_option("--roster", roster, "the team's roster file (elaslam-keys team), over the config's");
+  app.add_option("--mission", mission, "the mission to verify the events of (default: the roster's)");
   std::string suffix;
   app.add_option("--channel-suffix", suffix, "the team's channel suffix (which sender owns which channel)");
   if (const int rc = elaslam::cli::parse(app, argc, argv); rc >= 0) return rc;
   std::string used_key;
   std::unique_ptr<elaslam::LogAuth> auth;
-  if (!elaslam::open_log_auth(key_file, config, suffix, "log_info", &auth, &used_key))
+  if (!elaslam::open_log_auth(roster, mission, config, suffix, "log_info", &auth, &used_key))
     return elaslam::cli::kExitBadInput;
   try {
     const elaslam::LogSummary s = elaslam::summarize_log(path, auth.get(), used_key);

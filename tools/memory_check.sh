@@ -17,7 +17,7 @@
 #   (t_s,process,pid,rss_kb,hwm_kb).
 # - At the end prints per process: RSS at the first sample, at 60 s (after warm-up),
 #   the maximum and the last, and the least-squares slope of RSS after 60 s [KiB/min].
-# - --log also records the run with lcm-logger (DIR/run.lcmlog; ~10 MB a minute).
+# - --log also records the run with the recorder (record: DIR/run.lcmlog; ~10 MB a minute).
 # - As root the team runs in a private network namespace (tools/netns_run.sh);
 #   otherwise on LCM_DEFAULT_URL (multicast on loopback must be enabled).
 set -euo pipefail
@@ -81,7 +81,7 @@ start() {
   "$@" > "$OUT/logs/$name.log" 2>&1 &
   PIDS+=($!); NAMES+=("$name")
 }
-[ "$LOG" -eq 1 ] && start logger lcm-logger -f -q "$OUT/run.lcmlog"
+[ "$LOG" -eq 1 ] && start logger "$BIN/record" -f -q "$OUT/run.lcmlog"
 start main_robot "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json"
 for r in "${ROBOTS[@]}"; do start "robot_node_$r" "$BIN/robot_node" --config "$CONFIG" --robot "$r"; done
 start simulator "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) --frames "$FRAMES" "${SIM_ARGS[@]}"

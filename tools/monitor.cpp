@@ -153,7 +153,7 @@ int monitor_main(int argc, char** argv) {
     }
   }
   int open_rc = 1;
-  const auto lcm = transport::open_lcm(targs, config_path, transport::auth::kSenderTool, "monitor", &open_rc, nullptr);
+  const auto lcm = transport::open_lcm(targs, config_path, transport::kSenderTool, false, 0, "monitor", &open_rc, nullptr);
   if (!lcm) return open_rc;
   // No log: the line is the monitor's output; bad messages show in it as "undecodable".
   transport::NodeShell shell(*lcm, transport::ShellOptions("monitor", targs.channel_suffix, nullptr));

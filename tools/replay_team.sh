@@ -6,7 +6,7 @@
 #                            [--out DIR] [--port P] [--build-dir DIR] [--robots "1 2 3"]
 #                            [--channel-groups]
 #
-# - Starts lcm-logger (DIR/run.lcmlog), main_robot and one robot_node per robot of
+# - Starts the recorder (record: DIR/run.lcmlog), main_robot and one robot_node per robot of
 #   the log (its SENSOR_<r> channels, or --robots), waits until each has announced
 #   itself, then plays the log's inputs only (SENSOR_<r>, GROUND_TRUTH, RUN_INFO)
 #   with lcm-logplayer at S times the recorded speed (default 1): the nodes compute
@@ -21,7 +21,7 @@
 # - --channel-groups (or the config's team.channel_groups: true): the nodes open one
 #   LCM port per channel group (tools/lcm_groups.sh); the log is played by one
 #   lcm-logplayer per group (started together: each keeps the log's timing) and
-#   recorded by one lcm-logger per group, merged by log_merge into DIR/run.lcmlog.
+#   recorded by one recorder per group, merged by log_merge into DIR/run.lcmlog.
 # - To watch a recorded run as it was (no nodes): `viewer` and
 #   `lcm-logplayer run.lcmlog` on the same LCM URL (docs/tools.md).
 # Exit status: 0 done, 1 a node or the replay failed, 2 bad arguments, 130 interrupted.
@@ -68,10 +68,10 @@ done
 LOG="$(cd "$(dirname "$LOG")" && pwd)/$(basename "$LOG")"
 CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
 BIN="$BUILD_DIR/bin"
-for p in main_robot robot_node evaluate log_info log_merge ${VIEW_PORT:+viewer}; do
+for p in main_robot robot_node evaluate log_info log_merge record ${VIEW_PORT:+viewer}; do
   [ -x "$BIN/$p" ] || die "no $BIN/$p (build it: cmake --build $BUILD_DIR --target $p)"
 done
-command -v lcm-logplayer >/dev/null && command -v lcm-logger >/dev/null || die "needs lcm-logplayer and lcm-logger (liblcm-bin)"
+command -v lcm-logplayer >/dev/null || die "needs lcm-logplayer (liblcm-bin)"
 PY="$ROOT/.venv/bin/python"
 [ -x "$PY" ] || die "needs the Python venv (tools/setup.sh)"
 [ -n "$OUT" ] || OUT="$ROOT/runs/replay_$(date +%Y%m%d_%H%M%S)"
@@ -113,11 +113,11 @@ G_ARGS=()
 GROUPED=$(lcm_groups_in_check "$OUT/logs/check.log")
 [ "$GROUPED" -eq 0 ] || G_ARGS=(--channel-groups)
 if [ "$GROUPED" -eq 0 ]; then
-  lcm-logger -f -q "$OUT/run.lcmlog" >"$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
+  "$BIN/record" -f -q "$OUT/run.lcmlog" >"$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
 else
   mkdir -p "$OUT/groups"
   for g in $(lcm_team_groups "${R[@]}"); do
-    lcm-logger -f -q --lcm-url="$(lcm_group_url "$g")" "$OUT/groups/g$g.lcmlog" >"$OUT/logs/logger_g$g.log" 2>&1 &
+    "$BIN/record" -f -q --lcm-url="$(lcm_group_url "$g")" "$OUT/groups/g$g.lcmlog" >"$OUT/logs/logger_g$g.log" 2>&1 &
     PIDS+=($!)
   done
 fi

@@ -8,14 +8,15 @@
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
 #                     [--loss P [--loss-scope radio|all]]
 #                     [--kill-robot R --kill-at-frame F [--restart-after S]]
-#                     [--robot-state] [--key-file FILE | --auth] [--view [PORT]] [--channel-groups]
+#                     [--robot-state] [--keys DIR | --auth] [--view [PORT]] [--channel-groups]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
 #   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
 #   Arguments are checked before any of that starts.
 # - Defaults: config/paper.yaml (its scenario: 50 % of the landmarks moving at
 #   0.5 m/s, seed 1, 150 frames at 10 Hz), the config's robot.mode (ela).
-# - Starts lcm-logger (DIR/run.lcmlog), main_robot, one robot_node per robot of the
+# - Starts the recorder (record, an lcm-logger that survives malformed datagrams:
+#   DIR/run.lcmlog), main_robot, one robot_node per robot of the
 #   scenario, a progress line (monitor: frame k/N, poses, moving landmarks found),
 #   then the simulator, which waits until every node has announced itself on
 #   STATUS_* and then publishes at F frames/s. Process logs go to DIR/logs/.
@@ -25,7 +26,7 @@
 #   (--no-baseline: without). DIR/metrics.json has everything, with provenance.
 # - As root, the whole team runs in a private network namespace with multicast on
 #   its loopback (nothing leaves the machine); with --hosts each process gets a
-#   namespace of its own (lcm-logger too), joined by a bridge (veth pairs), as
+#   namespace of its own (the recorder too), joined by a bridge (veth pairs), as
 #   separate onboard computers would be (multicast TTL 1). Not as root: the LCM URL
 #   comes from LCM_DEFAULT_URL (or LCM's default) and multicast on loopback must be
 #   enabled.
@@ -38,15 +39,15 @@
 # - --realtime (root): real-time scheduling (SCHED_FIFO, chrt) as an onboard
 #   computer would give its control loop: the simulator at priority 60 (it publishes
 #   a frame's SENSOR messages in one burst, not preempted by the robots it wakes),
-#   every robot_node and lcm-logger at 50 (the logger at the robots' level, or its
+#   every robot_node and the recorder at 50 (the recorder at the robots' level, or its
 #   LCM queue overflows while the robots hold both CPUs; in channel groups each
-#   group's lcm-logger at 40), main_robot normal. On this
+#   group's recorder at 40), main_robot normal. On this
 #   2-vCPU machine it brings sensor-to-pose p99 at 100 Hz under 1 ms
 #   (docs/benchmarks.md). --no-progress: no progress line (measurements: one process
 #   fewer woken by every datagram).
 # - Faults (docs/faults.md; tools/fault_test.sh runs a set of them):
 #   --loss P (with --hosts; P in [0, 100], at most one decimal): every receiving
-#   host (simulator, main_robot, each robot; not lcm-logger's host, so that the
+#   host (simulator, main_robot, each robot; not the recorder's host, so that the
 #   recording is complete) drops P % of its incoming IPv4 UDP packets, single IP
 #   fragments before reassembly (nftables, prerouting at priority -450, numgen
 #   random), as a lossy link would: a datagram of k fragments is lost with
@@ -57,20 +58,22 @@
 #   drivers, on board; the simulator stands in for them), so robot hosts do not
 #   drop what the simulator sends them. all: the robots lose SENSOR frames too.
 #   --kill-robot R --kill-at-frame F: when robot R has published its pose of frame F
-#   (or later; watched from lcm-logger's host), its robot_node gets SIGKILL and,
+#   (or later; watched from the recorder's host), its robot_node gets SIGKILL and,
 #   --restart-after S seconds later (default 1.0; -1: never), is started again with
 #   the same command, host and arguments (its log appended). DIR/faults.log says
 #   when. Needs the Python venv (tools/setup.sh).
 #   --robot-state: each robot_node gets --state DIR/state/robot<R>.json (a
 #   robot_node that saves and reloads its state; main_robot always has --state).
-# - Message authentication (docs/security.md): --key-file FILE gives every process
-#   (simulator, main_robot, each robot_node, the progress line) the team key FILE;
-#   --auth makes a new key in DIR/team.key (tools/make_team_key.sh) and uses it.
-#   Without either, the config's team.key_file decides (the repo's configs have none).
+# - Message authentication (docs/security.md): --keys DIR takes a team's keys made by
+#   `build/bin/keys team DIR --robots 1,2,3` (elaslam-keys): every process verifies
+#   with the roster DIR/team.yaml (--roster), and each that sends signs with its own
+#   key, DIR/<sender>.key (--key-file); the recording is verified with the roster.
+#   --auth makes a new team's keys and mission in DIR/keys and uses them. Without
+#   either, the config's team: section decides (the repo's configs have none).
 # - --channel-groups (or the config's team.channel_groups: true): every process opens
 #   one LCM port per channel group, ports P to P+19 (docs/decisions.md "Channel
 #   groups"), so that each is woken only by what it reads. The recording is then one
-#   lcm-logger per group in use (DIR/groups/), merged by log_merge into DIR/run.lcmlog
+#   recorder per group in use (DIR/groups/), merged by log_merge into DIR/run.lcmlog
 #   after the run.
 # - --view [PORT] (default 8765; 0: any free port): the live viewer (docs/tools.md) with the team; its
 #   URL, http://127.0.0.1:PORT/, is printed at the start. It listens on the host's
@@ -97,7 +100,7 @@ KILL_ROBOT=""
 KILL_FRAME=""
 RESTART_AFTER=1.0
 ROBOT_STATE=0
-KEY_FILE=""      # --key-file, or DIR/team.key with --auth
+KEYS=""          # --keys: a team's key directory, or DIR/keys with --auth
 AUTH=0
 VIEW_PORT=""     # --view [PORT]
 VIEW_NS=""       # internal: the network namespace the viewer's HTTP socket goes in
@@ -119,7 +122,7 @@ number() {
 while [ $# -gt 0 ]; do
   case "$1" in
     --config|--out|--mode|--dynamism|--speed|--seed|--rate|--frames|--port|--build-dir|--loss|--loss-scope|--kill-robot|\
-    --kill-at-frame|--restart-after|--key-file)
+    --kill-at-frame|--restart-after|--keys)
       [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --config) CONFIG="$2"; shift 2 ;;
     --out) OUT="$2"; shift 2 ;;
@@ -140,7 +143,7 @@ while [ $# -gt 0 ]; do
     --kill-at-frame) number --kill-at-frame "$2" 0 100000000 int; KILL_FRAME="$2"; shift 2 ;;
     --restart-after) [ "$2" = -1 ] || number --restart-after "$2" 0 3600; RESTART_AFTER="$2"; shift 2 ;;
     --robot-state) ROBOT_STATE=1; shift ;;
-    --key-file) KEY_FILE="$2"; shift 2 ;;
+    --keys) KEYS="$2"; shift 2 ;;
     --auth) AUTH=1; shift ;;
     --channel-groups) GROUPED=1; shift ;;
     --in-process) IN_PROCESS=1; shift ;;
@@ -175,20 +178,16 @@ if [ "$REALTIME" -eq 1 ] && { [ "$(id -u)" -ne 0 ] || ! command -v chrt >/dev/nu
   echo "run_team.sh: --realtime needs root and chrt (util-linux); running with normal scheduling" >&2
   REALTIME=0
 fi
-[ -z "$KEY_FILE" ] || [ "$AUTH" -eq 0 ] || die "--key-file and --auth do not go together (--auth makes a key)"
-[ -z "$KEY_FILE" ] || [ -f "$KEY_FILE" ] || die "--key-file $KEY_FILE: no such file"
-[ -z "$KEY_FILE" ] || KEY_FILE="$(cd "$(dirname "$KEY_FILE")" && pwd)/$(basename "$KEY_FILE")"
+[ -z "$KEYS" ] || [ "$AUTH" -eq 0 ] || die "--keys and --auth do not go together (--auth makes the keys)"
+[ -z "$KEYS" ] || [ -f "$KEYS/team.yaml" ] || die "--keys $KEYS: no team.yaml there (make the keys with: build/bin/keys team DIR --robots 1,2,3)"
+[ -z "$KEYS" ] || KEYS="$(cd "$KEYS" && pwd)"
 [ -n "$OUT" ] || OUT="$ROOT/runs/team_$(date +%Y%m%d_%H%M%S)"
 mkdir -p "$OUT/logs" 2>/dev/null || die "cannot create the output directory $OUT"
 OUT="$(cd "$OUT" && pwd)"
 [ "$ROBOT_STATE" -eq 0 ] || mkdir -p "$OUT/state"
-if [ "$AUTH" -eq 1 ]; then  # a new key for this run (the nested run inside the namespace gets --key-file)
-  rm -f "$OUT/team.key"
-  "$ROOT/tools/make_team_key.sh" "$OUT/team.key" 2>/dev/null || die "cannot make a team key in $OUT/team.key"
-  KEY_FILE="$OUT/team.key"
-fi
-KEY_ARGS=(${KEY_FILE:+--key-file "$KEY_FILE"})
-# Given to every process: its transport (the key, the channel groups).
+# Given to every process: its transport (the team's roster, the channel groups); each
+# sender also gets its own key (key_of).
+KEY_ARGS=()
 [ "$GROUPED" -eq 0 ] || KEY_ARGS+=(--channel-groups)
 # --view holds the page after the run only for someone at a terminal (the outermost
 # run's stdin; a nested run's is /dev/null).
@@ -204,7 +203,7 @@ interrupted() {
 }
 trap interrupted INT TERM
 
-TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor log_merge)
+TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor log_merge record keys)
 [ -z "$VIEW_PORT" ] || TARGETS+=(viewer)
 if [ "$INSIDE" -eq 0 ]; then
   first=0
@@ -225,6 +224,15 @@ fi
 [ -d "$BUILD_DIR/bin" ] || die "no programs in $BUILD_DIR/bin (build them: cmake --build $BUILD_DIR)"
 BUILD_DIR="$(cd "$BUILD_DIR" && pwd)"
 BIN="$BUILD_DIR/bin"
+if [ "$AUTH" -eq 1 ]; then  # a new team's keys and mission for this run (a nested run gets --keys)
+  rm -rf "$OUT/keys"
+  "$BIN/keys" team "$OUT/keys" --robots "$("$BIN/simulator" --config "$CONFIG" --list-robots | tr ' ' ,)" \
+    >"$OUT/logs/keys.log" 2>&1 || { cat "$OUT/logs/keys.log" >&2; die "cannot make the team's keys in $OUT/keys"; }
+  KEYS="$OUT/keys"
+fi
+[ -z "$KEYS" ] || KEY_ARGS+=(--roster "$KEYS/team.yaml")
+# key_of SENDER: the --key-file of a process that signs as SENDER (robot_<r>, main, simulator).
+key_of() { [ -z "$KEYS" ] || echo "--key-file $KEYS/$1.key"; }
 # The whole configuration with the overrides, checked by the simulator before anything starts.
 # As root the team will run in a namespace of its own on --port (netns_run.sh, --hosts):
 # checked with that URL, not the caller's.
@@ -232,7 +240,8 @@ CHECK_ENV=()
 if [ "$INSIDE" -eq 0 ] && { [ "$HOSTS" -eq 1 ] || { [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1; }; }; then
   CHECK_ENV=(env "LCM_DEFAULT_URL=udpm://239.255.76.67:$PORT?ttl=0")
 fi
-"${CHECK_ENV[@]}" "$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" "${KEY_ARGS[@]}" --check >"$OUT/logs/check.log" 2>&1 ||
+"${CHECK_ENV[@]}" "$BIN/simulator" --config "$CONFIG" "${SIM_ARGS[@]}" "${KEY_ARGS[@]}" $(key_of simulator) --check \
+  >"$OUT/logs/check.log" 2>&1 ||
   { sed 's/^/  /' "$OUT/logs/check.log" >&2; die "the configuration with these arguments is not valid"; }
 # Channel groups as the nodes will open them (the config may ask for them).
 if [ "$GROUPED" -eq 0 ] && grep -q "channel groups on" "$OUT/logs/check.log"; then
@@ -245,7 +254,7 @@ fi
 
 # The robots' mode (the override, else the config's robot.mode) as robot_node reads
 # it: its --check validates the robot section and says "valid, mode M".
-"$BIN/robot_node" --config "$CONFIG" --robot 1 ${MODE:+--mode "$MODE"} ${KEY_FILE:+--key-file "$KEY_FILE"} --check \
+"${CHECK_ENV[@]}" "$BIN/robot_node" --config "$CONFIG" --robot 1 ${MODE:+--mode "$MODE"} "${KEY_ARGS[@]}" $(key_of robot_1) --check \
   >"$OUT/logs/check_robot.log" 2>&1 ||
   { sed 's/^/  /' "$OUT/logs/check_robot.log" >&2; die "the robots' configuration is not valid"; }
 MODE_NAME="$(sed -n 's/.*: valid, mode \([a-z]*\)$/\1/p' "$OUT/logs/check_robot.log")"
@@ -359,9 +368,11 @@ loss_report() {
     "$(awk -v n="$total_n" -v d="$total_d" 'BEGIN { printf "%.2f", n ? 100 * d / n : 0 }') % ($OUT/loss.csv)"
 }
 
-# lcm-logger's LCM queue holds 30 messages; a burst (the first landmarks' ADD
-# events, ~30 at once a few frames in) overflows it when the logger waits for a CPU.
-# As root it gets a higher share (nice -10), unless it runs real-time anyway.
+# The recorder (record, not lcm-logger: liblcm's receive thread dies on a malformed
+# datagram, transport/udpm_receiver.hpp) reads what waits in its socket's buffer; a
+# burst (the first landmarks' ADD events, ~30 at once a few frames in) waits there
+# while it waits for a CPU. As root it gets a higher share (nice -10), unless it runs
+# real-time anyway.
 logger_nice() { [ "$REALTIME" -eq 0 ] && [ "$(id -u)" -eq 0 ] && echo nice -n -10; return 0; }
 
 # Real-time priority prefix for a role (--realtime), empty otherwise.
@@ -370,7 +381,7 @@ rt() { [ "$REALTIME" -eq 1 ] && echo chrt -f "$1"; return 0; }
 launch() {  # $1: how to run each role (a function printing the prefix)
   local where="$1"
   if [ "$GROUPED" -eq 0 ]; then
-    start logger $($where log) $(rt 50) $(logger_nice) -- lcm-logger -f -q "$OUT/run.lcmlog"
+    start logger $($where log) $(rt 50) $(logger_nice) -- "$BIN/record" -f -q "$OUT/run.lcmlog"
   else  # one recorder per group in use: the team-wide ones and the team's robots' own
     # Each carries a part of the traffic, so below the robots (--realtime: 40), not at
     # their level: at 100 Hz that took sensor-to-pose p99 from 401-567 to 377-413 us
@@ -378,16 +389,17 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     mkdir -p "$OUT/groups"
     local g
     for g in $(lcm_team_groups "${ROBOTS[@]}"); do
-      start "logger_g$g" $($where log) $(rt 40) $(logger_nice) -- lcm-logger -f -q --lcm-url="$(lcm_group_url "$g")" \
+      start "logger_g$g" $($where log) $(rt 40) $(logger_nice) -- "$BIN/record" -f -q --lcm-url="$(lcm_group_url "$g")" \
         "$OUT/groups/g$g.lcmlog"
     done
   fi
-  start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json" "${KEY_ARGS[@]}"
+  start main_robot $($where main) -- "$BIN/main_robot" --config "$CONFIG" --state "$OUT/main_state.json" "${KEY_ARGS[@]}" \
+    $(key_of main)
   local state=()
   for r in "${ROBOTS[@]}"; do
     [ "$ROBOT_STATE" -eq 0 ] || state=(--state "$OUT/state/robot$r.json")
     start "robot_node_$r" $($where "robot$r") $(rt 50) -- "$BIN/robot_node" --config "$CONFIG" --robot "$r" "${MODE_ARGS[@]}" \
-      "${state[@]}" "${KEY_ARGS[@]}"
+      "${state[@]}" "${KEY_ARGS[@]}" $(key_of "robot_$r")
   done
   if [ -n "$KILL_ROBOT" ]; then  # from the logger's host: it hears every pose
     $($where log) env "LCM_DEFAULT_URL=$(pose_url)" "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD_DIR" wait-frame "POSE_$KILL_ROBOT" \
@@ -412,7 +424,7 @@ launch() {  # $1: how to run each role (a function printing the prefix)
     MONITOR_PID=$!
   fi
   start simulator $($where sim) $(rt 60) -- "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) \
-    ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}" "${KEY_ARGS[@]}"
+    ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}" "${KEY_ARGS[@]}" $(key_of simulator)
 }
 
 # fault NOTE: a line in DIR/faults.log (Unix time, what happened) and on stderr.
@@ -518,8 +530,8 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
     --config "$CONFIG" --out "$OUT" ${MODE:+--mode "$MODE"} $([ "$REALTIME" -eq 1 ] && echo --realtime) \
     $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" \
     ${KILL_ROBOT:+--kill-robot "$KILL_ROBOT" --kill-at-frame "$KILL_FRAME" --restart-after "$RESTART_AFTER"} \
-    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) "${KEY_ARGS[@]}" \
-    ${VIEW_PORT:+--view "$VIEW_PORT" --view-ns "/proc/$$/ns/net"} &
+    $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) ${KEYS:+--keys "$KEYS"} \
+    $([ "$GROUPED" -eq 1 ] && echo --channel-groups) ${VIEW_PORT:+--view "$VIEW_PORT" --view-ns "/proc/$$/ns/net"} &
   NESTED_PID=$!
   wait "$NESTED_PID" || rc=$?
   NESTED_PID=""
@@ -562,10 +574,10 @@ else
 fi
 if [ "$GROUPED" -eq 1 ]; then
   echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator; channel groups on LCM ports" \
-    "$(lcm_group_url 0 | sed 's/.*:\([0-9]*\).*/\1/')-$(lcm_group_url "$LCM_GROUP_LAST" | sed 's/.*:\([0-9]*\).*/\1/'), one lcm-logger per group;" \
+    "$(lcm_group_url 0 | sed 's/.*:\([0-9]*\).*/\1/')-$(lcm_group_url "$LCM_GROUP_LAST" | sed 's/.*:\([0-9]*\).*/\1/'), one recorder per group;" \
     "logs in $OUT/logs" >&2
 else
-  echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator, lcm-logger; logs in $OUT/logs" >&2
+  echo "run_team.sh: ${#ROBOTS[@]} robots (${MODE_NAME:-?}), main_robot, simulator, recorder; logs in $OUT/logs" >&2
 fi
 
 status=0
@@ -579,9 +591,10 @@ if [ "$GROUPED" -eq 1 ]; then  # the groups' recordings into one log, in receive
 fi
 echo "run_team.sh: recorded $OUT/run.lcmlog"
 # A keyed team's recording is read as its nodes read the wire: what they would refuse
-# (injected by someone without the key, also recorded) is counted, not evaluated.
+# (injected by someone without a key, another mission's, replayed; also recorded) is
+# counted, not evaluated.
 "$BIN/evaluate" --log "$OUT/run.lcmlog" --out "$OUT" --config "$CONFIG" "${BASE_ARGS[@]}" ${MODE_NAME:+--mode "$MODE_NAME"} \
-  ${KEY_FILE:+--key-file "$KEY_FILE"} "${EVAL_ARGS[@]}"
+  ${KEYS:+--roster "$KEYS/team.yaml"} "${EVAL_ARGS[@]}"
 echo "run_team.sh: results in $OUT (metrics.json, frames.csv, map.csv, trajectories/, logs/)"
 # --view on a terminal: the page keeps the run's last state until Enter.
 if [ -n "$VIEWER_PID" ] && [ "${ELASLAM_VIEW_HOLD:-0}" = 1 ] && kill -0 "$VIEWER_PID" 2>/dev/null &&

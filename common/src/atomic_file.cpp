@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <vector>
@@ -67,9 +68,10 @@ bool write_atomic(const std::string& path, const std::string& data, std::string*
   return true;
 }
 
-bool read_all(const std::string& path, std::string* out, std::string* why, bool* missing) {
+bool read_all(const std::string& path, std::string* out, std::string* why, bool* missing, std::size_t max_bytes) {
   if (missing) *missing = false;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: open(2) of a FIFO would wait for a writer; on a regular file it changes nothing.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     if (missing) *missing = errno == ENOENT;
     if (why) *why = errno_text("cannot open", path);
@@ -81,7 +83,14 @@ bool read_all(const std::string& path, std::string* out, std::string* why, bool*
     if (why) *why = path + " is not a regular file";
     return false;
   }
+  const auto size = static_cast<std::uint64_t>(st.st_size);
+  if (size > max_bytes) {  // before any read: a huge file costs nothing
+    ::close(fd);
+    if (why) *why = path + " is " + std::to_string(size) + " bytes, more than the " + std::to_string(max_bytes) + " accepted";
+    return false;
+  }
   out->clear();
+  out->reserve(static_cast<std::size_t>(size));
   char buf[65536];
   for (;;) {
     const ssize_t n = ::read(fd, buf, sizeof buf);
@@ -93,6 +102,12 @@ bool read_all(const std::string& path, std::string* out, std::string* why, bool*
     }
     if (n == 0) break;
     out->append(buf, static_cast<std::size_t>(n));
+    if (out->size() > max_bytes) {  // it grew while being read
+      ::close(fd);
+      if (why) *why = path + " grew past the " + std::to_string(max_bytes) + " bytes accepted while being read";
+      out->clear();
+      return false;
+    }
   }
   ::close(fd);
   return true;

@@ -3,11 +3,8 @@
 #include "elaslam/main_robot/global_map.hpp"
 
 #include <algorithm>
-#include <limits>
-#include <stdexcept>
 
 #include <Eigen/Cholesky>
-#include <nlohmann/json.hpp>
 
 #include "elaslam/landmark_event_t.hpp"
 
@@ -155,9 +152,9 @@ bool fuse_estimates(const std::array<RobotEstimate, kMaxTeamRobots>& by_robot, F
 
 }  // namespace
 
-void GlobalMap::fuse(GlobalEntry& g) const {
+bool GlobalMap::fuse(GlobalEntry& g) const {
   // No usable estimate: keep the last fused one.
-  fuse_estimates(g.by_robot, options_.fusion, 0u, &g.fused, &g.fused_cov);
+  return fuse_estimates(g.by_robot, options_.fusion, 0u, &g.fused, &g.fused_cov);
 }
 
 unsigned GlobalMap::check_team() {
@@ -370,159 +367,6 @@ bool GlobalMap::apply_snapshot(int robot_id, std::int64_t seq, int frame, int id
   s.last_frame = std::max(s.last_frame, frame);
   newest_frame_ = std::max(newest_frame_, frame);
   ++version_;
-  return true;
-}
-
-std::string GlobalMap::to_json() const {
-  using nlohmann::json;
-  json j;
-  j["format"] = "elaslam.global_map.v1";
-  j["version"] = version_;
-  j["newest_frame"] = newest_frame_;
-  j["max_landmark_id"] = max_landmark_id();
-  json streams = json::array();
-  for (const auto& s : streams_) {
-    json st = {{"last_seq", s.last_seq}, {"last_frame", s.last_frame}, {"incarnation", s.incarnation},
-               {"snapshot_seq", s.snapshot_seq}, {"snapshot_frame", s.snapshot_frame}};
-    if (s.gap_pending) st["repair_seq"] = s.repair_seq;  // a gap not repaired yet: repaired after a restart too
-    streams.push_back(std::move(st));
-  }
-  j["robots"] = streams;
-  json lms = json::array();
-  for (int id = 0; id < max_landmark_id(); ++id) {
-    const GlobalEntry& g = entries_[static_cast<std::size_t>(id)];
-    if (g.status == GlobalStatus::kAbsent) continue;
-    json est = json::array();
-    for (int r = 0; r < kMaxTeamRobots; ++r) {
-      const RobotEstimate& e = g.by_robot[static_cast<std::size_t>(r)];
-      if (!e.valid) continue;
-      est.push_back({{"robot", r + 1}, {"frame", e.frame}, {"x", e.position.x()}, {"y", e.position.y()},
-                     {"cov", {e.cov(0, 0), e.cov(0, 1), e.cov(1, 0), e.cov(1, 1)}}});
-    }
-    json l = {{"id", id}, {"status", static_cast<int>(g.status)}, {"status_frame", g.status_frame},
-              {"moving_by", g.moving_by}, {"estimates", est}};
-    // The fused estimate of a static landmark: the one it keeps when no robot holds
-    // it any more (a robot that restarted fresh dropped it from its snapshots).
-    if (g.status == GlobalStatus::kStatic)
-      l["fused"] = {{"x", g.fused.x()}, {"y", g.fused.y()},
-                    {"cov", {g.fused_cov(0, 0), g.fused_cov(0, 1), g.fused_cov(1, 0), g.fused_cov(1, 1)}}};
-    if (g.moving_unconfirmed) l["moving_unconfirmed"] = true;
-    if (g.history_unknown) l["history_unknown"] = true;
-    lms.push_back(std::move(l));
-  }
-  j["landmarks"] = lms;
-  return j.dump(1);
-}
-
-namespace {
-
-// An integer field within [lo, hi] (a float, a huge value or a string is refused:
-// nlohmann's get<int> would convert or wrap silently).
-std::int64_t integer(const nlohmann::json& o, const char* key, std::int64_t lo, std::int64_t hi) {
-  const nlohmann::json& v = o.at(key);
-  if (!v.is_number_integer() || (v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(hi)))
-    throw std::runtime_error(std::string(key) + " is not an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "] (got " + v.dump() + ")");
-  const std::int64_t x = v.get<std::int64_t>();
-  if (x < lo || x > hi)
-    throw std::runtime_error(contract::got(std::string(key) + " not in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", x));
-  return x;
-}
-
-constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
-
-// A 2x2 covariance saved as 4 numbers, row by row, under "cov" (checked by the caller).
-Eigen::Matrix2d cov2(const nlohmann::json& o, const char* what) {
-  const auto c = o.at("cov").get<std::vector<double>>();
-  if (c.size() != 4) throw std::runtime_error(std::string(what) + ": expected 4 numbers");
-  Eigen::Matrix2d C;
-  C << c[0], c[1], c[2], c[3];
-  return C;
-}
-
-}  // namespace
-
-bool GlobalMap::from_json(const std::string& text, std::string* why) {
-  using nlohmann::json;
-  GlobalMap loaded(options_);
-  try {
-    const json j = json::parse(text);
-    if (j.at("format").get<std::string>() != "elaslam.global_map.v1") throw std::runtime_error("unknown format");
-    loaded.version_ = integer(j, "version", 0, kMaxSeq);
-    loaded.newest_frame_ = static_cast<int>(integer(j, "newest_frame", -1, kIntMax));
-    const json& rs = j.at("robots");
-    // One entry per robot id 1..kMaxTeamRobots; a file of a build with fewer robot
-    // ids (8 before issue 18) holds fewer, and the rest start fresh.
-    if (!rs.is_array() || rs.empty() || rs.size() > static_cast<std::size_t>(kMaxTeamRobots))
-      throw std::runtime_error("robots: expected 1 to " + std::to_string(kMaxTeamRobots) + " entries");
-    for (std::size_t r = 0; r < rs.size(); ++r) {
-      const std::string where = "robots[" + std::to_string(r) + "].";
-      try {
-        loaded.streams_[r].last_seq = integer(rs[r], "last_seq", 0, kMaxSeq);
-        loaded.streams_[r].last_frame = static_cast<int>(integer(rs[r], "last_frame", -1, kIntMax));
-        loaded.streams_[r].incarnation_frame = loaded.streams_[r].last_frame;  // its events' (POSEs' not kept)
-        if (rs[r].contains("incarnation"))  // absent in v1 files of before
-          loaded.streams_[r].incarnation = integer(rs[r], "incarnation", 0, std::numeric_limits<std::int64_t>::max());
-        // Absent in files of before 2026-12-03. A pending gap repair starts over: every
-        // id must be covered again by a chunk as new as repair_seq.
-        if (rs[r].contains("snapshot_seq")) {
-          loaded.streams_[r].snapshot_seq = integer(rs[r], "snapshot_seq", 0, kMaxSeq);
-          loaded.streams_[r].snapshot_frame = static_cast<int>(integer(rs[r], "snapshot_frame", -1, kIntMax));
-        }
-        if (rs[r].contains("repair_seq")) loaded.streams_[r].restart_repair(integer(rs[r], "repair_seq", 0, kMaxSeq));
-      } catch (const std::exception& e) {
-        throw std::runtime_error(where + e.what());
-      }
-    }
-    for (const json& l : j.at("landmarks")) {
-      const int id = static_cast<int>(integer(l, "id", -1, kIntMax));
-      const int status = static_cast<int>(integer(l, "status", 0, 100));
-      if (id < 0 || id >= max_landmark_id()) throw std::runtime_error("landmark id " + std::to_string(id) + " out of range");
-      if (status < 1 || status > 2) throw std::runtime_error("landmark status " + std::to_string(status));
-      GlobalEntry& g = loaded.entries_[static_cast<std::size_t>(id)];
-      g.status = static_cast<GlobalStatus>(status);
-      g.status_frame = static_cast<int>(integer(l, "status_frame", -1, kIntMax));
-      g.moving_by = static_cast<int>(integer(l, "moving_by", 0, kMaxTeamRobots));
-      for (const json& e : l.at("estimates")) {
-        const int r = static_cast<int>(integer(e, "robot", 0, 100));
-        if (r < 1 || r > kMaxTeamRobots) throw std::runtime_error("estimate robot " + std::to_string(r));
-        RobotEstimate& est = g.by_robot[static_cast<std::size_t>(r - 1)];
-        est.valid = true;
-        est.frame = static_cast<int>(integer(e, "frame", -1, kIntMax));
-        est.position = {e.at("x").get<double>(), e.at("y").get<double>()};
-        est.cov = cov2(e, "cov");
-        const std::string where = "landmark " + std::to_string(id) + " robot " + std::to_string(r);
-        if (!options_.limits.in_team(r)) throw std::runtime_error(where + ": robot not in limits.team " + team_text(options_.limits.team_mask));
-        std::string bad = check_position(est.position.x(), est.position.y(), options_.limits, "position");
-        if (bad.empty()) bad = check_cov2(est.cov, options_.limits, "cov");
-        if (!bad.empty()) throw std::runtime_error(where + ": " + bad);
-      }
-      // Optional (files of before 2026-12-03 lack them): a static landmark no robot
-      // holds comes back at its saved fused estimate, or not at all.
-      const auto flag = [&](const char* key) {
-        if (!l.contains(key)) return false;
-        if (!l.at(key).is_boolean()) throw std::runtime_error("landmark " + std::to_string(id) + ": " + key + " is not a boolean");
-        return l.at(key).get<bool>();
-      };
-      g.moving_unconfirmed = g.status == GlobalStatus::kMoving && flag("moving_unconfirmed");
-      g.history_unknown = flag("history_unknown");
-      if (g.status != GlobalStatus::kStatic || fuse_estimates(g.by_robot, options_.fusion, 0u, &g.fused, &g.fused_cov))
-        continue;
-      if (!l.contains("fused")) {
-        g = GlobalEntry{};  // no estimate and no position: as if never mapped
-        continue;
-      }
-      const json& f = l.at("fused");
-      g.fused = {f.at("x").get<double>(), f.at("y").get<double>()};
-      g.fused_cov = cov2(f, "fused cov");
-      std::string bad = check_position(g.fused.x(), g.fused.y(), options_.limits, "fused position");
-      if (bad.empty()) bad = check_cov2(g.fused_cov, options_.limits, "fused cov");
-      if (!bad.empty()) throw std::runtime_error("landmark " + std::to_string(id) + ": " + bad);
-    }
-  } catch (const std::exception& ex) {
-    if (why) *why = ex.what();
-    return false;
-  }
-  *this = std::move(loaded);
   return true;
 }
 

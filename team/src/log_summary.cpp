@@ -302,7 +302,7 @@ void frames_of_run(const Reader& r, LogSummary* s) {
 
 }  // namespace
 
-LogSummary summarize_log(const std::string& path, LogAuth* auth, const std::string& key_file) {
+LogSummary summarize_log(const std::string& path, LogAuth* auth, const std::string& roster) {
   LogSummary s;
   s.file = printable(path);
   LogReader in(path);
@@ -334,7 +334,7 @@ LogSummary summarize_log(const std::string& path, LogAuth* auth, const std::stri
     if (d == Decoded::kOtherFingerprint) ++c.fingerprint_mismatches;
   }
   if (auth) {
-    s.key_file = printable(key_file);
+    s.roster = printable(roster);
     s.auth_accepted = auth->accepted();
     s.auth_refused = auth->refused();
     for (const auto& [ch, reasons] : auth->refused_by_channel())
@@ -467,7 +467,7 @@ void print_channels(std::ostream& out, const std::vector<ChannelSummary>& channe
   for (const auto& c : channels)
     if (c.auth_refused > 0)
       out << "  " << c.auth_refused << " of " << c.count << " " << c.name
-          << " events refused by the team key (a keyed node would drop them; not decoded)\n";
+          << " events refused by the team's keys (a keyed node would drop them; not decoded)\n";
 }
 
 void print_robots(std::ostream& out, const LogSummary& s) {
@@ -532,8 +532,8 @@ void print_log_summary(std::ostream& out, const LogSummary& s) {
     out << "start:     " << iso_utc(s.first_us) << "\n"
         << "end:       " << iso_utc(s.last_us) << "\n"
         << "duration:  " << num(s.duration_s(), "%.3f") << " s\n";
-  if (!s.key_file.empty()) {
-    out << "key:       " << s.key_file << ": " << s.auth_accepted << " events verified, " << s.auth_refused << " refused";
+  if (!s.roster.empty()) {
+    out << "auth:      " << s.roster << ": " << s.auth_accepted << " events verified, " << s.auth_refused << " refused";
     const char* sep = " (";
     for (const auto& [why, n] : s.auth_refused_by) {
       out << sep << why << " " << n;
@@ -599,11 +599,11 @@ nlohmann::json to_json(const LogSummary& s) {
                              {"rate_hz", c.count >= 2 && c.rate_hz > 0.0 ? nlohmann::json(c.rate_hz) : nlohmann::json(nullptr)},
                              {"decode_errors", c.type == "other" ? nlohmann::json(nullptr) : nlohmann::json(c.decode_errors)},
                              {"fingerprint_mismatches", c.fingerprint_mismatches},
-                             {"auth_refused", s.key_file.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.auth_refused)}});
-  if (s.key_file.empty()) {
+                             {"auth_refused", s.roster.empty() ? nlohmann::json(nullptr) : nlohmann::json(c.auth_refused)}});
+  if (s.roster.empty()) {
     j["authentication"] = nullptr;
   } else {
-    j["authentication"] = {{"key_file", s.key_file}, {"accepted", s.auth_accepted}, {"refused", s.auth_refused},
+    j["authentication"] = {{"roster", s.roster}, {"accepted", s.auth_accepted}, {"refused", s.auth_refused},
                            {"refused_by", s.auth_refused_by}};
   }
   const RunInfoSummary& r = s.run_info;

@@ -33,7 +33,7 @@ note() { echo "-- $*"; }
 # (log_info, log_merge, monitor, viewer), tools/spy.sh, the lcm-spy jar (needs a JDK).
 tool_programs() {
   local t
-  for t in run_scenario evaluate sweep run_dataset mrclam_import mrclam_stats log_info log_merge monitor viewer; do
+  for t in run_scenario evaluate sweep run_dataset mrclam_import mrclam_stats log_info log_merge monitor viewer record; do
     [ -x "$BUILD/bin/$t" ] && echo "$t"
   done
   return 0
@@ -50,7 +50,7 @@ expected_files() {
       echo "$p/share/elaslam/systemd/realtime.conf"
       echo "$p/share/elaslam/VERSION"
       echo "$p/share/doc/elaslam/deployment.md"; echo "$p/share/doc/elaslam/security.md"
-      echo "$p/bin/elaslam-make-team-key" ;;
+      echo "$p/bin/elaslam-keys" ;;
     elaslam-robot)
       echo "$p/bin/elaslam-robot-node"; echo "$p/lib/systemd/system/elaslam-robot@.service" ;;
     elaslam-main-robot)
@@ -129,7 +129,7 @@ PY
 # Every ELF program answers --version with exit 0 and this version.
 version_check() { # BIN_DIR: every program and script answers --version with this version
   local f out n=0
-  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy" "$1/elaslam-make-team-key"; do
+  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy"; do
     out="$("$f" --version 2>&1)" || fail "$f --version: exit $?: $out"
     case "$out" in
       *"(elaslam $VERSION"*) ;;
@@ -174,7 +174,8 @@ etc_check() { # ETC_DIR
   n="$(grep -c '' "$SRC/config/paper.yaml")"
   tail -n "$n" "$yaml" | cmp -s - "$SRC/config/paper.yaml" || fail "$yaml: does not end with config/paper.yaml"
   grep -qx 'LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608' "$env" || fail "$env: LCM_DEFAULT_URL"
-  grep -q "^  key_file: .*/team.key$" "$yaml" || fail "$yaml: no team.key_file (authentication on by default)"
+  grep -q "^  key_file: .*/keys/{sender}.key$" "$yaml" || fail "$yaml: no team.key_file (authentication on by default)"
+  grep -q "^  roster_file: .*/team.yaml$" "$yaml" || fail "$yaml: no team.roster_file (authentication on by default)"
   grep -qx "  channel_groups: true" "$yaml" || fail "$yaml: no team.channel_groups: true (on in a deployment)"
   ! grep -v '^#' "$env" | grep -v '^$' | grep -v '^[A-Z_][A-Z0-9_]*=' || fail "$env: a line that is not KEY=VALUE"
 }
@@ -265,7 +266,13 @@ mode_deb() {
     case ", $tdep," in *", $want,"*) ;; *) fail "elaslam-tools Depends lacks $want" ;; esac
   done
   dpkg-deb -f "${DEB[elaslam-tools]}" Recommends | grep -q libjchart2d-java || fail "elaslam-tools Recommends"
-  [ -z "$(dpkg-deb -f "${DEB[elaslam-common]}" Depends)" ] || fail "elaslam-common has Depends"
+  # elaslam-common's one program, elaslam-keys (its postinst runs it): libsodium and the C++ runtime.
+  local cdep; cdep="$(dpkg-deb -f "${DEB[elaslam-common]}" Depends)"
+  note "elaslam-common Depends: $cdep"
+  for want in libsodium23 "libstdc++6" libc6; do
+    case ", $cdep," in *", $want"*) ;; *) fail "elaslam-common Depends lacks $want: $cdep" ;; esac
+  done
+  case "$cdep" in *elaslam-*|*liblcm*) fail "elaslam-common depends on another package of the team: $cdep" ;; esac
   # Conffiles: both /etc files.
   dpkg-deb -I "${DEB[elaslam-common]}" conffiles > "$TMP/conffiles" || fail "elaslam-common: no conffiles"
   printf '/etc/elaslam/elaslam.env\n/etc/elaslam/elaslam.yaml\n' | diff - <(sort "$TMP/conffiles") \
@@ -318,12 +325,19 @@ mode_deb() {
     dpkg-query --admindir="$I/var/lib/dpkg" -W -f='${Status}\n' "$pkg" | grep -qx "install ok installed" \
       || fail "dpkg: $pkg not installed"
   done
-  # The team key: made by elaslam-common's postinst, root's, mode 0600, 64 hex digits.
-  [ -f "$I/etc/elaslam/team.key" ] || fail "postinst made no /etc/elaslam/team.key"
-  [ "$(stat -c '%a %U' "$I/etc/elaslam/team.key")" = "600 root" ] || fail "team.key: $(stat -c '%a %U' "$I/etc/elaslam/team.key")"
-  grep -qx '[0-9a-f]\{64\}' "$I/etc/elaslam/team.key" || fail "team.key is not 64 hexadecimal digits"
+  # The keys: a one-computer team made by elaslam-common's postinst: a secret key per
+  # role (root's, 0600, in a 0700 directory), the roster listing their public keys (0644).
+  local K="$I/etc/elaslam/keys" ROSTER="$I/etc/elaslam/team.yaml"
+  [ "$(stat -c '%a %U' "$K")" = "700 root" ] || fail "keys/: $(stat -c '%a %U' "$K" 2>&1)"
+  for role in main simulator robot_1 robot_16; do
+    [ "$(stat -c '%a %U' "$K/$role.key")" = "600 root" ] || fail "keys/$role.key: $(stat -c '%a %U' "$K/$role.key" 2>&1)"
+    grep -qx '[0-9a-f]\{64\}' "$K/$role.key" || fail "keys/$role.key is not 64 hexadecimal digits"
+    grep -q "^    $role: \"$("$I/usr/bin/elaslam-keys" public "$K/$role.key")\"$" "$ROSTER" || fail "team.yaml does not list $role's key"
+  done
+  [ "$(stat -c '%a' "$ROSTER")" = 644 ] || fail "team.yaml: mode $(stat -c '%a' "$ROSTER")"
+  grep -q '^  mission: "[0-9a-f]\{16\}"$' "$ROSTER" || fail "team.yaml has no mission"
   local key_before
-  key_before="$(sha256sum < "$I/etc/elaslam/team.key")"
+  key_before="$(cat "$K"/*.key "$ROSTER" | sha256sum)"
   # Upgrade elaslam-common to -2 (the same files) after a site edit: the edit stays.
   echo "# site edit" >> "$I/etc/elaslam/elaslam.yaml"
   dpkg-deb -R "${DEB[elaslam-common]}" "$TMP/common2"
@@ -331,7 +345,7 @@ mode_deb() {
   dpkg-deb --root-owner-group -b "$TMP/common2" "$TMP/elaslam-common_2.deb" > /dev/null
   "${DP[@]}" -i "$TMP/elaslam-common_2.deb" > "$TMP/dpkg2.log" 2>&1 || { cat "$TMP/dpkg2.log"; fail "dpkg upgrade"; }
   [ "$(tail -1 "$I/etc/elaslam/elaslam.yaml")" = "# site edit" ] || fail "upgrade lost the edit of elaslam.yaml"
-  [ "$(sha256sum < "$I/etc/elaslam/team.key")" = "$key_before" ] || fail "upgrade replaced the team key"
+  [ "$(cat "$K"/*.key "$ROSTER" | sha256sum)" = "$key_before" ] || fail "upgrade replaced the keys or the roster"
   # Purge elaslam-robot: its state and enablement links go, main-robot's state stays.
   mkdir -p "$I/var/lib/private/elaslam/robot-3" "$I/var/lib/private/elaslam/main-robot" "$I/var/lib/elaslam" \
            "$I/etc/systemd/system/multi-user.target.wants"
@@ -342,11 +356,11 @@ mode_deb() {
   [ ! -e "$I/var/lib/private/elaslam/robot-3" ] && [ ! -L "$I/var/lib/elaslam/robot-3" ] || fail "purge left robot-3's state"
   [ ! -L "$I/etc/systemd/system/multi-user.target.wants/elaslam-robot@3.service" ] || fail "purge left the enablement link"
   [ -d "$I/var/lib/private/elaslam/main-robot" ] || fail "purging elaslam-robot removed main-robot's state"
-  # Purge everything: elaslam-common's purge removes the key it made.
+  # Purge everything: elaslam-common's purge removes the keys and roster it made.
   "${DP[@]}" --purge elaslam-main-robot elaslam-simulator elaslam-tools > "$TMP/dpkg4.log" 2>&1 \
     && "${DP[@]}" --purge elaslam-common >> "$TMP/dpkg4.log" 2>&1 || { cat "$TMP/dpkg4.log"; fail "dpkg --purge (all)"; }
-  [ ! -e "$I/etc/elaslam/team.key" ] || fail "purge left the team key"
-  note "dpkg: installed (team key made, 0600), upgraded (site edit and key kept), purged (key removed)"
+  [ ! -e "$K" ] && [ ! -e "$ROSTER" ] || fail "purge left the keys or the roster"
+  note "dpkg: installed (a one-computer team's keys made, 0600, and roster), upgraded (site edit and keys kept), purged (keys removed)"
   echo "deb: ok"
 }
 

@@ -21,6 +21,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "../support/child_process.hpp"
+#include "../support/test_keys.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -226,26 +227,44 @@ TEST(SystemSimulator, NodesCheckTheirConfigWithoutStarting) {
 // --check also loads the team key as the process would at start: a key file that
 // others may read stops the check (exit 2, naming the file and its mode), not the
 // service's first start; a good one passes.
-TEST(SystemSimulator, CheckLoadsTheTeamKeyAsTheStartWould) {
+// --check loads the team's roster and the node's own key as the start would: a key
+// file others can read, or a key that is not the node's in the roster, fails the
+// check (exit 2, the reason named), not the service's first start.
+TEST(SystemSimulator, CheckLoadsTheKeysAsTheStartWould) {
   const std::string bin = std::string(ELASLAM_BINARY_DIR) + "/bin/";
-  const std::string key = testing::TempDir() + "/check_team.key";
-  std::ofstream(key) << std::string(64, 'a') << "\n";
-  const std::vector<std::pair<std::string, std::vector<std::string>>> programs = {
-      {bin + "robot_node", {"--robot", "2"}}, {bin + "main_robot", {}}, {kSimulator, {}}};
+  const std::string dir = testing::TempDir();
+  const std::string roster = dir + "/check_roster.yaml";
+  std::ofstream(roster) << elaslam::test::team_yaml({2, elaslam::transport::kSenderMain, elaslam::transport::kSenderSimulator});
+  struct Program {
+    std::string path;
+    std::vector<std::string> extra;
+    std::int16_t sender;
+  };
+  const std::vector<Program> programs = {{bin + "robot_node", {"--robot", "2"}, 2},
+                                         {bin + "main_robot", {}, elaslam::transport::kSenderMain},
+                                         {kSimulator, {}, elaslam::transport::kSenderSimulator}};
   for (const mode_t mode : {0644, 0600}) {
-    ASSERT_EQ(chmod(key.c_str(), mode), 0);
-    for (const auto& [program, extra] : programs) {
-      std::vector<std::string> args = extra;
-      for (const char* a : {"--config", kConfig.c_str(), "--key-file", key.c_str(), "--check"}) args.emplace_back(a);
-      Child c(program, args);
+    for (const auto& p : programs) {
+      const std::string key = dir + "/check_" + elaslam::transport::sender_name(p.sender) + ".key";
+      std::ofstream(key) << elaslam::test::team_key_text(p.sender);
+      ASSERT_EQ(chmod(key.c_str(), mode), 0);
+      std::vector<std::string> args = p.extra;
+      for (const char* a : {"--config", kConfig.c_str(), "--roster", roster.c_str(), "--key-file", key.c_str(), "--check"})
+        args.emplace_back(a);
+      Child c(p.path, args);
       if (mode == 0600) {
-        EXPECT_EQ(c.wait(), 0) << program << ": " << c.stderr_text();
+        EXPECT_EQ(c.wait(), 0) << p.path << ": " << c.stderr_text();
       } else {
-        EXPECT_EQ(c.wait(), 2) << program;
-        EXPECT_NE(c.stderr_text().find(key + ": has mode 0644"), std::string::npos) << program << ": " << c.stderr_text();
+        EXPECT_EQ(c.wait(), 2) << p.path;
+        EXPECT_NE(c.stderr_text().find(key + ": has mode 0644"), std::string::npos) << p.path << ": " << c.stderr_text();
       }
     }
   }
+  // robot_node 2 with main's key: not robot_2's in the roster.
+  Child wrong(bin + "robot_node", {"--robot", "2", "--config", kConfig, "--roster", roster, "--key-file",
+                                   dir + "/check_main.key", "--check"});
+  EXPECT_EQ(wrong.wait(), 2);
+  EXPECT_NE(wrong.stderr_text().find("is not robot_2's"), std::string::npos) << wrong.stderr_text();
 }
 
 }  // namespace

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# System test `system_auth_duplicate` (issue 15, docs/security.md): with a team key,
-# two live processes that use one robot id (robot_node --robot 2, twice) still both
-# get through authentication (each its own incarnation, each its own replay window),
-# so the duplicate-sender detection still sees them: main_robot says "FAULT: two live
-# senders use robot id 2" and a robot node says another process publishes POSE_2.
-# And a node without the key is deaf to the team: its messages are refused as
-# unauthenticated (auth_unauthenticated on the keyed nodes' STATUS).
+# System test `system_auth_duplicate` (docs/security.md): with the team's keys, two
+# live processes that use one robot id and its key (robot_node --robot 2, twice: a
+# copied computer) still both get through authentication (each its own incarnation,
+# each its own replay window), so the duplicate-sender detection still sees them:
+# main_robot says "FAULT: two live senders use robot id 2" and a robot node says
+# another process publishes POSE_2. And a node without keys is deaf to the team: its
+# messages are refused as unauthenticated (auth_unauthenticated on the keyed nodes' STATUS).
 # Needs root and ip netns (exit 77 otherwise) and the .venv (tools/setup.sh).
 #   tests/system/auth_duplicate.sh BUILD_DIR
 set -euo pipefail
@@ -14,26 +14,27 @@ PY="$ROOT/.venv/bin/python"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=60
 
-if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEY
-  BUILD="$2" OUT="$3" KEY="$4"
+if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
+  BUILD="$2" OUT="$3" KEYS="$4"
   B="$BUILD/bin"
   PIDS=()
   trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
-  K=(--config "$CONFIG" --key-file "$KEY")
-  lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
-  "$B/main_robot" "${K[@]}" > "$OUT/main_robot.log" 2>&1 & PIDS+=($!)
-  "$B/robot_node" "${K[@]}" --robot 1 > "$OUT/robot_1.log" 2>&1 & PIDS+=($!)
-  "$B/robot_node" "${K[@]}" --robot 2 > "$OUT/robot_2a.log" 2>&1 & PIDS+=($!)
-  "$B/robot_node" "${K[@]}" --robot 3 > "$OUT/robot_3.log" 2>&1 & PIDS+=($!)
-  # A robot 3 without the key (a team member started without it).
+  K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
+  "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
+  "$B/main_robot" "${K[@]}" --key-file "$KEYS/main.key" > "$OUT/main_robot.log" 2>&1 & PIDS+=($!)
+  "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_1.key" --robot 1 > "$OUT/robot_1.log" 2>&1 & PIDS+=($!)
+  "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_2.key" --robot 2 > "$OUT/robot_2a.log" 2>&1 & PIDS+=($!)
+  "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_3.key" --robot 3 > "$OUT/robot_3.log" 2>&1 & PIDS+=($!)
+  # A robot 3 without keys (a team member started without them).
   "$B/robot_node" --config "$CONFIG" --robot 3 > "$OUT/robot_3_unkeyed.log" 2>&1 & PIDS+=($!)
   rc=0
-  "$B/simulator" "${K[@]}" --frames $FRAMES --wait-for-nodes 4 > "$OUT/simulator.log" 2>&1 &
+  "$B/simulator" "${K[@]}" --key-file "$KEYS/simulator.key" --frames $FRAMES --wait-for-nodes 4 \
+    > "$OUT/simulator.log" 2>&1 &
   SIM=$!
   # The second robot 2 joins at frame 10: main_robot has followed the first, takes the
   # second for a restart, then hears the first again (main_node.cpp's detection).
   "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD" wait-frame POSE_2 10 > /dev/null
-  "$B/robot_node" "${K[@]}" --robot 2 > "$OUT/robot_2b.log" 2>&1 & PIDS+=($!)
+  "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_2.key" --robot 2 > "$OUT/robot_2b.log" 2>&1 & PIDS+=($!)
   wait $SIM || rc=$?
   sleep 0.5
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
@@ -46,12 +47,11 @@ BUILD="$(cd "${1:?usage: auth_duplicate.sh BUILD_DIR}" && pwd)"
 [ "$(id -u)" -eq 0 ] || { echo "auth_duplicate: skipped (needs root for network namespaces)"; exit 77; }
 ip netns list >/dev/null 2>&1 || { echo "auth_duplicate: skipped (no ip netns)"; exit 77; }
 [ -x "$PY" ] || { echo "auth_duplicate: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
-command -v lcm-logger > /dev/null || { echo "auth_duplicate: skipped (no lcm-logger)"; exit 77; }
 OUT="$(mktemp -d)"
 [ -n "${KEEP_OUT:-}" ] && echo "auth_duplicate: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
-"$ROOT/tools/make_team_key.sh" "$OUT/team.key" 2>/dev/null
+"$BUILD/bin/keys" team "$OUT/keys" --robots 1,2,3 > /dev/null
 fail() { echo "auth_duplicate: $*"; for f in "$OUT"/*.log; do echo "== $f"; tail -n 4 "$f"; done; exit 1; }
-"$ROOT/tools/netns_run.sh" --port 7723 -- "$0" --inner "$BUILD" "$OUT" "$OUT/team.key" > "$OUT/inner.txt" 2>&1 ||
+"$ROOT/tools/netns_run.sh" --port 7723 -- "$0" --inner "$BUILD" "$OUT" "$OUT/keys" > "$OUT/inner.txt" 2>&1 ||
   { cat "$OUT/inner.txt"; fail "the team did not run"; }
 grep -h "FAULT: two live senders use robot id 2" "$OUT/main_robot.log" | head -n 1 ||
   fail "main_robot did not see two live senders with robot id 2"
@@ -59,7 +59,7 @@ grep -h "FAULT: another process publishes POSE_2" "$OUT/robot_2a.log" "$OUT/robo
   fail "neither robot 2 saw the other"
 grep -q "^robot_node 2: frames=$FRAMES " "$OUT/robot_2a.log" || fail "robot 2 did not process the $FRAMES frames"
 grep -q "^robot_node 2: frames=" "$OUT/robot_2b.log" || fail "the second robot 2 processed nothing"
-# The unkeyed robot 3 (authentication off: it reads the sealed SENSOR_3 and works)
+# The unkeyed robot 3 (authentication off: it reads the signed SENSOR_3 and works)
 # is refused by every keyed node: main_robot (its events and snapshots) and the keyed
 # robot 3 (its POSE_3, so no false duplicate-sender alarm there).
 ! grep -q "FAULT: another process" "$OUT/robot_3.log" || fail "the keyed robot 3 took the unkeyed one's POSE_3 for its own"
@@ -69,7 +69,7 @@ sys.path.insert(0, os.path.join(sys.argv[1], "lcmgen", "python"))
 import lcm, elaslam
 best = {}
 for ev in lcm.EventLog(sys.argv[2], "r"):
-    if ev.channel in ("STATUS_MAIN", "STATUS_ROBOT_3") and ev.data[-54:-50] == b"ELA1":
+    if ev.channel in ("STATUS_MAIN", "STATUS_ROBOT_3") and ev.data[-98:-94] == b"ELA2":
         m = elaslam.node_status_t.decode(ev.data)
         best[ev.channel] = max(best.get(ev.channel, 0), m.auth_unauthenticated)
 print("auth_duplicate: auth_unauthenticated (the unkeyed robot 3's messages):", best)

@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""An attacker on the team's LCM network without the team key (system test
+"""An attacker on the team's LCM network without any team member's key (system test
 `system_forger`, tests/system/forger.sh; issue 15). Until SIGTERM / SIGINT or
 --duration, every --period seconds it sends:
 
   - LMAP_EVENT  ADD of a landmark at (100, 100) with a tiny covariance, from robot
                 ids in the team (1..3) and not (9..11), plain and with a made-up
-                trailer (magic, sender id, counter, a random MAC); the same in an
-                LMAP_EVENTS batch;
+                trailer (magic, sender id, the team's mission, a counter, a random
+                key id and signature); the same in an LMAP_EVENTS batch;
   - DYNAMIC_NOTICE  a landmark "found moving" (every id in turn), plain and trailed;
   - LMAP_SNAPSHOT   a robot's map with every landmark at (100, 100);
   - POSE_<r>        a robot's pose 100 m off;
@@ -37,9 +37,14 @@ import struct  # noqa: E402
 import time  # noqa: E402
 
 
+MISSION = 0  # the team's mission, learnt from the first trailer heard (it is not secret)
+
+
 def fake_trailer(sender, counter):
-    """A trailer of the right shape whose MAC is random: what a forger without the key can do."""
-    return b"ELA1" + struct.pack(">hqQ", sender, int(time.time() * 1e6), counter) + os.urandom(32)
+    """A trailer of the right shape whose signature is random, with a random key id:
+    what a forger without a team member's secret key can do (transport/auth_transport.hpp)."""
+    return (b"ELA2" + struct.pack(">h", sender) + os.urandom(4) +
+            struct.pack(">QqQ", MISSION, int(time.time() * 1e6), counter) + os.urandom(64))
 
 
 def main():
@@ -58,7 +63,9 @@ def main():
     mine = set()                           # what this process sent (it hears itself)
 
     def on_any(channel, data):
-        if data not in mine and len(data) > 54 and data[-54:-50] == b"ELA1" and len(heard[channel]) < 400:
+        global MISSION
+        if data not in mine and len(data) > 98 and data[-98:-94] == b"ELA2" and len(heard[channel]) < 400:
+            MISSION = struct.unpack(">Q", data[-88:-80])[0]
             heard[channel].append(data)
 
     lc.subscribe(".*", on_any).set_queue_capacity(10000)

@@ -1,17 +1,18 @@
 #!/usr/bin/env bash
-# System test `system_forger` (issue 15, docs/security.md): a live team with a team
-# key, attacked by a process on its LCM network without the key (forger.py: forged
+# System test `system_forger` (docs/security.md): a live team with its keys (each
+# process its own, elaslam-keys team), attacked by a process on its LCM network
+# without any of them (forger.py: forged
 # LMAP_EVENT ADDs at (100, 100) from robot ids in and out of the team, DYNAMIC_NOTICEs,
 # LMAP_SNAPSHOTs, POSEs, fake trailers, replayed, altered and moved genuine datagrams),
 # ends as the same team unattacked: the robots' poses (compare-poses) and the final
 # GLOBAL_MAP (compare-maps) of both recordings, read as a keyed node reads them
-# (lcm_check.py --key-file: only what verifies, each message once), are the same,
+# (lcm_check.py --roster: only what verifies, each message once), are the same,
 # following the rule of the other two-run tests: exit 0 of compare-poses (the same
 # input, the same poses) requires the same map; exit 3 (notice timing differed) is
 # reported, not failed. Every robot and main_robot reported auth_refused > 0.
 # The unattacked keyed recording is read by evaluate (run_team.sh) and by the Python
-# tools (decode_log.py): sealed messages decode unchanged. evaluate and log_info with
-# the key (--key-file) leave out what the nodes refused: the attacked recording scores
+# tools (decode_log.py): signed messages decode unchanged. evaluate and log_info with
+# the roster (--roster) leave out what the nodes refused: the attacked recording scores
 # as the unattacked one.
 # Last, the same attack on the team without a key: its map is not the unattacked one
 # (the attack is real; skipped with UNKEYED=0).
@@ -45,20 +46,20 @@ ip netns list >/dev/null 2>&1 || { echo "forger: skipped (no ip netns)"; exit 77
 [ -x "$PY" ] || { echo "forger: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
 OUT="$(mktemp -d)"
 [ -n "${KEEP_OUT:-}" ] && echo "forger: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
-KEY="$OUT/team.key"
-"$ROOT/tools/make_team_key.sh" "$KEY" 2>/dev/null
 ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
+KEYS="$OUT/keys"
+"$BUILD/bin/keys" team "$KEYS" --robots "$(IFS=,; echo "${ROBOTS[*]}")" > /dev/null
 FRAMES=$(awk '/^scenario:/ {s = 1; next} /^[^ #]/ {s = 0} s && $1 == "frames:" {print $2; exit}' "$CONFIG")
-check() { "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" --key-file "$KEY" "$@"; }
+check() { "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" --roster "$KEYS/team.yaml" "$@"; }
 fail() { echo "forger: $*"; exit 1; }
 
 # 1. The keyed team, unattacked; 2. the same, attacked.
 "$ROOT/tools/netns_run.sh" --port 7720 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT/ref" \
-  --no-progress --no-baseline --key-file "$KEY" "${ARGS[@]}" > "$OUT/ref.txt" 2>&1 || { cat "$OUT/ref.txt"; exit 1; }
-"$ROOT/tools/netns_run.sh" --port 7721 -- "$0" --inner "$BUILD" "$OUT/attacked" --key-file "$KEY" "${ARGS[@]}" \
+  --no-progress --no-baseline --keys "$KEYS" "${ARGS[@]}" > "$OUT/ref.txt" 2>&1 || { cat "$OUT/ref.txt"; exit 1; }
+"$ROOT/tools/netns_run.sh" --port 7721 -- "$0" --inner "$BUILD" "$OUT/attacked" --keys "$KEYS" "${ARGS[@]}" \
   > "$OUT/attacked.txt" 2>&1 || { cat "$OUT/attacked.txt"; tail -n 5 "$OUT"/attacked/logs/*.log; exit 1; }
 cat "$OUT/attacked.forger.txt"
-grep -q "authenticated with the team key" "$OUT/attacked/logs/main_robot.log" || fail "main_robot did not use the key"
+grep -q "authentication on: .*signing as main" "$OUT/attacked/logs/main_robot.log" || fail "main_robot did not sign"
 grep -h "refused a message" "$OUT"/attacked/logs/*.log | head -n 4 || true
 
 # Every robot processed every frame, none lost or refused (its own count): a pose
@@ -83,15 +84,15 @@ if ! check compare-maps "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --tol 1
   [ "$poses" -ne 0 ] || fail "the same poses, but the attacked team's map differs"
   echo "forger: (not a failure) the robots' inputs differed by notice timing"
 fi
-# evaluate with the key (run_team.sh passes it) leaves out what the nodes refused: the
-# attacked recording scores as the unattacked one; log_info --key-file counts it.
-python3 - "$OUT/ref/metrics.json" "$OUT/attacked/metrics.json" "$poses" <<'PY' || fail "evaluate --key-file"
+# evaluate with the roster (run_team.sh passes it) leaves out what the nodes refused: the
+# attacked recording scores as the unattacked one; log_info --roster counts it.
+python3 - "$OUT/ref/metrics.json" "$OUT/attacked/metrics.json" "$poses" <<'PY' || fail "evaluate --roster"
 import json, sys
 ref, att, poses = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), int(sys.argv[3])
 a = att["authentication"]
 assert a and a["refused"] > 0, f"evaluate refused nothing in the attacked recording: {a}"
 assert ref["authentication"]["refused"] == 0, ref["authentication"]
-print(f"forger: evaluate --key-file on the attacked recording: {a['accepted']} events verified, "
+print(f"forger: evaluate --roster on the attacked recording: {a['accepted']} events verified, "
       f"{a['refused']} refused {dict((ch, r) for ch, r in a['refused_by'].items())}")
 if poses == 0:  # the same poses; the recorder may have lost a few of either run's (compare-poses --allow-missing)
     for r, s in zip(ref["robots"], att["robots"]):
@@ -99,12 +100,12 @@ if poses == 0:  # the same poses; the recorder may have lost a few of either run
     print("forger: evaluate scores the attacked recording as the unattacked one (robot errors within 2 %: "
           + ", ".join(f"{r['error_mean']:.4f}/{s['error_mean']:.4f}" for r, s in zip(ref["robots"], att["robots"])) + ")")
 PY
-"$BUILD/bin/log_info" "$OUT/attacked/run.lcmlog" --key-file "$KEY" --json > "$OUT/info.json"
-python3 - "$OUT/info.json" <<'PY' || fail "log_info --key-file"
+"$BUILD/bin/log_info" "$OUT/attacked/run.lcmlog" --roster "$KEYS/team.yaml" --json > "$OUT/info.json"
+python3 - "$OUT/info.json" <<'PY' || fail "log_info --roster"
 import json, sys
 a = json.load(open(sys.argv[1]))["authentication"]
 assert a["refused"] > 0 and a["accepted"] > 0, a
-print(f"forger: log_info --key-file: {a['accepted']} verified, {a['refused']} refused {a['refused_by']}")
+print(f"forger: log_info --roster: {a['accepted']} verified, {a['refused']} refused {a['refused_by']}")
 PY
 nodes=("${ROBOTS[@]/#/ROBOT_}" MAIN)
 check auth-refused "$OUT/attacked/run.lcmlog" --nodes "${nodes[@]}" || fail "a node refused nothing"

@@ -21,10 +21,13 @@ generated Python types (BUILD/lcmgen/python).
   lcm_check.py --build-dir B auth-refused LOG --nodes ROBOT_1 ... MAIN
       the largest auth_refused each named node reported on STATUS_<node> (exit 1
       when one reported none above 0)
-  --key-file K (before the command): read logs as an authenticated node does
-      (docs/security.md): only events whose trailer verifies with the team key K,
-      each (sender, incarnation, counter) once; forged, unauthenticated and
-      replayed events are left out (a recording has them: lcm-logger keeps all)
+  --roster R (before the command): read logs as an authenticated node does
+      (docs/security.md): only events whose trailer verifies with the public key of
+      their sender in the roster file R (elaslam-keys team), of R's mission (or
+      --mission M), each (sender, incarnation, counter) once; forged,
+      unauthenticated, other missions' and replayed events are left out (a
+      recording has them: the recorder keeps all). A second implementation of the
+      wire format, independent of transport/auth_transport.cpp (PyNaCl's Ed25519).
 """
 # ---- start-up: standard library only, before any third-party import (tools/elaslam_tool.py)
 import os
@@ -39,7 +42,6 @@ if __name__ == "__main__":
 # ----------------------------------------------------------------------------------
 import argparse  # noqa: E402
 import hashlib  # noqa: E402
-import hmac  # noqa: E402
 import math  # noqa: E402
 import struct  # noqa: E402
 import re  # noqa: E402
@@ -52,31 +54,47 @@ def load_types(build_dir):
     return elaslam
 
 
-KEY = None  # --key-file: the team key (bytes); None: every event
+ROSTER = None  # --roster: {sender id: [public key bytes]}, mission; None: every event
+MISSION = None
+SENDERS = {"main": 100, "simulator": 101, "tool": 102, **{f"robot_{r}": r for r in range(1, 17)}}
 
 
-def load_key(path):
-    """A team key file: 32 raw bytes or 64 hexadecimal characters (transport/team_key.hpp)."""
-    data = open(path, "rb").read()
-    if len(data) == 32:
-        return data
-    return bytes.fromhex(data.decode("ascii").strip())
+def load_roster(path):
+    """A roster file (elaslam-keys team's team.yaml): {sender id: [key, ...]} and the mission.
+    Read line by line: it is the flat YAML the tool writes."""
+    keys, mission = {}, None
+    for line in open(path):
+        name, _, value = line.strip().partition(":")
+        value = value.strip().strip('"')
+        if name == "mission":
+            mission = int(value, 16)
+        elif name in SENDERS and value:
+            keys[SENDERS[name]] = [bytes.fromhex(k) for k in value.replace(",", " ").split()]
+    return keys, mission
 
 
-TRAILER = 54  # magic 4, sender 2, incarnation 8, counter 8, MAC 32 (transport/auth_transport.hpp)
+TRAILER = 98  # magic 4, sender 2, key id 4, mission 8, incarnation 8, counter 8, Ed25519 signature 64
 
 
-def open_sealed(key, channel, data):
+def open_sealed(roster, mission, channel, data):
     """(payload, (sender, incarnation, counter)) when `data` carries a trailer whose
-    HMAC-SHA-512-256 verifies with `key`, else None."""
-    if len(data) < TRAILER or data[-TRAILER:-TRAILER + 4] != b"ELA1":
+    signature verifies with its sender's key in `roster`, of `mission`, else None."""
+    from nacl.exceptions import BadSignatureError  # noqa: E402
+    from nacl.signing import VerifyKey  # noqa: E402
+    if len(data) < TRAILER or data[-TRAILER:-TRAILER + 4] != b"ELA2":
         return None
-    payload, header, mac = data[:-TRAILER], data[-TRAILER:-32], data[-32:]
+    payload, header, sig = data[:-TRAILER], data[-TRAILER:-64], data[-64:]
+    sender, key_id, msg_mission, incarnation, counter = struct.unpack(">hIQqQ", header[4:])
+    key = next((k for k in roster.get(sender, []) if k[:4] == struct.pack(">I", key_id)), None)
+    if key is None or msg_mission != mission:
+        return None
     ch = channel.encode()
-    expected = hmac.new(key, struct.pack(">I", len(ch)) + ch + payload + header, hashlib.sha512).digest()[:32]
-    if not hmac.compare_digest(expected, mac):
+    digest = hashlib.sha512(struct.pack(">I", len(ch)) + ch + payload + header).digest()
+    try:
+        VerifyKey(key).verify(digest, sig)
+    except BadSignatureError:
         return None
-    return payload, struct.unpack(">hqQ", header[4:])
+    return payload, (sender, incarnation, counter)
 
 
 class _Event:
@@ -88,10 +106,10 @@ def read_log(path):
     lcm = _need("lcm")
     seen = set()
     for ev in lcm.EventLog(path, "r"):
-        if KEY is None:
+        if ROSTER is None:
             yield ev
             continue
-        opened = open_sealed(KEY, ev.channel, ev.data)
+        opened = open_sealed(ROSTER, MISSION, ev.channel, ev.data)
         if opened is None or opened[1] in seen:
             continue
         seen.add(opened[1])
@@ -309,11 +327,12 @@ def cmd_auth_refused(args, T):
 
 
 def main():
-    global KEY
+    global ROSTER, MISSION
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build-dir", default=os.path.join(root, "build"))
-    ap.add_argument("--key-file", help="only events that verify with this team key (docs/security.md)")
+    ap.add_argument("--roster", help="only events that verify with this roster's keys (docs/security.md)")
+    ap.add_argument("--mission", help="the mission (16 hexadecimal digits; default: the roster's)")
     sub = ap.add_subparsers(dest="cmd", required=True)
     w = sub.add_parser("wait-nodes")
     w.add_argument("n", type=int)
@@ -337,8 +356,10 @@ def main():
     a.add_argument("log")
     a.add_argument("--nodes", nargs="+", required=True)
     args = ap.parse_args()
-    if args.key_file:
-        KEY = load_key(args.key_file)
+    if args.roster:
+        ROSTER, MISSION = load_roster(args.roster)
+        if args.mission:
+            MISSION = int(args.mission, 16)
     T = load_types(args.build_dir)
     return {"wait-nodes": cmd_wait_nodes, "wait-frame": cmd_wait_frame, "compare-poses": cmd_compare_poses,
             "compare-maps": cmd_compare_maps, "auth-refused": cmd_auth_refused}[args.cmd](args, T)

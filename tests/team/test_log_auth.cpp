@@ -1,7 +1,7 @@
 // Reading a keyed team's recording as its nodes read the wire (log_auth.hpp): what
 // verifies loses its trailer and is decoded as recorded; forged, altered, replayed,
-// unauthenticated and misattributed events are refused and counted per channel and
-// reason; channels that are not the team's pass untouched.
+// unauthenticated, misattributed and other missions' events are refused and counted
+// per channel and reason; channels that are not the team's pass untouched.
 #include "elaslam/team/log_auth.hpp"
 
 #include <gtest/gtest.h>
@@ -11,20 +11,14 @@
 #include <string>
 #include <vector>
 
+#include "../support/test_keys.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 
 namespace elaslam {
 namespace {
 
-using transport::TeamKey;
 namespace auth = transport::auth;
-
-TeamKey key_of(std::uint8_t seed) {
-  std::array<std::uint8_t, TeamKey::kBytes> b{};
-  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<std::uint8_t>(seed + 7 * i);
-  return TeamKey(b);
-}
 
 std::vector<std::uint8_t> encoded_pose(int robot, int frame) {
   pose_estimate_t m{};
@@ -36,7 +30,7 @@ std::vector<std::uint8_t> encoded_pose(int robot, int frame) {
   return b;
 }
 
-// An event as lcm-logger records it: the sealed datagram.
+// An event as the recorder records it: the signed datagram.
 LogEvent sealed(auth::Authenticator* sender, const std::string& channel, std::vector<std::uint8_t> payload) {
   const std::size_t n = payload.size();
   payload.resize(n + auth::kTrailerBytes);
@@ -46,9 +40,15 @@ LogEvent sealed(auth::Authenticator* sender, const std::string& channel, std::ve
 
 TEST(LogAuth, GenuineEventsVerifyAndDecodeAsSentTheRestIsRefusedPerReason) {
   const std::string sfx = "_T";
-  auth::Authenticator robot1(key_of(1), 1, 1000, sfx);
-  auth::Authenticator stranger(key_of(2), 1, 1000, sfx);  // the same id, another key
-  LogAuth reader(key_of(1), sfx);
+  auth::Authenticator robot1(test::team_setup(1, 1000, sfx));
+  auth::AuthSetup other = test::team_setup(1, 1000, sfx);  // the same id, another key (its own roster lists it)
+  other.roster = transport::Roster{};
+  std::string why;
+  other.key = test::test_key(222);
+  ASSERT_TRUE(other.roster.add(1, other.key.public_key(), &why)) << why;
+  auth::Authenticator stranger(std::move(other));
+  auth::Authenticator earlier(test::team_setup(1, 900, sfx, true, test::kTestMission + 1));  // another mission
+  LogAuth reader(test::team_setup(transport::kSenderTool, 0, sfx, false));
 
   const std::vector<std::uint8_t> payload = encoded_pose(1, 7);
   LogEvent ok = sealed(&robot1, channels::pose(1, sfx), payload);
@@ -70,22 +70,31 @@ TEST(LogAuth, GenuineEventsVerifyAndDecodeAsSentTheRestIsRefusedPerReason) {
   EXPECT_FALSE(reader.admit(&plain));
   LogEvent not_its = sealed(&robot1, channels::pose(2, sfx), encoded_pose(2, 11));  // robot 1 on robot 2's channel
   EXPECT_FALSE(reader.admit(&not_its));
+  LogEvent old = sealed(&earlier, channels::pose(1, sfx), encoded_pose(1, 12));
+  EXPECT_FALSE(reader.admit(&old));
   LogEvent self_test{0, "LCM_SELF_TEST", {1, 2, 3}};
   EXPECT_TRUE(reader.admit(&self_test));  // not the team's: as is
   EXPECT_EQ(self_test.data, (std::vector<std::uint8_t>{1, 2, 3}));
 
   EXPECT_EQ(reader.accepted(), 1);
-  EXPECT_EQ(reader.refused(), 5);
+  EXPECT_EQ(reader.refused(), 6);
   const auto& by = reader.refused_by_channel();
   ASSERT_EQ(by.count(channels::pose(1, sfx)), 1u);
   const auto& p1 = by.at(channels::pose(1, sfx));
-  EXPECT_EQ(p1.at(auth::to_string(auth::Verdict::kReplayed)), 1);
-  EXPECT_EQ(p1.at(auth::to_string(auth::Verdict::kForged)), 2);  // another key, and altered bytes
-  EXPECT_EQ(p1.at(auth::to_string(auth::Verdict::kUnauthenticated)), 1);
-  EXPECT_EQ(by.at(channels::pose(2, sfx)).at(auth::to_string(auth::Verdict::kWrongSender)), 1);
+  const auto n = [&](const std::map<std::string, std::int64_t>& m, auth::Verdict v) {
+    return m.count(auth::key_of(v)) ? m.at(auth::key_of(v)) : 0;
+  };
+  EXPECT_EQ(n(p1, auth::Verdict::kReplayed), 1);
+  EXPECT_EQ(n(p1, auth::Verdict::kUnknownKey), 1);  // another key
+  EXPECT_EQ(n(p1, auth::Verdict::kForged), 1);      // altered bytes
+  EXPECT_EQ(n(p1, auth::Verdict::kUnauthenticated), 1);
+  EXPECT_EQ(n(p1, auth::Verdict::kOtherMission), 1);
+  EXPECT_EQ(n(by.at(channels::pose(2, sfx)), auth::Verdict::kWrongSender), 1);
   const nlohmann::json j = reader.to_json("k");
-  EXPECT_EQ(j["refused"], 5);
-  EXPECT_EQ(j["refused_by"][channels::pose(2, sfx)][auth::to_string(auth::Verdict::kWrongSender)], 1);
+  EXPECT_EQ(j["refused"], 6);
+  EXPECT_EQ(j["mission"], transport::mission_text(test::kTestMission));
+  EXPECT_EQ(j["refused_by"][channels::pose(2, sfx)]["wrong_sender"], 1);
+  EXPECT_EQ(j["refused_by_reason"]["other_mission"], 1);
 }
 
 TEST(Channels, TeamChannelsAreRecognisedWithTheirSuffixOnly) {

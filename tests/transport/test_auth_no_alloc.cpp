@@ -1,12 +1,13 @@
 // The receive path of message authentication allocates nothing: open() verifies a
-// message in place (the MAC state on the stack, the payload the same bytes without
-// the trailer), accepted or refused; and a steady flow of sealed messages through
+// message in place (the hash state on the stack, the payload the same bytes without
+// the trailer), accepted or refused; and a steady flow of signed messages through
 // the node shell and the authenticated transport allocates nothing once warm.
 #include <gtest/gtest.h>
 
 #include <vector>
 
 #include "../support/no_alloc.hpp"
+#include "../support/test_keys.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/transport/auth_transport.hpp"
@@ -16,16 +17,9 @@
 namespace elaslam::transport::auth {
 namespace {
 
-TeamKey test_key() {
-  std::array<std::uint8_t, TeamKey::kBytes> b{};
-  for (std::size_t i = 0; i < b.size(); ++i) b[i] = static_cast<std::uint8_t>(3 * i + 11);
-  return TeamKey(b);
-}
-
 TEST(AuthNoAlloc, OpeningAcceptedAndRefusedMessagesAllocatesNothing) {
-  const TeamKey key = test_key();
-  Authenticator sim(key, kSenderSimulator, 5);
-  Authenticator robot(key, 1, 6);
+  Authenticator sim(test::team_setup(kSenderSimulator, 5));
+  Authenticator robot(test::team_setup(1, 6));
   sensor_frame_t s{};
   s.robot_id = 1;
   s.obs.resize(15);
@@ -61,10 +55,9 @@ TEST(AuthNoAlloc, OpeningAcceptedAndRefusedMessagesAllocatesNothing) {
 }
 
 TEST(AuthNoAlloc, ASensorToPoseRoundTripThroughAuthenticatedTransportsAllocatesNothingOnceWarm) {
-  const TeamKey key = test_key();
   InProcessTransport bus;
-  AuthenticatedTransport robot_t(bus, key, 1, 1, "", "robot", nullptr);
-  AuthenticatedTransport sim_t(bus, key, kSenderSimulator, 2, "", "sim", nullptr);
+  AuthenticatedTransport robot_t(bus, test::team_setup(1, 1), "robot", nullptr);
+  AuthenticatedTransport sim_t(bus, test::team_setup(kSenderSimulator, 2), "sim", nullptr);
   NodeShell robot(robot_t, ShellOptions("robot", "", nullptr));
   NodeShell sim(sim_t, ShellOptions("sim", "", nullptr));
   long poses = 0;

@@ -1,5 +1,6 @@
 #include "elaslam/transport/auth_transport.hpp"
 
+#include <chrono>
 #include <cstring>
 #include <stdexcept>
 #include <string_view>
@@ -12,9 +13,8 @@
 namespace elaslam::transport::auth {
 namespace {
 
-static_assert(crypto_auth_hmacsha512256_BYTES == kMacBytes);
-static_assert(crypto_auth_hmacsha512256_KEYBYTES == TeamKey::kBytes);
 static_assert(kWindow % 64 == 0);
+static_assert(crypto_hash_sha512_BYTES == 64 && crypto_sign_BYTES == kSignatureBytes);
 
 void put_be(std::uint8_t* p, std::uint64_t v, int bytes) {
   for (int i = bytes - 1; i >= 0; --i, v >>= 8) p[i] = static_cast<std::uint8_t>(v & 0xff);
@@ -25,8 +25,12 @@ std::uint64_t get_be(const std::uint8_t* p, int bytes) {
   return v;
 }
 
-/// `channel` without `suffix`; false when it does not end with it.
 bool is_robot(std::int16_t id) { return id >= 1 && id <= contract::kMaxRobots; }
+
+std::int64_t monotonic_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
 
 // The robot_id field of landmark_event_t, lmap_events_t and lmap_snapshot_t: after the 8-byte
 // fingerprint, int64 utime and int32 frame (LCM encodes big-endian, in field order).
@@ -38,10 +42,30 @@ const char* to_string(Verdict v) {
   switch (v) {
     case Verdict::kAccepted: return "accepted";
     case Verdict::kUnauthenticated: return "unauthenticated (no trailer)";
-    case Verdict::kForged: return "forged or altered (MAC does not verify)";
+    case Verdict::kForged: return "forged or altered (the signature does not verify)";
+    case Verdict::kUnknownKey: return "signed with a key that is not the sender's in the roster (unknown or revoked)";
     case Verdict::kWrongSender: return "sender may not publish on this channel";
+    case Verdict::kOtherMission: return "of another mission";
     case Verdict::kReplayed: return "replayed (counter seen or too old)";
-    case Verdict::kStale: return "stale incarnation (older than every one tracked)";
+    case Verdict::kJump: return "counter jumps too far ahead (held until the sender's next message confirms it)";
+    case Verdict::kStale: return "stale incarnation (older than every one tracked, while its sender is heard)";
+    case Verdict::kMalformed: return "malformed (a size or channel name no message can have)";
+  }
+  return "?";
+}
+
+const char* key_of(Verdict v) {
+  switch (v) {
+    case Verdict::kAccepted: return "accepted";
+    case Verdict::kUnauthenticated: return "unauthenticated";
+    case Verdict::kForged: return "forged";
+    case Verdict::kUnknownKey: return "unknown_key";
+    case Verdict::kWrongSender: return "wrong_sender";
+    case Verdict::kOtherMission: return "other_mission";
+    case Verdict::kReplayed: return "replayed";
+    case Verdict::kJump: return "jump";
+    case Verdict::kStale: return "stale";
+    case Verdict::kMalformed: return "malformed";
   }
   return "?";
 }
@@ -72,8 +96,6 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
   return true;  // another channel (a tool's, a test's): any sender of the team
 }
 
-static_assert(kMaxRobotSenders == contract::kMaxRobots);
-
 // ---- ReplayGuard --------------------------------------------------------------------
 
 int ReplayGuard::slot_of(std::int16_t id) {
@@ -86,41 +108,63 @@ int ReplayGuard::slot_of(std::int16_t id) {
   }
 }
 
-Verdict ReplayGuard::check(const Sender& s) {
+void ReplayGuard::slide(Window* w, std::uint64_t counter) {
+  const std::uint64_t shift = counter - w->highest;
+  if (shift >= static_cast<std::uint64_t>(kWindow)) {
+    w->bits.fill(0);
+  } else {
+    const int words = static_cast<int>(shift / 64), bits = static_cast<int>(shift % 64);
+    for (int i = kWindow / 64 - 1; i >= 0; --i) {
+      std::uint64_t v = i - words >= 0 ? w->bits[static_cast<std::size_t>(i - words)] << bits : 0;
+      if (bits != 0 && i - words - 1 >= 0) v |= w->bits[static_cast<std::size_t>(i - words - 1)] >> (64 - bits);
+      w->bits[static_cast<std::size_t>(i)] = v;
+    }
+  }
+  w->highest = counter;
+  w->bits[0] |= 1;
+}
+
+Verdict ReplayGuard::check(const Sender& s, std::int64_t now_us, bool* healed) {
+  if (healed != nullptr) *healed = false;
   const int slot = slot_of(s.id);
   if (slot < 0) return Verdict::kWrongSender;
   if (s.counter == 0) return Verdict::kReplayed;  // counters start at 1
   auto& ws = slots_[static_cast<std::size_t>(slot)].windows;
   Window* w = nullptr;
   Window* oldest = nullptr;
+  bool heard = false;  // a tracked incarnation of this sender was heard lately
   for (Window& c : ws) {
-    if (c.used && c.incarnation == s.incarnation) {
-      w = &c;
-      break;
-    }
+    if (c.used && now_us - c.heard_us < kQuietUs) heard = true;
+    if (c.used && c.incarnation == s.incarnation) w = &c;
     if (oldest == nullptr || !c.used || (oldest->used && c.incarnation < oldest->incarnation)) oldest = &c;
   }
   if (w == nullptr) {  // a new incarnation: a free window, else the oldest's if it is older
-    if (oldest->used && s.incarnation < oldest->incarnation) return Verdict::kStale;
+    if (oldest->used && s.incarnation < oldest->incarnation) {
+      if (heard) return Verdict::kStale;
+      // Every tracked one quiet: the sender started again with a smaller incarnation
+      // (its start count or clock reset). The window heard least recently gives way.
+      for (Window& c : ws)
+        if (c.heard_us < oldest->heard_us) oldest = &c;
+    }
     *oldest = Window{};
     oldest->used = true;
     oldest->incarnation = s.incarnation;
     w = oldest;
   }
-  if (s.counter > w->highest) {  // ahead: slide the window
-    const std::uint64_t shift = s.counter - w->highest;
-    if (shift >= static_cast<std::uint64_t>(kWindow)) {
-      w->bits.fill(0);
-    } else {
-      const int words = static_cast<int>(shift / 64), bits = static_cast<int>(shift % 64);
-      for (int i = kWindow / 64 - 1; i >= 0; --i) {
-        std::uint64_t v = i - words >= 0 ? w->bits[static_cast<std::size_t>(i - words)] << bits : 0;
-        if (bits != 0 && i - words - 1 >= 0) v |= w->bits[static_cast<std::size_t>(i - words - 1)] >> (64 - bits);
-        w->bits[static_cast<std::size_t>(i)] = v;
+  if (s.counter > w->highest) {
+    if (w->highest != 0 && s.counter - w->highest > kMaxCounterJump) {
+      // Far ahead: taken only when the next message continues it (a partition longer
+      // than the bound); a lone datagram with a far counter never moves the window.
+      const bool continues = w->held != 0 && s.counter > w->held && s.counter - w->held <= kMaxCounterJump;
+      if (!continues) {
+        w->held = s.counter;
+        return Verdict::kJump;
       }
+      if (healed != nullptr) *healed = true;
     }
-    w->highest = s.counter;
-    w->bits[0] |= 1;
+    w->held = 0;
+    slide(w, s.counter);
+    w->heard_us = now_us;
     return Verdict::kAccepted;
   }
   const std::uint64_t back = w->highest - s.counter;
@@ -129,103 +173,119 @@ Verdict ReplayGuard::check(const Sender& s) {
   const std::uint64_t bit = std::uint64_t{1} << (back % 64);
   if ((word & bit) != 0) return Verdict::kReplayed;
   word |= bit;
+  w->heard_us = now_us;
   return Verdict::kAccepted;
 }
 
 // ---- Authenticator ------------------------------------------------------------------
 
-struct Authenticator::Keyed {
-  crypto_auth_hmacsha512256_state state;
-};
-
-Authenticator::Authenticator(const TeamKey& key, std::int16_t sender_id, std::int64_t incarnation,
-                             std::string channel_suffix)
-    : keyed_(std::make_unique<Keyed>()), sender_id_(sender_id), incarnation_(incarnation),
-      suffix_(std::move(channel_suffix)) {
+Authenticator::Authenticator(AuthSetup setup) : setup_(std::move(setup)) {
+  last_channel_.reserve(contract::kMaxChannelBytes + 1);
   if (sodium_init() < 0) throw std::runtime_error("libsodium could not be initialised");
-  if (key.empty()) throw std::invalid_argument("Authenticator: no team key");
-  crypto_auth_hmacsha512256_init(&keyed_->state, key.data(), TeamKey::kBytes);
+  if (setup_.roster.empty()) throw std::invalid_argument("Authenticator: no public keys (team.public_keys)");
+  if (setup_.mission == 0) throw std::invalid_argument("Authenticator: no mission id (team.mission)");
+  if (!setup_.key.empty()) {
+    if (!setup_.roster.holds(setup_.sender_id, setup_.key.public_key()))
+      throw std::invalid_argument("Authenticator: this node's public key is not " + sender_name(setup_.sender_id) +
+                                  "'s in the roster (team.public_keys)");
+    key_id_ = key_id(setup_.key.public_key());
+  }
 }
 
-Authenticator::~Authenticator() { sodium_memzero(&keyed_->state, sizeof keyed_->state); }
-
-void Authenticator::mac(const std::string& channel, const std::uint8_t* payload, std::size_t size,
-                        const std::uint8_t* header, std::uint8_t* out) const {
-  crypto_auth_hmacsha512256_state st = keyed_->state;  // = init(key): the key's pads already hashed
+void Authenticator::digest(const std::string& channel, const std::uint8_t* payload, std::size_t size,
+                           const std::uint8_t* header, std::uint8_t* out) const {
+  crypto_hash_sha512_state st;
+  crypto_hash_sha512_init(&st);
   std::uint8_t len[4];
   put_be(len, channel.size(), 4);
-  crypto_auth_hmacsha512256_update(&st, len, sizeof len);
-  crypto_auth_hmacsha512256_update(&st, reinterpret_cast<const unsigned char*>(channel.data()), channel.size());
-  crypto_auth_hmacsha512256_update(&st, payload, size);
-  crypto_auth_hmacsha512256_update(&st, header, kHeaderBytes);
-  crypto_auth_hmacsha512256_final(&st, out);
-  sodium_memzero(&st, sizeof st);
+  crypto_hash_sha512_update(&st, len, sizeof len);
+  crypto_hash_sha512_update(&st, reinterpret_cast<const unsigned char*>(channel.data()), channel.size());
+  crypto_hash_sha512_update(&st, payload, size);
+  crypto_hash_sha512_update(&st, header, kHeaderBytes);
+  crypto_hash_sha512_final(&st, out);
 }
 
 std::size_t Authenticator::seal(const std::string& channel, std::uint8_t* buf, std::size_t size) {
+  if (setup_.key.empty()) throw std::logic_error("Authenticator::seal: this process has no signing key");
   std::uint8_t* t = buf + size;
   std::memcpy(t, kMagic, kMagicBytes);
-  put_be(t + 4, static_cast<std::uint16_t>(sender_id_), 2);
-  put_be(t + 6, static_cast<std::uint64_t>(incarnation_), 8);
-  put_be(t + 14, ++counter_, 8);
-  mac(channel, buf, size, t, t + kHeaderBytes);
+  put_be(t + 4, static_cast<std::uint16_t>(setup_.sender_id), 2);
+  put_be(t + 6, key_id_, 4);
+  put_be(t + 10, setup_.mission, 8);
+  put_be(t + 18, static_cast<std::uint64_t>(setup_.incarnation), 8);
+  put_be(t + 26, ++counter_, 8);
+  std::uint8_t d[64];
+  digest(channel, buf, size, t, d);
+  setup_.key.sign(d, t + kHeaderBytes);
   ++counters_.sealed;
   return size + kTrailerBytes;
 }
 
 Verdict Authenticator::verify(const std::string& channel, const std::uint8_t* data, std::size_t size,
                               std::size_t* payload_size, Sender* sender) const {
+  if (malformed_message(channel, data, size) != nullptr) return Verdict::kMalformed;
   if (size < kTrailerBytes) return Verdict::kUnauthenticated;
   const std::size_t n = size - kTrailerBytes;
   const std::uint8_t* t = data + n;
   if (std::memcmp(t, kMagic, kMagicBytes) != 0) return Verdict::kUnauthenticated;
-  std::uint8_t expected[kMacBytes];
-  mac(channel, data, n, t, expected);
-  if (crypto_verify_32(expected, t + kHeaderBytes) != 0) return Verdict::kForged;
   sender->id = static_cast<std::int16_t>(get_be(t + 4, 2));
-  sender->incarnation = static_cast<std::int64_t>(get_be(t + 6, 8));
-  sender->counter = get_be(t + 14, 8);
-  if (!sender_may_publish(sender->id, channel, suffix_, data, n)) return Verdict::kWrongSender;
+  sender->key_id = static_cast<std::uint32_t>(get_be(t + 6, 4));
+  sender->mission = get_be(t + 10, 8);
+  sender->incarnation = static_cast<std::int64_t>(get_be(t + 18, 8));
+  sender->counter = get_be(t + 26, 8);
+  const PublicKey* key = setup_.roster.find(sender->id, sender->key_id);
+  if (key == nullptr) return Verdict::kUnknownKey;
+  std::uint8_t d[64];
+  digest(channel, data, n, t, d);
+  if (!verify_signature(*key, d, t + kHeaderBytes)) return Verdict::kForged;
+  // Signed by the one holder of the key: what it says of itself is now its word.
+  if (!sender_may_publish(sender->id, channel, setup_.channel_suffix, data, n)) return Verdict::kWrongSender;
+  if (sender->mission != setup_.mission) return Verdict::kOtherMission;
   *payload_size = n;
   return Verdict::kAccepted;
 }
 
 Verdict Authenticator::open(const std::string& channel, const std::uint8_t* data, std::size_t size,
-                            std::size_t* payload_size, Sender* sender, int receiver) {
-  Verdict v = verify(channel, data, size, payload_size, sender);
+                            std::size_t* payload_size, Sender* sender, int receiver, std::int64_t now_us) {
   const std::uint64_t bit = receiver >= 1 && receiver <= 64 ? std::uint64_t{1} << (receiver - 1) : 0;
-  if (v == Verdict::kAccepted) {
-    const bool again = sender->counter != 0 && last_.id == sender->id && last_.incarnation == sender->incarnation &&
-                       last_.counter == sender->counter;
-    if (again && bit != 0 && (last_receivers_ & bit) == 0) {  // the same datagram, another subscription
-      last_receivers_ |= bit;
-      ++counters_.accepted;
-      return v;
-    }
-    v = guard_.check(*sender);
+  // The datagram just accepted, handed to another subscription (LCM hands one datagram
+  // to each subscription that matches its channel, one after the other): accepted once
+  // more without a second signature check. The same channel, size and trailer
+  // (signature included); a replay reaching a receiver that had it is refused.
+  if (bit != 0 && (last_receivers_ & bit) == 0 && last_.counter != 0 && size == last_size_ &&
+      size >= kTrailerBytes && channel == last_channel_ &&
+      std::memcmp(data + size - kTrailerBytes, last_trailer_.data(), kTrailerBytes) == 0) {
+    last_receivers_ |= bit;
+    *payload_size = size - kTrailerBytes;
+    *sender = last_;
+    ++counters_.accepted;
+    return Verdict::kAccepted;
   }
+  Verdict v = verify(channel, data, size, payload_size, sender);
+  bool healed = false;
+  if (v == Verdict::kAccepted) v = guard_.check(*sender, now_us != 0 ? now_us : monotonic_us(), &healed);
   if (v != Verdict::kAccepted) {
     ++counters_.refused_by[static_cast<std::size_t>(v)];
     return v;
   }
+  if (healed) ++counters_.healed;
   ++counters_.accepted;
   last_ = *sender;
   last_receivers_ = bit;
+  last_size_ = size;
+  last_channel_.assign(channel);  // capacity reserved: no allocation
+  std::memcpy(last_trailer_.data(), data + size - kTrailerBytes, kTrailerBytes);
   return v;
 }
 
 // ---- AuthenticatedTransport ---------------------------------------------------------
 
-AuthenticatedTransport::AuthenticatedTransport(std::unique_ptr<Transport> inner, const TeamKey& key,
-                                               std::int16_t sender_id, std::int64_t incarnation,
-                                               std::string channel_suffix, std::string who, std::FILE* log)
-    : owned_(std::move(inner)), inner_(owned_.get()), auth_(key, sender_id, incarnation, std::move(channel_suffix)),
-      who_(std::move(who)), log_(log) {}
-
-AuthenticatedTransport::AuthenticatedTransport(Transport& inner, const TeamKey& key, std::int16_t sender_id,
-                                               std::int64_t incarnation, std::string channel_suffix, std::string who,
+AuthenticatedTransport::AuthenticatedTransport(std::unique_ptr<Transport> inner, AuthSetup setup, std::string who,
                                                std::FILE* log)
-    : inner_(&inner), auth_(key, sender_id, incarnation, std::move(channel_suffix)), who_(std::move(who)), log_(log) {}
+    : owned_(std::move(inner)), inner_(owned_.get()), auth_(std::move(setup)), who_(std::move(who)), log_(log) {}
+
+AuthenticatedTransport::AuthenticatedTransport(Transport& inner, AuthSetup setup, std::string who, std::FILE* log)
+    : inner_(&inner), auth_(std::move(setup)), who_(std::move(who)), log_(log) {}
 
 AuthenticatedTransport::~AuthenticatedTransport() {
   for (const Sub& s : subs_) inner_->unsubscribe(s.id);
@@ -260,8 +320,17 @@ void AuthenticatedTransport::unsubscribe(int id) {
 }
 
 TransportRefusals AuthenticatedTransport::refusals() const {
-  return {auth_.counters().refused(),
-          auth_.counters().refused_by[static_cast<std::size_t>(Verdict::kUnauthenticated)]};
+  const TransportRefusals inner = inner_->refusals();  // what never reached this layer
+  const AuthCounters& c = auth_.counters();
+  const auto by = [&](Verdict v) { return c.refused_by[static_cast<std::size_t>(v)]; };
+  TransportRefusals r = inner;
+  r.total += c.refused();
+  r.unauthenticated += by(Verdict::kUnauthenticated);
+  r.malformed += by(Verdict::kMalformed);
+  r.other_mission += by(Verdict::kOtherMission);
+  r.jumps += by(Verdict::kJump);
+  r.healed += c.healed;
+  return r;
 }
 
 int AuthenticatedTransport::handle_timeout(int timeout_ms) { return inner_->handle_timeout(timeout_ms); }
@@ -274,15 +343,26 @@ void AuthenticatedTransport::dispatch(const RawMessage& m, void* context) {
   std::size_t payload_size = 0;
   Sender sender;
   const Verdict v = self.auth_.open(m.channel, m.data, m.size, &payload_size, &sender, sub->receiver);
-  if (v != Verdict::kAccepted) return self.refused_warning(m.channel, v, m.size);
-  sub->handler(RawMessage{m.channel, m.data, payload_size}, sub->context);
+  if (v != Verdict::kAccepted) return self.refused_warning(m.channel, v, m.size, sender);
+  sub->handler(RawMessage{m.channel, m.data, payload_size, m.recv_utime}, sub->context);
 }
 
-void AuthenticatedTransport::refused_warning(const std::string& channel, Verdict v, std::size_t size) {
-  // No allocation: a flood of forged datagrams costs a MAC each and a counter, nothing more.
-  if ((++warnings_ <= 20 || warnings_ % 1000 == 0) && log_ != nullptr)
-    std::fprintf(log_, "%s: refused a message on %s (%zu bytes): %s (%lld refused so far)\n", who_.c_str(),
-                 channel.c_str(), size, to_string(v), static_cast<long long>(auth_.counters().refused()));
+void AuthenticatedTransport::refused_warning(const std::string& channel, Verdict v, std::size_t size, const Sender& s) {
+  // No allocation: a flood of forged datagrams costs a signature check each and a counter, nothing more.
+  char name[4 * contract::kMaxChannelBytes + 8];
+  if ((++warnings_ <= 20 || warnings_ % 1000 == 0) && log_ != nullptr) {
+    if (v == Verdict::kUnauthenticated || v == Verdict::kMalformed)
+      std::fprintf(log_, "%s: refused a message on %s (%zu bytes): %s (%lld refused so far)\n", who_.c_str(),
+                   printable_channel(channel, name), size, to_string(v),
+                   static_cast<long long>(auth_.counters().refused()));
+    else  // the trailer's claims (unverified for kUnknownKey and kForged)
+      std::fprintf(log_, "%s: refused a message on %s (%zu bytes, sender %d, mission %016llx, incarnation %lld, "
+                   "counter %llu): %s (%lld refused so far)\n",
+                   who_.c_str(), printable_channel(channel, name), size, s.id,
+                   static_cast<unsigned long long>(s.mission), static_cast<long long>(s.incarnation),
+                   static_cast<unsigned long long>(s.counter), to_string(v),
+                   static_cast<long long>(auth_.counters().refused()));
+  }
 }
 
 }  // namespace elaslam::transport::auth

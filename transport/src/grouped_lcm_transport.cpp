@@ -87,7 +87,8 @@ struct GroupedLcmTransport::Impl {
     std::vector<std::pair<int, int>> parts;  // (group, the group instance's subscription id)
   };
 
-  std::string suffix;
+  std::string suffix, who;
+  std::FILE* log = nullptr;
   std::array<std::string, channels::kChannelGroups> urls;
   std::array<std::unique_ptr<LcmTransport>, channels::kChannelGroups> groups;
   std::array<int, channels::kChannelGroups> subscriptions{};  // per group: live subscriptions
@@ -99,7 +100,7 @@ struct GroupedLcmTransport::Impl {
 
   LcmTransport* instance(int g) {
     if (!groups[g]) {
-      groups[g] = std::make_unique<LcmTransport>(urls[g]);
+      groups[g] = std::make_unique<LcmTransport>(urls[g], who, log);
       if (!groups[g]->good()) error = "cannot open LCM at " + urls[g];
     }
     return groups[g]->good() ? groups[g].get() : nullptr;
@@ -116,8 +117,11 @@ struct GroupedLcmTransport::Impl {
   }
 };
 
-GroupedLcmTransport::GroupedLcmTransport(const std::string& url, std::string suffix) : impl_(std::make_unique<Impl>()) {
+GroupedLcmTransport::GroupedLcmTransport(const std::string& url, std::string suffix, std::string who, std::FILE* log)
+    : impl_(std::make_unique<Impl>()) {
   impl_->suffix = std::move(suffix);
+  impl_->who = std::move(who);
+  impl_->log = log;
   for (int g = 0; g < channels::kChannelGroups; ++g) {
     impl_->urls[g] = group_url(url, g, &impl_->error);
     if (impl_->urls[g].empty()) return;
@@ -172,6 +176,16 @@ void GroupedLcmTransport::unsubscribe(int id) {
     impl_->rebuild_fds();
     return;
   }
+}
+
+TransportRefusals GroupedLcmTransport::refusals() const {
+  TransportRefusals sum;
+  for (const auto& g : impl_->groups) {
+    if (!g) continue;
+    const TransportRefusals r = g->refusals();
+    sum.total += r.total, sum.unauthenticated += r.unauthenticated, sum.malformed += r.malformed;
+  }
+  return sum;
 }
 
 int GroupedLcmTransport::handle_timeout(int timeout_ms) {

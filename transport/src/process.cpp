@@ -14,7 +14,7 @@
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/grouped_lcm_transport.hpp"
 #include "elaslam/transport/lcm_transport.hpp"
-#include "elaslam/transport/team_key.hpp"
+#include "elaslam/transport/keys.hpp"
 
 namespace elaslam::transport {
 namespace {
@@ -54,28 +54,83 @@ void add_transport_options(CLI::App& app, TransportArgs* args) {
           },
           "[A-Za-z0-9_]*", "channel suffix"));
   app.add_option("--key-file", args->key_file,
-                 "team key file: authenticate every message (default: the config's team.key_file; none: off)");
+                 "this node's secret key: sign what it sends (default: the config's team.key_file)");
+  app.add_option("--mission", args->mission,
+                 "the mission id, 16 hexadecimal digits (default: the roster's team.mission)");
+  app.add_option("--roster", args->roster,
+                 "the team's roster file (public keys, mission; elaslam-keys team writes one; default: the config's "
+                 "team: section or its team.roster_file)");
   app.add_flag("--channel-groups", args->channel_groups,
                "one UDP port per channel group, from the URL's port up (default: the config's team.channel_groups)");
 }
 
-TeamSection read_team_section(const std::string& config_path) {
+namespace {
+
+/// The roster's keys of a team: section (the config's, or a roster file's).
+void read_roster_keys(config::Reader& r, TeamSection* t) {
+  r.read_optional("mission", &t->mission);
+  std::uint64_t mission = 0;
+  std::string why;
+  if (r.has("mission") && !parse_mission(t->mission, &mission, &why)) r.fail("mission", why);
+  r.read_optional("revoked", &t->revoked);
+  r.section(
+      "public_keys",
+      [&](config::Reader& k) {
+        for (std::int16_t id = 1; id <= kSenderTool; ++id) {
+          const std::string name = sender_name(id);
+          if (name.empty() || !k.has(name)) continue;
+          std::string keys;
+          k.read(name, &keys);
+          t->public_keys.emplace_back(name, keys);
+        }
+      },
+      true);
+}
+
+}  // namespace
+
+TeamSection read_team_section(const std::string& config_path, bool roster) {
   TeamSection t;
   if (config_path.empty()) return t;
   config::Document doc = config::Document::from_file(config_path);
+  bool inline_roster = false;
   doc.section(
       "team",
       [&](config::Reader& r) {
         r.read_optional("key_file", &t.key_file);
         r.read_optional("channel_groups", &t.channel_groups);
+        r.read_optional("roster_file", &t.roster_file);
+        inline_roster = r.has("mission") || r.has("public_keys") || r.has("revoked");
+        if (inline_roster && !t.roster_file.empty())
+          r.fail("roster_file", "the roster is either in the file it names or here (mission, public_keys, revoked), not both");
+        read_roster_keys(r, &t);
       },
       true);
   doc.allow_sections();
   doc.finish();
+  if (t.roster_file.empty() || !roster) return t;
+  // The roster in a file of its own: a team: section with mission, public_keys and
+  // revoked only. A relative path is relative to the config's directory.
+  if (t.roster_file[0] != '/') {
+    const std::size_t slash = config_path.rfind('/');
+    if (slash != std::string::npos) t.roster_file = config_path.substr(0, slash + 1) + t.roster_file;
+  }
+  read_roster_file(t.roster_file, &t);
   return t;
 }
 
-std::string team_key_file(const TransportArgs& args, const std::string& config_path, std::string* origin) {
+void read_roster_file(const std::string& path, TeamSection* t) {
+  t->mission.clear();
+  t->public_keys.clear();
+  t->revoked.clear();
+  t->roster_file = path;
+  config::Document roster = config::Document::from_file(path);
+  roster.section("team", [&](config::Reader& r) { read_roster_keys(r, t); });
+  roster.finish();
+}
+
+std::string node_key_file(const TransportArgs& args, const std::string& config_path, const std::string& sender,
+                          std::string* origin) {
   std::string where;
   if (origin == nullptr) origin = &where;
   if (!args.key_file.empty()) {
@@ -83,15 +138,126 @@ std::string team_key_file(const TransportArgs& args, const std::string& config_p
     return args.key_file;
   }
   if (config_path.empty()) return "";
-  const std::string path = read_team_section(config_path).key_file;
+  std::string path = read_team_section(config_path, false).key_file;
   *origin = "team.key_file in " + config_path;
+  // "{sender}" stands for the node's sender name: one config for every node of a team.
+  if (const std::size_t at = path.find("{sender}"); at != std::string::npos && !sender.empty())
+    path.replace(at, 8, sender);
   const char* creds = std::getenv("CREDENTIALS_DIRECTORY");
   if (path.empty() || creds == nullptr || *creds == '\0') return path;
-  const std::string credential = std::string(creds) + "/team.key";
+  const std::string credential = std::string(creds) + "/node.key";
   std::error_code ec;
   if (!std::filesystem::exists(credential, ec)) return path;
-  *origin += ", passed by systemd as the credential team.key (LoadCredential=; 4 bytes \"none\": " + path + " is missing)";
+  *origin += ", passed by systemd as the credential node.key (LoadCredential=)";
   return credential;
+}
+
+namespace {
+
+/// The keys of a roster entry: one or two (a space between), each 64 hexadecimal digits.
+bool parse_keys(const std::string& text, std::vector<PublicKey>* keys, std::string* why) {
+  std::size_t i = 0;
+  while (i < text.size()) {
+    while (i < text.size() && (text[i] == ' ' || text[i] == ',')) ++i;
+    if (i == text.size()) break;
+    std::size_t j = i;
+    while (j < text.size() && text[j] != ' ' && text[j] != ',') ++j;
+    PublicKey k{};
+    if (!from_hex(text.substr(i, j - i), k.data(), k.size())) {
+      *why = "'" + text.substr(i, j - i) + "' is not a public key (64 hexadecimal digits; elaslam-keys public FILE prints one)";
+      return false;
+    }
+    keys->push_back(k);
+    i = j;
+  }
+  return true;
+}
+
+/// The roster and mission of the team: section (the command line's mission over it).
+bool read_roster(const TransportArgs& args, const TeamSection& t, auth::AuthSetup* setup, std::string* why) {
+  std::vector<PublicKey> revoked;
+  if (!parse_keys(t.revoked, &revoked, why)) return *why = "team.revoked: " + *why, false;
+  for (const PublicKey& k : revoked)
+    if (!setup->roster.revoke(k)) return *why = "team.revoked: more than 64 keys", false;
+  for (const auto& [name, text] : t.public_keys) {
+    std::int16_t id = 0;
+    sender_of_name(name, &id);
+    std::vector<PublicKey> keys;
+    if (!parse_keys(text, &keys, why)) return *why = "team.public_keys." + name + ": " + *why, false;
+    for (const PublicKey& k : keys) {
+      if (setup->roster.revoked(k)) continue;  // revoked wins: an old config that still lists it
+      if (!setup->roster.add(id, k, why)) return *why = "team.public_keys." + name + ": " + *why, false;
+    }
+  }
+  if (setup->roster.empty()) return true;
+  const std::string mission = args.mission.empty() ? t.mission : args.mission;
+  if (mission.empty())
+    return *why = "team.public_keys is set but no mission id is (team.mission, --mission; elaslam-keys mission makes one)",
+           false;
+  if (!parse_mission(mission, &setup->mission, why))
+    return *why = (args.mission.empty() ? "team.mission: " : "--mission: ") + *why, false;
+  return true;
+}
+
+}  // namespace
+
+bool configured_auth(const TransportArgs& args, const std::string& config_path, const std::string& who,
+                     std::int16_t sender_id, bool sends, auth::AuthSetup* setup, bool* on, std::string* description) {
+  *on = false;
+  *setup = auth::AuthSetup{};
+  TeamSection t;
+  std::string why, origin, key_path;
+  try {
+    t = read_team_section(config_path, args.roster.empty());
+    if (!args.roster.empty()) read_roster_file(args.roster, &t);  // --roster over the config's
+    key_path = node_key_file(args, config_path, sender_name(sender_id), &origin);
+  } catch (const config::ConfigError& e) {
+    std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
+    return false;
+  }
+  if (!read_roster(args, t, setup, &why)) {
+    std::fprintf(stderr, "%s: %s (%s%s)\n", who.c_str(), why.c_str(), config_path.c_str(),
+                 t.roster_file.empty() ? "" : (", roster " + t.roster_file).c_str());
+    return false;
+  }
+  if (setup->roster.empty()) {
+    if (!key_path.empty() && sends)  // a key without a roster would be a node nobody can verify
+      std::fprintf(stderr, "%s: warning: a key file is given (%s) but no team.public_keys: authentication off\n",
+                   who.c_str(), origin.c_str());
+    if (description != nullptr) *description = "authentication off (no team.public_keys)";
+    return true;
+  }
+  setup->sender_id = sender_id;
+  if (sends) {
+    if (key_path.empty()) {
+      std::fprintf(stderr, "%s: team.public_keys is set: this node signs what it sends and needs its secret key "
+                   "(team.key_file, --key-file; elaslam-keys new FILE makes one)\n", who.c_str());
+      return false;
+    }
+    if (!SigningKey::load(key_path, &setup->key, &why)) {
+      std::fprintf(stderr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin.c_str());
+      return false;
+    }
+    const PublicKey& pk = setup->key.public_key();
+    if (setup->roster.revoked(pk)) {
+      std::fprintf(stderr, "%s: the key %s is revoked (team.revoked): make a new one and list it\n", who.c_str(),
+                   key_path.c_str());
+      return false;
+    }
+    if (!setup->roster.holds(sender_id, pk)) {
+      std::fprintf(stderr, "%s: the public key of %s (%s) is not %s's in team.public_keys of %s\n", who.c_str(),
+                   key_path.c_str(), to_hex(pk.data(), pk.size()).c_str(), sender_name(sender_id).c_str(),
+                   config_path.c_str());
+      return false;
+    }
+  }
+  *on = true;
+  if (description != nullptr)
+    *description = "authentication on: mission " + mission_text(setup->mission) + ", roster " +
+                   setup->roster.describe() + (t.roster_file.empty() ? "" : " (" + t.roster_file + ")") +
+                   (sends ? ", signing as " + sender_name(sender_id) + " with " + key_path + " (" + origin + ")"
+                          : ", verifying only");
+  return true;
 }
 
 namespace {
@@ -114,7 +280,7 @@ std::string describe_url(const std::string& url) {
 std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& who, bool channel_groups,
                                     const std::string& suffix) {
   if (channel_groups) {
-    auto g = std::make_unique<GroupedLcmTransport>(effective_url(url), suffix);
+    auto g = std::make_unique<GroupedLcmTransport>(effective_url(url), suffix, who, stderr);
     if (g->good()) {
       std::string why;
       std::fprintf(stderr, "%s: LCM in channel groups: %s up to %s\n", who.c_str(),
@@ -126,7 +292,7 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
                  g->error().c_str());
     return nullptr;
   }
-  auto t = std::make_unique<LcmTransport>(effective_url(url));
+  auto t = std::make_unique<LcmTransport>(effective_url(url), who, stderr);
   if (t->good()) return t;
   std::fprintf(stderr,
                "%s: cannot open LCM (%s). Multicast on loopback needs a route: ip route add 224.0.0.0/4 dev lo "
@@ -135,25 +301,9 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
   return nullptr;
 }
 
-bool configured_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who,
-                         TeamKey* key, std::string* path, std::string* origin) {
-  try {
-    *path = team_key_file(args, config_path, origin);
-  } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
-    return false;
-  }
-  std::string why;
-  if (!path->empty() && !load_team_key(*path, key, &why)) {
-    std::fprintf(stderr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin->c_str());
-    return false;
-  }
-  return true;
-}
-
 bool channel_groups_on(const TransportArgs& args, const std::string& config_path, const std::string& who, bool* on) {
   try {
-    const bool configured = read_team_section(config_path).channel_groups;  // checked also under the flag
+    const bool configured = read_team_section(config_path, false).channel_groups;  // checked also under the flag
     *on = args.channel_groups || configured;
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
@@ -167,15 +317,13 @@ bool channel_groups_on(const TransportArgs& args, const std::string& config_path
   return true;
 }
 
-int check_team_key(const TransportArgs& args, const std::string& config_path, const std::string& who) {
-  TeamKey key;
-  std::string path, origin;
-  if (!configured_team_key(args, config_path, who, &key, &path, &origin)) return 2;
-  if (key.empty())
-    std::printf("%s: authentication off (no team key configured: team.key_file, --key-file)\n", who.c_str());
-  else
-    std::printf("%s: authentication on, team key %s (%s): readable and valid\n", who.c_str(), path.c_str(),
-                origin.c_str());
+int check_transport(const TransportArgs& args, const std::string& config_path, const std::string& who,
+                    std::int16_t sender_id, bool sends) {
+  auth::AuthSetup setup;
+  bool on = false;
+  std::string description;
+  if (!configured_auth(args, config_path, who, sender_id, sends, &setup, &on, &description)) return 2;
+  std::printf("%s: %s\n", who.c_str(), description.c_str());
   bool groups = false;
   if (!channel_groups_on(args, config_path, who, &groups)) return 2;
   if (!groups) {
@@ -190,10 +338,12 @@ int check_team_key(const TransportArgs& args, const std::string& config_path, co
 }
 
 std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
-                                    const std::string& who, int* exit_code, std::FILE* log) {
-  TeamKey key;
-  std::string key_path, origin;
-  if (!configured_team_key(args, config_path, who, &key, &key_path, &origin)) {
+                                    bool sends, std::int64_t incarnation, const std::string& who, int* exit_code,
+                                    std::FILE* log, std::array<std::uint8_t, kKeyBytes>* file_key, bool* keyed) {
+  auth::AuthSetup setup;
+  bool on = false;
+  std::string description;
+  if (!configured_auth(args, config_path, who, sender_id, sends, &setup, &on, &description)) {
     *exit_code = 2;
     return nullptr;
   }
@@ -207,11 +357,13 @@ std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string
     *exit_code = 1;
     return nullptr;
   }
-  if (key.empty()) return lcm;
-  std::fprintf(stderr, "%s: messages authenticated with the team key %s (sender id %d)\n", who.c_str(),
-               key_path.c_str(), sender_id);
-  return std::make_unique<auth::AuthenticatedTransport>(std::move(lcm), key, sender_id, now_utime(),
-                                                        args.channel_suffix, who, log);
+  if (keyed != nullptr) *keyed = on && !setup.key.empty();
+  if (!on) return lcm;
+  if (file_key != nullptr && !setup.key.empty()) *file_key = setup.key.file_key(setup.mission);
+  std::fprintf(stderr, "%s: %s, incarnation %lld\n", who.c_str(), description.c_str(), static_cast<long long>(incarnation));
+  setup.incarnation = incarnation;
+  setup.channel_suffix = args.channel_suffix;
+  return std::make_unique<auth::AuthenticatedTransport>(std::move(lcm), std::move(setup), who, log);
 }
 
 }  // namespace elaslam::transport

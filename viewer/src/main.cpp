@@ -184,7 +184,7 @@ int viewer_main(int argc, char** argv) {
   }
 
   int open_rc = 1;
-  const auto lcm = transport::open_lcm(targs, config_path, transport::auth::kSenderTool, "viewer", &open_rc, nullptr);
+  const auto lcm = transport::open_lcm(targs, config_path, transport::kSenderTool, false, 0, "viewer", &open_rc, nullptr);
   if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions("viewer", targs.channel_suffix, nullptr));
   ViewState state(limits);

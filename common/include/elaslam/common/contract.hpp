@@ -34,6 +34,15 @@ constexpr int kMaxWorldLandmarks = kMaxCount;
 /// The largest max_landmark_id a robot or main_robot accepts (ids 0 .. 2^20 - 1).
 constexpr int kMaxLandmarkIdLimit = 1 << 20;
 
+/// The largest message any channel carries, as a transport hands it over: GROUND_TRUTH
+/// of kMaxWorldLandmarks landmarks encodes to under 0.7 MB, every other type is far
+/// smaller. A size beyond this is not a message: LCM 1.3.1 reports -1 (4294967295)
+/// for a datagram whose channel name runs past its end, and the transport refuses it
+/// before anything reads the bytes (transport/lcm_transport.hpp, docs/security.md).
+constexpr std::size_t kMaxMessageBytes = std::size_t{4} << 20;
+/// The longest channel name LCM sends or receives (LCM_MAX_CHANNEL_NAME_LENGTH).
+constexpr std::size_t kMaxChannelBytes = 63;
+
 // Messages that repair state fit one datagram (lmap_snapshot_t, global_map_t chunks):
 // at most this many bytes encoded (LCM's payload, fingerprint included). With LCM's
 // header (8 bytes and the channel name), IP/UDP (28 bytes) and the message

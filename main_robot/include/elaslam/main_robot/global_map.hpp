@@ -14,6 +14,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -243,15 +244,20 @@ class GlobalMap {
   int count(GlobalStatus s) const;
   const GlobalMapOptions& options() const { return options_; }
 
-  /// Persistence (JSON text). from_json returns false with `why` on malformed input,
-  /// or on values a message could not carry either (positions beyond
-  /// limits.world_bound_m, covariances outside limits.cov_*, seq beyond 2^62, ids
-  /// outside the team), and leaves the map unchanged.
+  /// The map as JSON text, and back: the body of main_robot's state file (map_state.hpp
+  /// seals it, bounds it and moves it to and from the file; both live in
+  /// map_state.cpp). from_json returns false with `why` on malformed input, on values
+  /// a message could not carry either (positions beyond limits.world_bound_m,
+  /// covariances outside limits.cov_*, seq beyond 2^62, ids outside the team, frames
+  /// outside [0, INT32_MAX]), and on a landmark id or a robot's estimate listed twice
+  /// (refused, never merged), and leaves the map unchanged. The state file's tighter
+  /// bounds (seq <= 2^40, incarnation <= 2^62) are map_state_out_of_bounds'.
   std::string to_json() const;
-  bool from_json(const std::string& text, std::string* why);
+  bool from_json(std::string_view text, std::string* why);
 
  private:
-  void fuse(GlobalEntry& g) const;
+  /// g's fused estimate from its robots' estimates; false (the last one kept) when none is usable.
+  bool fuse(GlobalEntry& g) const;
   /// Delete landmark `id` from the map as moving (every robot's estimate of it is
   /// dropped), record who found it, and queue a notice unless `unconfirmed` (a
   /// snapshot's opinion of unknown age). Idempotent.

@@ -45,6 +45,7 @@ struct MainCounters {
   std::int64_t occupied = 0;             // STATIC landmarks found where a robot was (main.body_radius_m): now moving
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
+  std::int64_t state_damaged = 0;        // a damaged state file was moved aside at start (map_state.hpp)
 };
 
 class MainNode {
@@ -61,6 +62,8 @@ class MainNode {
   /// counted). False when anything was refused; `why` says the first problem.
   bool on_events(const lmap_events_t& msg, std::string* why = nullptr);
   void count_decode_error() { ++counters_.decode_errors; }
+  /// The state file was damaged and moved aside at start (map_state.hpp).
+  void count_state_damaged() { ++counters_.state_damaged; }
 
   /// Notices produced since the last call, as messages (seq assigned); clears them.
   const std::vector<dynamic_notice_t>& take_notices(std::int64_t now_utime);

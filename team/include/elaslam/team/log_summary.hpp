@@ -79,7 +79,7 @@ struct LogSummary {
   std::int64_t last_us = 0;
   std::vector<ChannelSummary> channels;  // sorted by name
   RunInfoSummary run_info;
-  std::string key_file;            // with the team key (summarize_log's auth): its file
+  std::string roster;              // with the team's keys (summarize_log's auth): where the roster came from
   std::int64_t auth_accepted = 0;  // events that verified
   std::int64_t auth_refused = 0;   // events a keyed node would refuse: counted, not decoded
   std::map<std::string, std::int64_t> auth_refused_by;  // per reason (forged, replayed, ...)
@@ -101,7 +101,7 @@ struct LogSummary {
 /// channel, and a truncated or corrupt tail ends the read (complete = false).
 /// With `auth` (the team key: log_auth.hpp), every event is verified as a keyed node
 /// does and only what verifies is decoded; refusals are counted per channel.
-LogSummary summarize_log(const std::string& path, LogAuth* auth = nullptr, const std::string& key_file = {});
+LogSummary summarize_log(const std::string& path, LogAuth* auth = nullptr, const std::string& roster = {});
 
 /// Human-readable summary (what `log_info` prints).
 void print_log_summary(std::ostream& out, const LogSummary& s);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <string>
 
@@ -37,7 +38,8 @@ class GroupedLcmTransport final : public Transport {
   /// `url`: the base URL (udpm:// only; "" is LCM's default); `suffix`: the team's
   /// channel suffix, which channel names carry. Not good() when the URL is not udpm://,
   /// leaves no room for every group's port, or the base group cannot be opened.
-  GroupedLcmTransport(const std::string& url, std::string suffix);
+  /// `who`, `log`: as LcmTransport's, for every group.
+  GroupedLcmTransport(const std::string& url, std::string suffix, std::string who = "LCM", std::FILE* log = nullptr);
   ~GroupedLcmTransport() override;
 
   bool good() const override;
@@ -46,6 +48,7 @@ class GroupedLcmTransport final : public Transport {
   int subscribe(const std::string& pattern, RawHandler handler, void* context, int queue_capacity) override;
   void unsubscribe(int id) override;
   int handle_timeout(int timeout_ms) override;
+  TransportRefusals refusals() const override;  // summed over the groups
   bool channel_groups() const override { return true; }
 
   /// Why the transport is not good(); "" when it is.

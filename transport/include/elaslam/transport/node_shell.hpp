@@ -174,6 +174,7 @@ class NodeShell {
    private:
     // A negative count makes LCM's decoder throw (std::vector::resize): not a message.
     bool decode(const RawMessage& m) {
+      if (m.size > contract::kMaxMessageBytes) return false;  // the transport refuses these first (transport.hpp)
       try {
         return msg_->decode(m.data, 0, static_cast<int>(m.size)) >= 0;
       } catch (const std::exception&) {

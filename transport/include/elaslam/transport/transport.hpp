@@ -10,14 +10,50 @@
 #include <cstdint>
 #include <string>
 
+#include "elaslam/common/contract.hpp"
+
 namespace elaslam::transport {
 
 /// One received message as the transport hands it over; valid during the handler call only.
 struct RawMessage {
   const std::string& channel;
   const std::uint8_t* data;
-  std::size_t size;  // [bytes]
+  std::size_t size;             // [bytes]
+  std::int64_t recv_utime = 0;  // [us] when it was received (the kernel's stamp over udpm://); 0: not known
 };
+
+/// Is what a transport was handed a message at all? nullptr when it is, else why not.
+/// Checked on every received datagram before anything reads its bytes: LCM 1.3.1
+/// parses a datagram's channel name with strlen, so a name without its terminating
+/// NUL runs into what the previous datagram left in the buffer, and the payload size
+/// it then reports is negative (as an unsigned 32-bit number, 4294967232..4294967295);
+/// the name it reports may hold those leftover bytes too.
+inline const char* malformed_message(const std::string& channel, const void* data, std::size_t size) {
+  if (data == nullptr) return "no payload";
+  if (size > contract::kMaxMessageBytes) return "a payload size larger than any message (a datagram cut short)";
+  if (channel.empty() || channel.size() > contract::kMaxChannelBytes) return "a channel name of impossible length";
+  for (const char c : channel)
+    if (c <= ' ' || c > '~') return "a channel name with bytes that are not printable ASCII";
+  return nullptr;
+}
+
+/// `channel` for a log line, whatever bytes it holds: printable ASCII as it is, the
+/// rest as \xNN, cut to LCM's longest name; into `out`, which it returns. Allocates nothing.
+inline const char* printable_channel(const std::string& channel, char (&out)[4 * contract::kMaxChannelBytes + 8]) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < channel.size() && i < contract::kMaxChannelBytes; ++i) {
+    const auto c = static_cast<unsigned char>(channel[i]);
+    if (c > ' ' && c <= '~') {
+      out[n++] = static_cast<char>(c);
+    } else {
+      out[n++] = '\\', out[n++] = 'x', out[n++] = kHex[c >> 4], out[n++] = kHex[c & 15];
+    }
+  }
+  if (channel.size() > contract::kMaxChannelBytes) out[n++] = '.', out[n++] = '.', out[n++] = '.';
+  out[n] = '\0';
+  return out;
+}
 
 /// A subscription's handler: a plain function and a context pointer (LCM 1.3.1 cannot
 /// subscribe a lambda: LCM.md). It runs on the thread that calls handle_timeout() and
@@ -33,6 +69,10 @@ constexpr int kUnboundedQueue = 0;
 struct TransportRefusals {
   std::int64_t total = 0;            // for every reason
   std::int64_t unauthenticated = 0;  // of which: no authentication trailer (a sender without the team key)
+  std::int64_t malformed = 0;        // of which: not a message at all (malformed_message)
+  std::int64_t other_mission = 0;    // of which: signed for another mission (auth_transport.hpp)
+  std::int64_t jumps = 0;            // of which: a sender's counter far ahead, held (auth_transport.hpp)
+  std::int64_t healed = 0;           // not refused: held jumps that the sender's next message confirmed
 };
 
 class Transport {
@@ -63,8 +103,8 @@ class Transport {
   /// signal). Never call it from inside a handler.
   virtual int handle_timeout(int timeout_ms) = 0;
 
-  /// Messages received but refused before any subscriber saw them (message
-  /// authentication: auth_transport.hpp); none for a transport that refuses none.
+  /// Messages received but refused before any subscriber saw them (malformed_message;
+  /// message authentication: auth_transport.hpp); none for a transport that refuses none.
   virtual TransportRefusals refusals() const { return {}; }
 
   /// True when a subscription costs the process the wake-ups of its channel group only
