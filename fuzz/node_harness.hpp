@@ -6,6 +6,8 @@
 // depends on it alone. Made, not copied from a pristine one: a copy copies every
 // scratch buffer element by element under the coverage instrumentation (the ELA
 // gate's pairwise blocks: 58 % of fuzz_robot_node's time), a move swaps pointers.
+// ShellRig: a node, its shell and its ports made whole over another transport
+// (fuzz_datagrams: the receive path from raw datagrams up).
 #pragma once
 
 #include <cstdint>
@@ -50,6 +52,39 @@ struct NodeHarness {
   transport::NodeShell shell;
   const std::function<Node()> make;
   Node node{make()};
+  Ports<transport::NodeShell> ports{shell, node};
+};
+
+/// The datagram target's node (fuzz_datagrams.cpp): a node on its ports on a NodeShell
+/// over a transport that the caller keeps, made whole, as NodeHarness makes its shell
+/// and ports, with the node anew. Not movable: the shell's clock and the ports point
+/// into it. untouched() says whether it is still as made (no message reached a handler,
+/// nothing was published): then the next input may use it again, and depends on
+/// nothing before it; else the caller makes a new one.
+template <class Node, template <class> class Ports>
+struct ShellRig {
+  static constexpr std::int64_t kEpoch = 1'700'000'000'000'000;  // [us] the shell's clock at the start
+
+  ShellRig(transport::Transport& transport, const char* name, Node made)
+      : shell(transport, [this, name] {
+          transport::ShellOptions so(name, "", nullptr);
+          so.clock = [this] { return clock += 1000; };
+          return so;
+        }()),
+        node(std::move(made)) {
+    if (!ports.open()) std::abort();
+  }
+  ShellRig(const ShellRig&) = delete;
+  ShellRig& operator=(const ShellRig&) = delete;
+
+  bool untouched() const {
+    const transport::ShellCounters c = shell.counters();
+    return c.inputs.received == 0 && c.published == 0 && c.publish_errors == 0;
+  }
+
+  std::int64_t clock = kEpoch;
+  transport::NodeShell shell;
+  Node node;
   Ports<transport::NodeShell> ports{shell, node};
 };
 

@@ -76,10 +76,9 @@ int run(const Args& a) {
   std::string note;
   const std::int64_t incarnation = transport::start_incarnation(a.state, &note);  // a later start: a larger one
   int open_rc = 1;  // authenticated when the team's keys are configured (transport/process.hpp)
-  StateKey file_key{};
-  bool keyed = false;  // the state file sealed with the node's key of this mission, when it signs
+  transport::AuthInfo auth;  // the state file sealed with the node's key of this mission, when it signs
   const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::kSenderMain, true, incarnation, "main_robot",
-                                       &open_rc, stderr, &file_key, &keyed);
+                                       &open_rc, stderr, &auth);
   if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions("main_robot", a.transport.channel_suffix));
   MainNode node(o);
@@ -87,16 +86,16 @@ int run(const Args& a) {
   MainPorts<transport::NodeShell> ports(shell, node);
   // Keyed with the node's own key of this mission: an edited file, or one of another
   // mission, does not verify (docs/security.md "main_robot's state file").
-  const StateKey* state_key = keyed ? &file_key : nullptr;
+  const StateKey* state_key = auth.signs ? &auth.file_key : nullptr;
   if (!a.state.empty()) {
     const MapStateLoad loaded = load_map_state(a.state, state_key, &node.map());
     std::fprintf(stderr, "main_robot: %s\n", loaded.line.c_str());
     if (loaded.outcome == MapStateOutcome::kFreshAfterDamage) node.count_state_damaged();
   }
-  const auto save_state = [&] {
+  const auto save_state = [&] {  // a failure: FAULT_SAVE_FAILED in STATUS, said at the first of a series
     std::string why;
-    if (!save_map_state(a.state, node.map(), state_key, &why))
-      std::fprintf(stderr, "main_robot: cannot save %s: %s\n", a.state.c_str(), why.c_str());
+    node.note_save(save_map_state(a.state, node.map(), state_key, &why), a.state + ": " + why);
+    if (const std::string alert = node.take_alert(); !alert.empty()) std::fprintf(stderr, "main_robot: %s\n", alert.c_str());
   };
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");

@@ -67,13 +67,15 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
 // Robot::event_capacity, 3 x 64 + capacity + 8, events a frame).
 constexpr std::int64_t kResumeSeqSkip = std::int64_t{1} << 24;
 
-void save(const std::string& path, const RobotNode& node);
+void save(const std::string& path, RobotNode& node, std::uint64_t mission);
 
 /// The state in `path` when there is one (true: resumed); a corrupt one is moved
 /// aside to PATH.corrupt (said why) and the node starts fresh: a bad file must not
 /// keep a robot down. A fresh start takes this start's incarnation (`incarnation`,
 /// transport/incarnation.hpp: later starts have larger ones); a resumed node keeps its own.
-bool resume(const std::string& path, std::int64_t incarnation, RobotNode* node) {
+/// `mission` (the team's keys' mission, 0: none): a state of another mission is not
+/// resumed (robot_state.hpp).
+bool resume(const std::string& path, std::int64_t incarnation, std::uint64_t mission, RobotNode* node) {
   node->set_incarnation(incarnation);
   if (path.empty()) return false;
   std::string text, why;
@@ -82,7 +84,7 @@ bool resume(const std::string& path, std::int64_t incarnation, RobotNode* node) 
     if (!missing) std::fprintf(stderr, "robot_node %d: cannot read state %s: %s; starting fresh\n", node->robot_id(), path.c_str(), why.c_str());
     return false;
   }
-  if (load_robot_state(text, node, &why)) {
+  if (load_robot_state(text, node, &why, mission)) {
     // The events sent after the last save carried the next seq numbers, and
     // main_robot has them: numbering on from the file would have them refused as
     // stale. Jump ahead instead: main_robot sees one gap, asks for a snapshot
@@ -91,7 +93,7 @@ bool resume(const std::string& path, std::int64_t incarnation, RobotNode* node) 
     // Saved at once, before anything is sent: killed again before its first save, the
     // next resume would reuse this run's seq numbers, and main_robot would take its
     // events for duplicates of this run's and see no gap to repair.
-    save(path, *node);
+    save(path, *node, mission);
     std::fprintf(stderr, "robot_node %d: resumed from %s at frame %d, %d landmarks, seq %lld (incarnation %lld)\n",
                  node->robot_id(), path.c_str(), node->robot().last_frame(), node->robot().filter().num_landmarks(),
                  (long long)node->event_seq(), (long long)node->incarnation());
@@ -104,10 +106,13 @@ bool resume(const std::string& path, std::int64_t incarnation, RobotNode* node) 
   return false;
 }
 
-void save(const std::string& path, const RobotNode& node) {
+/// A failed save is said once per series (FAULT line) and flagged in STATUS
+/// (FAULT_SAVE_FAILED) until a save succeeds again.
+void save(const std::string& path, RobotNode& node, std::uint64_t mission) {
   std::string why;
-  if (!files::write_atomic(path, save_robot_state(node), &why))
-    std::fprintf(stderr, "robot_node %d: cannot save state: %s\n", node.robot_id(), why.c_str());
+  const bool ok = files::write_atomic(path, save_robot_state(node, mission), &why);
+  node.note_save(ok, path + ": " + why);
+  if (const std::string alert = node.take_alert(); !alert.empty()) std::fprintf(stderr, "robot_node %d: %s\n", node.robot_id(), alert.c_str());
 }
 
 /// --state while running, called every turn of the shell (after a frame's messages
@@ -122,8 +127,10 @@ class StateKeeper {
   static constexpr std::int64_t kMisfitFrames = 10;
   using Clock = std::chrono::steady_clock;
 
-  StateKeeper(std::string path, const RobotOptions& o, RobotNode* node, bool resumed, std::int64_t incarnation)
+  StateKeeper(std::string path, const RobotOptions& o, RobotNode* node, bool resumed, std::int64_t incarnation,
+              std::uint64_t mission)
       : path_(std::move(path)), options_(o), node_(node), watching_(resumed), next_incarnation_(incarnation + 1),
+        mission_(mission),
         period_(std::chrono::microseconds(static_cast<std::int64_t>(o.state_save_interval_s * 1e6))),
         next_save_(Clock::now()), saved_frames_(node->counters().frames), frames_at_start_(saved_frames_),
         refused_at_start_(refused()) {}
@@ -134,7 +141,7 @@ class StateKeeper {
     if (path_.empty()) return;
     const auto now = Clock::now();
     if (now < next_save_ || node_->counters().frames == saved_frames_) return;
-    save(path_, *node_);
+    save(path_, *node_, mission_);
     saved_frames_ = node_->counters().frames;
     next_save_ = now + period_;
   }
@@ -183,6 +190,7 @@ class StateKeeper {
   RobotNode* node_;
   bool watching_;
   std::int64_t next_incarnation_;
+  const std::uint64_t mission_;
   const Clock::duration period_;
   Clock::time_point next_save_;
   std::int64_t saved_frames_;
@@ -238,13 +246,14 @@ int run(const Args& a) {
   std::string note;
   const std::int64_t incarnation = transport::start_incarnation(a.state, &note);
   int open_rc = 1;  // authenticated when the team's keys are configured (transport/process.hpp)
+  transport::AuthInfo auth;  // its mission goes in the state file
   const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), true, incarnation,
-                                       name, &open_rc);
+                                       name, &open_rc, stderr, &auth);
   if (!lcm) return open_rc;
   transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
   RobotNode node(o, a.robot);
-  const bool resumed = resume(a.state, incarnation, &node);
-  StateKeeper keeper(a.state, o, &node, resumed, incarnation);
+  const bool resumed = resume(a.state, incarnation, auth.mission, &node);
+  StateKeeper keeper(a.state, o, &node, resumed, incarnation, auth.mission);
   RobotPorts<transport::NodeShell> ports(shell, node);
   if (!ports.open(a.queues)) {
     shell.say("cannot subscribe");
@@ -257,7 +266,7 @@ int run(const Args& a) {
   shell.every(std::chrono::milliseconds(static_cast<int>(a.status_period_s * 1000)), [&] { ports.publish_status(); });
   shell.every(transport::NodeShell::Clock::duration::zero(), [&] { keeper.turn(); });
   const bool transport_failed = shell.spin(100) == transport::NodeShell::Exit::kTransportError;
-  if (!a.state.empty()) save(a.state, node);  // SIGINT / SIGTERM (and a failed transport): the latest state
+  if (!a.state.empty()) save(a.state, node, auth.mission);  // SIGINT / SIGTERM (and a failed transport): the latest state
   if (!transport_failed) ports.publish_status();
   final_line(node, ports.stages());
   return transport_failed ? 1 : 0;

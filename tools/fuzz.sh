@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Fuzz the inputs from outside with libFuzzer (clang), under AddressSanitizer and
 # UndefinedBehaviorSanitizer: every message handler of robot_node and main_robot
-# (decode + validate + apply, through the node shell as in the processes), the
-# config loader, the state loaders and the MRCLAM parser (fuzz/, docs/security.md).
+# (decode + validate + apply, through the node shell as in the processes), the receive
+# path from raw udpm:// datagrams up to those handlers (fuzz_datagrams: reassembly,
+# dispatch, authentication), the config loader, the state loaders and the MRCLAM
+# parser (fuzz/, docs/security.md).
 #
 #   tools/fuzz.sh [--seconds S | --runs N] [--targets "fuzz_config fuzz_state ..."]
 #                 [--jobs J] [--max-len BYTES] [--build-dir DIR] [--keep-corpus]
@@ -25,7 +27,7 @@ ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 BUILD_DIR="$ROOT/build/fuzz"
 SECONDS_PER_TARGET=30
 RUNS=""
-TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam fuzz_viewer"
+TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam fuzz_viewer fuzz_datagrams"
 JOBS=1
 MAX_LEN=131072
 KEEP=0

@@ -30,7 +30,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"
 GOAL=10000000
 CHUNK=600
-TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam"
+TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam fuzz_datagrams"
 MAX_LEN=4096
 BUILD_DIR="$ROOT/build/fuzz"
 LEDGER="$ROOT/fuzz/ledger"

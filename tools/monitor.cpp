@@ -27,6 +27,7 @@
 #include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/transport/auth_transport.hpp"
+#include "elaslam/common/faults.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
 
@@ -82,32 +83,30 @@ class Progress {
     if (const long long refused = shell_.counters().auth_refused; refused > 0)
       out += " | refused (authentication) " + std::to_string(refused);
     long long refused = 0;
-    std::string full, lost;
+    std::string faults;  // "FAULT robot 2: frames lost, main silent"
     for (const auto& [node, h] : health_) {
       refused += h.refused;
-      if (h.capacity) full += (full.empty() ? "" : ", ") + node;
-      if (h.inconsistent) lost += (lost.empty() ? "" : ", ") + node;
+      std::string names;
+      for (const std::string& n : fault_names(h.faults)) names += (names.empty() ? "" : ", ") + n;
+      if (!names.empty()) faults += " | FAULT " + node + ": " + names;
     }
     if (refused > 0) out += " | messages refused " + std::to_string(refused);
-    if (!full.empty()) out += " | CAPACITY EXCEEDED: " + full;
-    if (!lost.empty()) out += " | INCONSISTENT (lost?): " + lost;
+    out += faults;
     if (frame_ < 0) out = "waiting for the first frame" + std::string(frames_ > 0 ? " of " + std::to_string(frames_) : "");
     return out;
   }
 
  private:
-  // Refusals (every reason of node_status_t.refused) and the capacity flag, per node.
+  // Refusals (every reason of node_status_t.refused) and the fault flags, per node.
   struct Health {
     long long refused = 0;
-    bool capacity = false;
-    bool inconsistent = false;  // FAULT_INCONSISTENT: the robot's consistency monitor
+    std::int32_t faults = 0;  // node_status_t.fault_flags of its last STATUS
   };
   void note_health(const std::string& node, const node_status_t& m) {
     Health& h = health_[node];
     h.refused = 0;
     for (std::int64_t n : m.refused) h.refused += n;
-    h.capacity = (m.fault_flags & node_status_t::FAULT_CAPACITY) != 0;
-    h.inconsistent = (m.fault_flags & node_status_t::FAULT_INCONSISTENT) != 0;
+    h.faults = m.fault_flags;
   }
 
   template <typename Msg, typename Fn>

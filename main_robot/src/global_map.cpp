@@ -3,6 +3,7 @@
 #include "elaslam/main_robot/global_map.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include <Eigen/Cholesky>
 
@@ -80,7 +81,15 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
     s.incarnation_frame = std::max(s.incarnation_frame, frame);
     return IncarnationVerdict::kCurrent;
   }
-  if (incarnation > s.incarnation) {  // restarted without its state: a new stream
+  bool back = false;
+  // (The replaced incarnation is no challenger: it came before the one followed; its
+  // datagrams are late ones or a second sender's, below.)
+  if (incarnation < s.incarnation && incarnation != s.previous_incarnation) {
+    if (incarnation != s.challenger) s.challenger = incarnation, s.challenger_frame = -1, s.challenger_heard = 0;
+    if (frame > s.challenger_frame) s.challenger_frame = frame, ++s.challenger_heard;
+    back = s.challenger_heard >= 3 && frame > s.incarnation_frame + kQuietFrames;
+  }
+  if (incarnation > s.incarnation || back) {  // restarted without its state: a new stream
     s.previous_incarnation = s.incarnation;
     s.previous_frame = s.incarnation_frame;
     s.incarnation_frame = frame;
@@ -89,6 +98,10 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
     s.snapshot_seq = 0;
     s.snapshot_frame = -1;
     s.previous_heard = 0;
+    s.challenger = 0;
+    s.challenger_frame = -1;
+    s.challenger_heard = 0;
+    s.restarted_back = back;
     ++s.restarts;
     s.restart_repair(0);
     return IncarnationVerdict::kRestarted;
@@ -101,6 +114,11 @@ IncarnationVerdict GlobalMap::observe_incarnation(int robot_id, std::int64_t inc
     s.previous_frame = frame;
     if (++s.previous_heard >= 3) s.duplicate_until_frame = std::max(newest_frame_, frame) + 50;
   }
+  // An older one that keeps pace with the followed one (frames within kQuietFrames of
+  // its: not a replay of old frames): a second live sender too.
+  if (incarnation == s.challenger && s.challenger_heard >= 3 &&
+      std::abs(s.incarnation_frame - s.challenger_frame) <= kQuietFrames)
+    s.duplicate_until_frame = std::max(newest_frame_, frame) + 50;
   return IncarnationVerdict::kStale;
 }
 

@@ -28,6 +28,8 @@ Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
 
 MainNode::MainNode(const GlobalMapOptions& options) : map_(options) {
   robot_frame_.fill(-1);
+  pose_frame_.fill(-1);
+  incarnation_refused_frame_.fill(-1);
   snapshot_done_frame_.fill(-1);
   resync_frame_.fill(-1000000);
   const auto max_id = static_cast<std::size_t>(options.max_landmark_id);
@@ -185,7 +187,11 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
       event_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       snapshot_guard_[static_cast<std::size_t>(robot_id - 1)].clear();
       alert_ = "robot " + std::to_string(robot_id) + " restarted without its state (incarnation " +
-               std::to_string(incarnation) + "): its stream starts over, snapshot requested";
+               std::to_string(incarnation) +
+               (map_.stream(robot_id).restarted_back
+                    ? ", older than the one followed, which is no longer heard: its start count or clock was reset"
+                    : "") +
+               "): its stream starts over, snapshot requested";
       // Far behind the frame the team finished: the sensor source started over (a
       // new run; frames are the team's one index, a robot restarted within a run
       // comes back at the team's frame). The team's frame starts over with it, else
@@ -204,6 +210,16 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
   ++counters_.stale_incarnation;
   counters_.refused.add(Refusal::kStale);
   ++counters_.rejected_inputs;
+  // FAULT_INCARNATION for kAlertFrames of the team after the last such refusal; a line
+  // at the first of a series (a duplicate sender has its own, below).
+  const auto ri = static_cast<std::size_t>(robot_id - 1);
+  const int team_frame = std::max(completed_frame_, frame);
+  if (incarnation_refused_frame_[ri] < 0 || team_frame - incarnation_refused_frame_[ri] >= kAlertFrames)
+    if (alert_.empty() && !map_.duplicate_sender(robot_id))
+      alert_ = "FAULT: robot " + std::to_string(robot_id) + "'s messages of incarnation " + std::to_string(incarnation) +
+               " refused: main follows its incarnation " + std::to_string(map_.stream(robot_id).incarnation) +
+               " (a replay, or a second sender with its id)";
+  incarnation_refused_frame_[ri] = team_frame;
   auto& alerted = alerted_duplicate_[static_cast<std::size_t>(robot_id - 1)];
   if (map_.duplicate_sender(robot_id) && !alerted) {
     alert_ = "FAULT: two live senders use robot id " + std::to_string(robot_id) + " (incarnations " +
@@ -212,6 +228,11 @@ bool MainNode::accept_incarnation(int robot_id, std::int64_t incarnation, int fr
   }
   alerted = map_.duplicate_sender(robot_id);
   return false;
+}
+
+void MainNode::note_save(bool ok, const std::string& why) {
+  if (!ok && !save_failed_ && alert_.empty()) alert_ = "FAULT: main_robot cannot save its state: " + why;
+  save_failed_ = !ok;
 }
 
 void MainNode::request_resync(int robot_id, std::int8_t reason) {
@@ -388,6 +409,16 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   const bool first = map_.stream(m.robot_id).incarnation == 0 && robot_frame_[r] < 0;
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) return -1;
   if (std::string p = check_frame(m.robot_id, m.frame, &reason); !p.empty()) return refused(reason, p, why), -1;
+  // A robot heard again after more than kPartitionFrames of its frames were missing:
+  // a partition (or a burst of loss) healed; said, and flagged for kAlertFrames.
+  if (pose_frame_[r] >= 0 && m.frame - pose_frame_[r] > kPartitionFrames) {
+    healed_frame_ = m.frame;
+    if (alert_.empty())
+      alert_ = "robot " + std::to_string(m.robot_id) + " heard again at frame " + std::to_string(m.frame) +
+             " after frame " + std::to_string(pose_frame_[r]) + " (" + std::to_string(m.frame - pose_frame_[r] - 1) +
+             " of its frames missing): a partition or a lossy stretch healed";
+  }
+  pose_frame_[r] = std::max(pose_frame_[r], m.frame);
   // Heard of first past its first frames (main started late or without its state):
   // the robot's earlier events never reached this map.
   if (first && m.frame > 0 && map_.stream(m.robot_id).last_seq == 0)
@@ -627,6 +658,12 @@ node_status_t MainNode::status_msg(std::int64_t now_utime) const {
   }
   if (capacity_fault_) s.fault_flags |= node_status_t::FAULT_CAPACITY;
   if (map_.left_out() != 0) s.fault_flags |= node_status_t::FAULT_INCONSISTENT;
+  const int team_frame = std::max(completed_frame_, map_.newest_frame());
+  for (std::size_t r = 0; r < kMaxTeamRobots; ++r)
+    if (incarnation_refused_frame_[r] >= 0 && team_frame - incarnation_refused_frame_[r] < kAlertFrames)
+      s.fault_flags |= node_status_t::FAULT_INCARNATION;
+  if (healed_frame_ >= 0 && team_frame - healed_frame_ < kAlertFrames) s.fault_flags |= node_status_t::FAULT_PARTITION_HEALED;
+  if (save_failed_) s.fault_flags |= node_status_t::FAULT_SAVE_FAILED;
   for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = counters_.events;
   s.frames_dropped = counters_.gaps;

@@ -222,7 +222,7 @@ std::string map_state_out_of_bounds(const GlobalMap& map) {
 
 bool seal_map_state(const GlobalMap& map, const StateKey* key, std::string* text, std::string* why) {
   if (std::string bad = map_state_out_of_bounds(map); !bad.empty()) {
-    if (why) *why = bad + " (docs/security_main_state.md): a file the loader would refuse is not written";
+    if (why) *why = bad + " (docs/security.md, main_robot's state file): a file the loader would refuse is not written";
     return false;
   }
   std::string sealed = seal_state(kMapStateFormat, kMapStateVersion, map.to_json(), key);

@@ -183,6 +183,13 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
   }
   if (!problem.empty()) return refused(reason, problem, why), Verdict::kInvalid;
+  // One frame processed so far, and this one does not continue it (older, or further
+  // ahead than confirm_jump_frames): that first frame was not the stream's (a forged
+  // far-ahead frame number, a stray datagram of an old run). Start over from this one
+  // instead of refusing the real frames that follow.
+  if (counters_.frames == 1 && frames_this_run_ == 1 &&
+      (msg.frame < last_frame_ || std::int64_t{msg.frame} - last_frame_ > options_.confirm_jump_frames))
+    start_over();
   if (msg.frame == last_frame_) {
     ++counters_.frames_duplicate;
     if (why) *why = "duplicate frame " + std::to_string(msg.frame);
@@ -196,7 +203,10 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   }
   problem = check_progress(msg, &reason);
   if (!problem.empty()) return refused(reason, problem, why), Verdict::kInvalid;
-  if (last_frame_ >= 0) counters_.frames_gap += msg.frame - last_frame_ - 1;
+  if (last_frame_ >= 0 && msg.frame > last_frame_ + 1) {
+    counters_.frames_gap += msg.frame - last_frame_ - 1;
+    note_frames_lost(last_frame_ + 1, msg.frame - 1);
+  }
 
   const auto t0 = std::chrono::steady_clock::now();
   input_.frame = msg.frame;
@@ -207,6 +217,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     input_.obs[static_cast<std::size_t>(k)] = {msg.obs[k].landmark_id, {msg.obs[k].range, msg.obs[k].bearing}};
   const FrameSummary s = robot_.process(input_);
   last_frame_ = msg.frame;
+  if (first_frame_utime_ == 0) first_frame_utime_ = now_utime;
   behind_ = 0;
   ++counters_.frames;
   ++frames_this_run_;
@@ -415,6 +426,68 @@ void RobotNode::note_filter_full(int n) {
   alert_.assign(line);
 }
 
+void RobotNode::note_frames_lost(int from, int to) {
+  lost_frame_ = to + 1;
+  if (to + 1 - lost_alerted_ < kAlertFrames || !alert_.empty()) return;  // rate-limited
+  lost_alerted_ = to + 1;
+  char line[kAlertBytes];
+  std::snprintf(line, sizeof line,
+                "FAULT: robot %d never received frames %d..%d (%lld lost so far): a flood of datagrams, a lossy link "
+                "or an overloaded computer",
+                robot_id_, from, to, static_cast<long long>(counters_.frames_gap));
+  alert_.assign(line);
+}
+
+void RobotNode::start_over() {
+  const std::int64_t next = incarnation_ + 1;
+  const int dropped = last_frame_;
+  RobotNode fresh(options_, robot_id_);
+  fresh.set_incarnation(next);
+  fresh.counters_.frames_out_of_order = counters_.frames_out_of_order + 1;  // the frame taken back
+  *this = std::move(fresh);
+  char line[kAlertBytes];
+  std::snprintf(line, sizeof line,
+                "robot %d: its first frame %d was not the stream's (the next one does not continue it): started over, "
+                "incarnation %lld",
+                robot_id_, dropped, static_cast<long long>(next));
+  alert_.assign(line);
+}
+
+void RobotNode::main_heard(std::int64_t now_utime) {
+  if (main_silent_) {
+    main_silent_ = false;
+    healed_frame_ = std::max(last_frame_, 0);
+    char line[kAlertBytes];
+    std::snprintf(line, sizeof line, "robot %d: main_robot heard again after %.1f s of silence (frame %d): the partition healed",
+                  robot_id_, static_cast<double>(now_utime - std::max(main_heard_utime_, first_frame_utime_)) * 1e-6,
+                  last_frame_);
+    alert_.assign(line);
+  }
+  main_heard_utime_ = now_utime;
+}
+
+void RobotNode::check_main(std::int64_t now_utime) {
+  if (options_.main_silent_s <= 0.0 || first_frame_utime_ == 0 || main_silent_) return;
+  const std::int64_t since = std::max(main_heard_utime_, first_frame_utime_);
+  if (static_cast<double>(now_utime - since) * 1e-6 <= options_.main_silent_s) return;
+  main_silent_ = true;
+  char line[kAlertBytes];
+  std::snprintf(line, sizeof line,
+                "FAULT: robot %d has not heard main_robot for %.1f s (node.main_silent_s %.1f) at frame %d: main is down "
+                "or cut off; the robot goes on alone",
+                robot_id_, static_cast<double>(now_utime - since) * 1e-6, options_.main_silent_s, last_frame_);
+  alert_.assign(line);
+}
+
+void RobotNode::note_save(bool ok, const std::string& why) {
+  if (!ok && !save_failed_) {
+    char line[kAlertBytes];
+    std::snprintf(line, sizeof line, "FAULT: robot %d cannot save its state: %.160s", robot_id_, why.c_str());
+    alert_.assign(line);
+  }
+  save_failed_ = !ok;
+}
+
 std::string RobotNode::take_alert() {
   std::string a = alert_;  // a copy: alert_ keeps its reserved buffer
   alert_.clear();
@@ -597,6 +670,11 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   if (full_frame_ >= 0 && last_frame_ - full_frame_ < kAlertFrames) s.fault_flags |= node_status_t::FAULT_CAPACITY;
   if (inconsistent_frame_ >= 0 && last_frame_ - inconsistent_frame_ < kAlertFrames)
     s.fault_flags |= node_status_t::FAULT_INCONSISTENT;
+  if (lost_frame_ >= 0 && last_frame_ - lost_frame_ < kAlertFrames) s.fault_flags |= node_status_t::FAULT_FRAMES_LOST;
+  if (save_failed_) s.fault_flags |= node_status_t::FAULT_SAVE_FAILED;
+  if (main_silent_) s.fault_flags |= node_status_t::FAULT_MAIN_SILENT;
+  if (healed_frame_ >= 0 && last_frame_ - healed_frame_ < kAlertFrames)
+    s.fault_flags |= node_status_t::FAULT_PARTITION_HEALED;
   for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = frames_this_run_;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;

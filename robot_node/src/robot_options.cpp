@@ -85,6 +85,7 @@ void parse(config::Reader& r, RobotOptions* o) {
     o->max_turn = deg2rad(max_turn_deg);
     n.read_optional("odometry_reanchor_frames", &o->odometry_reanchor_frames, 1, 1000);
     n.read_optional("confirm_jump_frames", &o->confirm_jump_frames, 1, 100000);
+    n.read_optional("main_silent_s", &o->main_silent_s, 0.0, 3600.0);
     if (o->confirm_jump_frames > o->max_frame_gap)
       n.fail("confirm_jump_frames", "larger than max_frame_gap: a jump that far is refused anyway");
   });

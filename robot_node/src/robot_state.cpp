@@ -689,18 +689,31 @@ std::string robot_state_checksum(const std::string& state_dump) {
   return buf;
 }
 
-std::string save_robot_state(const RobotNode& node) {
+std::string save_robot_state(const RobotNode& node, std::uint64_t mission) {
   const std::string state = RobotStateAccess::save(node).dump();
   // The state is dumped once and spliced in, so the checksum covers exactly these bytes' values.
   json head = {{"format", kRobotStateFormat}, {"version", kRobotStateVersion}, {"fnv1a64", robot_state_checksum(state)}};
+  if (mission != 0) {
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(mission));
+    head["mission"] = hex;
+  }
   std::string text = head.dump();
   text.pop_back();  // '}'
   return text + ",\"state\":" + state + "}\n";
 }
 
-bool load_robot_state(const std::string& text, RobotNode* node, std::string* why) {
+bool load_robot_state(const std::string& text, RobotNode* node, std::string* why, std::uint64_t mission) {
   try {
     const json doc = json::parse(text);
+    if (mission != 0) {  // with the team's keys: only a state of this mission
+      char hex[17];
+      std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(mission));
+      const auto m = doc.find("mission");
+      if (m == doc.end() || !m->is_string() || m->get<std::string>() != hex)
+        fail("mission", (m == doc.end() ? std::string("none") : m->dump()) + " is not this mission's \"" + hex +
+                            "\" (a state of another mission: a new mission starts fresh)");
+    }
     const json& format = need(doc, "file", "format");
     if (!format.is_string() || format.get<std::string>() != kRobotStateFormat)
       fail("format", format.dump() + " is not \"" + kRobotStateFormat + "\" (not a robot state file)");

@@ -522,3 +522,66 @@ TEST(MainLimits, ConfigMismatchesBetweenSectionsAreFoundAtStartUp) {
 
 }  // namespace
 }  // namespace elaslam
+
+namespace elaslam {
+namespace {
+
+pose_estimate_t pose_of(int robot, int frame, std::int64_t incarnation) {
+  pose_estimate_t p = test::pose_msg(robot, frame);
+  p.incarnation = incarnation;
+  return p;
+}
+
+// A robot restarted with a smaller incarnation than the one main followed (its state
+// directory lost, another computer, a clock set back): main refused all its events as
+// an older incarnation (26 static landmarks instead of 36). Now its messages are
+// refused, flagged (FAULT_INCARNATION) and said while the followed one might be alive;
+// once the new one's frames run on past the followed one's, which is no longer heard,
+// main follows it as a restart. A replay of old frames never gets past it.
+TEST(MainIncarnations, ARobotWhoseIncarnationWentBackIsFollowedOnceItsOldOneIsQuiet) {
+  MainNode main(options());
+  for (int f = 0; f < 20; ++f) ASSERT_GE(main.on_pose(pose_of(2, f, 9000), nullptr), -1);
+  // Replays of the old incarnation's frames: never taken.
+  for (int f = 5; f < 12; ++f) main.on_pose(pose_of(2, f, 3000), nullptr);
+  EXPECT_EQ(main.counters().restarts, 0);
+  EXPECT_TRUE(main.status_msg(0).fault_flags & node_status_t::FAULT_INCARNATION);
+  EXPECT_NE(main.take_alert().find("incarnation 3000 refused"), std::string::npos);
+  // A new process with a smaller incarnation, frames running on past 19 while 9000 is silent.
+  std::string why;
+  for (int f = 20; f < 23; ++f) EXPECT_LT(main.on_pose(pose_of(2, f, 500), &why), 0) << f;
+  EXPECT_EQ(main.counters().restarts, 0);
+  main.on_pose(pose_of(2, 23, 500), &why);
+  EXPECT_EQ(main.counters().restarts, 1);
+  EXPECT_EQ(main.map().stream(2).incarnation, 500);
+  EXPECT_NE(main.take_alert().find("older than the one followed"), std::string::npos);
+  // The followed incarnation is now 500: its POSEs count.
+  EXPECT_EQ(main.counters().stale_incarnation, 7 + 3);
+}
+
+TEST(MainIncarnations, AnOlderIncarnationThatKeepsPaceIsASecondSenderNotARestart) {
+  MainNode main(options());
+  for (int f = 0; f < 30; ++f) {
+    main.on_pose(pose_of(3, f, 9000), nullptr);
+    if (f >= 10) main.on_pose(pose_of(3, f, 500), nullptr);  // a copy of the robot, both alive
+  }
+  EXPECT_EQ(main.counters().restarts, 0);
+  EXPECT_EQ(main.map().stream(3).incarnation, 9000);
+  EXPECT_TRUE(main.status_msg(0).fault_flags & node_status_t::FAULT_DUPLICATE_SENDER);
+}
+
+TEST(MainFaults, ARobotHeardAgainAfterAGapAndAFailedSaveAreFlagged) {
+  MainNode main(options());
+  for (int f = 0; f < 10; ++f) main.on_pose(pose_of(1, f, 7), nullptr);
+  EXPECT_FALSE(main.status_msg(0).fault_flags & node_status_t::FAULT_PARTITION_HEALED);
+  main.on_pose(pose_of(1, 10 + MainNode::kPartitionFrames + 1, 7), nullptr);  // 11 frames missing
+  EXPECT_TRUE(main.status_msg(0).fault_flags & node_status_t::FAULT_PARTITION_HEALED);
+  EXPECT_NE(main.take_alert().find("heard again"), std::string::npos);
+  main.note_save(false, "global_map.json: No space left on device");
+  EXPECT_TRUE(main.status_msg(0).fault_flags & node_status_t::FAULT_SAVE_FAILED);
+  EXPECT_NE(main.take_alert().find("No space left"), std::string::npos);
+  main.note_save(true, "");
+  EXPECT_FALSE(main.status_msg(0).fault_flags & node_status_t::FAULT_SAVE_FAILED);
+}
+
+}  // namespace
+}  // namespace elaslam

@@ -1,6 +1,6 @@
 // main_robot's state file (map_state.hpp): sealed, bounded, checked; a refused file
 // is moved aside to PATH.corrupt and main starts fresh. Each case of the review
-// (docs/security_main_state.md) against the file functions the process calls.
+// (docs/security.md, "main_robot's state file") against the file functions the process calls.
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
@@ -176,7 +176,7 @@ TEST_F(MapStateFile, AConsistentFiveMetreShiftIsRefusedWithAKey) {
   };
   expect_refused(hand_edited(good, &key, shift), &key, "sealed without a key while a state key is configured");
   expect_refused(hand_edited(good, &key, shift, &forger), &key, "the MAC does not verify");
-  // The same edit of an unkeyed file, with no key configured: accepted (docs/security_main_state.md).
+  // The same edit of an unkeyed file, with no key configured: accepted (docs/security.md, "main_robot's state file").
   ASSERT_TRUE(save_map_state(path_, team_map(), nullptr, &why)) << why;
   write_file(path_, hand_edited(read_file(path_), nullptr, shift));
   GlobalMap m(options());

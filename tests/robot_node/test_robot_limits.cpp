@@ -59,6 +59,67 @@ TEST_F(RobotLimits, FramesNearInt32MaxNeverOverflowTheWindow) {
   EXPECT_EQ(node_.robot().last_frame(), top - 5);
 }
 
+// A first frame of INT32_MAX - 5 (a forged or stray datagram before the real stream)
+// was taken as the reference: the robot then refused real frames 1..10 as old, until
+// the process started over. Now the next frame that does not continue a lone first
+// frame starts the node over from it: no real frame is lost.
+TEST_F(RobotLimits, AFirstFrameFarAheadNeverCostsTheRealFrames) {
+  node_.set_incarnation(40);
+  auto forged = frame(0);
+  forged.frame = std::numeric_limits<int>::max() - 5;
+  ASSERT_EQ(send(forged), RobotNode::Verdict::kProcessed);
+  run(1, 30);
+  EXPECT_EQ(node_.counters().frames, 29);
+  EXPECT_EQ(node_.robot().last_frame(), 29);
+  EXPECT_EQ(node_.incarnation(), 41);  // its stream starts over at main_robot too
+  EXPECT_NE(node_.take_alert().find("started over"), std::string::npos);
+  EXPECT_LT(error(), 0.05);
+  // Two frames that continue each other are the stream: an older one after them is refused.
+  EXPECT_EQ(send(frame(3)), RobotNode::Verdict::kOutOfOrder);
+  EXPECT_EQ(node_.counters().frames, 29);
+}
+
+TEST_F(RobotLimits, AFirstFrameFarBehindItsSuccessorStartsOverToo) {
+  node_.set_incarnation(40);
+  ASSERT_EQ(send(frame(0)), RobotNode::Verdict::kProcessed);  // a stray frame 0 of an old run
+  run(500, 520);                                               // the real stream, far ahead
+  EXPECT_EQ(node_.counters().frames, 20);
+  EXPECT_EQ(node_.robot().last_frame(), 519);
+}
+
+// Faults an operator must see, in STATUS (node_status_t.fault_flags) and as a line.
+TEST_F(RobotLimits, LostFramesASilentMainAndAFailedSaveAreFlagged) {
+  const auto flags = [&](std::int64_t now) { return node_.status_msg(now).fault_flags; };
+  const std::int64_t s = 1000000;
+  ASSERT_EQ(node_.on_sensor(frame(0), 1 * s, nullptr), RobotNode::Verdict::kProcessed);
+  node_.main_heard(1 * s);
+  EXPECT_EQ(flags(1 * s), 0);
+  // Frames 1..3 never came.
+  ASSERT_EQ(node_.on_sensor(frame(4), 2 * s, nullptr), RobotNode::Verdict::kProcessed);
+  EXPECT_TRUE(flags(2 * s) & node_status_t::FAULT_FRAMES_LOST);
+  EXPECT_NE(node_.take_alert().find("never received frames 1..3"), std::string::npos);
+  run(5, 5 + RobotNode::kAlertFrames);
+  EXPECT_FALSE(flags(2 * s) & node_status_t::FAULT_FRAMES_LOST);  // 100 frames later
+  // main_robot not heard for longer than node.main_silent_s (5 s).
+  node_.check_main(5 * s);
+  EXPECT_FALSE(flags(5 * s) & node_status_t::FAULT_MAIN_SILENT);
+  node_.check_main(7 * s);
+  EXPECT_TRUE(flags(7 * s) & node_status_t::FAULT_MAIN_SILENT);
+  EXPECT_NE(node_.take_alert().find("has not heard main_robot for 6.0 s"), std::string::npos);
+  node_.main_heard(9 * s);
+  EXPECT_FALSE(flags(9 * s) & node_status_t::FAULT_MAIN_SILENT);
+  EXPECT_TRUE(flags(9 * s) & node_status_t::FAULT_PARTITION_HEALED);
+  EXPECT_NE(node_.take_alert().find("heard again after 8.0 s"), std::string::npos);
+  // A save that fails: flagged until one succeeds.
+  node_.note_save(false, "state.json: No space left on device");
+  EXPECT_TRUE(flags(9 * s) & node_status_t::FAULT_SAVE_FAILED);
+  EXPECT_NE(node_.take_alert().find("No space left"), std::string::npos);
+  node_.note_save(false, "state.json: No space left on device");
+  EXPECT_EQ(node_.take_alert(), "");  // said once per series
+  node_.note_save(true, "");
+  EXPECT_FALSE(flags(9 * s) & node_status_t::FAULT_SAVE_FAILED);
+}
+
 // One forged frame 99 ahead (inside max_frame_gap) made the robot refuse the 99
 // real frames after it (its error rose from 0.19 to 1.09 m in the team run).
 TEST_F(RobotLimits, AForgedFrameFarAheadNeverBlocksTheRealFrames) {

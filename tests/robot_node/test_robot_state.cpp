@@ -240,6 +240,29 @@ TEST(RobotState, ARestartedRobotKeepsWhichLandmarksHaveAgreedWithAnother) {
 // window puts the older operations into its lagged filter, none ignores them. The
 // loaded node goes on: the same pose as the saved one at the next frame when the
 // window is the same.
+// With the team's keys, a state file says which mission it belongs to, and a robot
+// of another mission does not resume it (a new mission starts fresh; without keys
+// the mission is not looked at).
+TEST(RobotState, AStateOfAnotherMissionIsNotResumed) {
+  const TeamConfig c = paper(Mode::kEla, 4);
+  const auto frames = sensor_frames(c);
+  const std::size_t R = c.scenario.robots.size();
+  RobotNode node(c.robot, kRobot);
+  for (std::size_t f = kRobot - 1; f < 10 * R; f += R) node.on_sensor(frames[f], 0);
+  const std::string keyed = save_robot_state(node, 0xabcdef0123456789ull);
+  EXPECT_EQ(json::parse(keyed)["mission"], "abcdef0123456789");
+  std::string why;
+  RobotNode back(c.robot, kRobot);
+  EXPECT_TRUE(load_robot_state(keyed, &back, &why, 0xabcdef0123456789ull)) << why;
+  EXPECT_EQ(back.robot().last_frame(), node.robot().last_frame());
+  RobotNode other(c.robot, kRobot);
+  EXPECT_FALSE(load_robot_state(keyed, &other, &why, 0x1111222233334444ull));
+  EXPECT_NE(why.find("another mission"), std::string::npos) << why;
+  EXPECT_EQ(other.robot().last_frame(), -1);  // unchanged
+  EXPECT_FALSE(load_robot_state(save_robot_state(node), &other, &why, 0x1111222233334444ull));  // of no mission
+  EXPECT_TRUE(load_robot_state(keyed, &other, &why)) << why;  // keys off: the mission is not looked at
+}
+
 TEST(RobotState, AFilterHistoryLoadsIntoAnyWindow) {
   const TeamConfig c = paper(Mode::kEla, 4);
   ASSERT_EQ(c.robot.candidate_history_frames, 2);

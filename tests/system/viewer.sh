@@ -8,8 +8,10 @@
 #      advances between two looks 2 s apart, it draws the 3 robots and the landmarks
 #      and throws nothing; a screenshot is saved after the replay;
 #      during the replay, 8 event streams that are never read (the most, --max-clients)
-#      leave /state.json answering at once, a 9th is refused with 503, and the count
-#      of clients is back to 0 once they close (tests/system/viewer_clients.py);
+#      leave /state.json answering at once, a 9th browser gets a stream within 10 s
+#      all the same (it evicts a stalled one), the viewer closes the stalled ones
+#      within 15 s, and the count of clients is back to 0 once all close
+#      (tests/system/viewer_clients.py);
 #   3. /state.json after the replay equals the log's last POSE_<r> of each robot and
 #      its GLOBAL_MAP assembled from the chunks (tests/system/viewer_check.py), and
 #      every key of it is in docs/data_dictionary.md;

@@ -23,6 +23,7 @@
 #include "../support/test_keys.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/landmark_event_t.hpp"
+#include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/inprocess_transport.hpp"
@@ -448,6 +449,29 @@ TEST(AuthenticatedTransport, NodesTalkAndAnUnsignedForgedOrReplayedMessageNeverR
   EXPECT_EQ(main.counters().auth_refused, 8);
   EXPECT_EQ(main.counters().auth_unauthenticated, 2);
   EXPECT_EQ(main.counters().inputs.decode_errors, 0);  // nothing refused was decoded
+}
+
+// STATUS says when the transport refused anything since the last one
+// (FAULT_INPUT_REFUSED), with one line at the start of a series.
+TEST(AuthenticatedTransport, RefusalsSinceTheLastStatusAreFlagged) {
+  InProcessTransport bus;
+  AuthenticatedTransport main_t(bus, team_setup(kSenderMain, 20), "main", nullptr);
+  NodeShell main(main_t, ShellOptions("main", "", nullptr));
+  main.subscribe<landmark_event_t>("LMAP_EVENT", [](const landmark_event_t&, const std::string&) {}, kUnboundedQueue);
+  node_status_t st{};
+  main.stamp_auth(&st);
+  EXPECT_FALSE(st.fault_flags & node_status_t::FAULT_INPUT_REFUSED);
+  const auto plain = encoded(event(1));
+  bus.publish("LMAP_EVENT", plain.data(), plain.size());
+  bus.dispatch_all();
+  st = node_status_t{};
+  main.stamp_auth(&st);
+  EXPECT_TRUE(st.fault_flags & node_status_t::FAULT_INPUT_REFUSED);
+  EXPECT_EQ(st.auth_refused, 1);
+  st = node_status_t{};
+  main.stamp_auth(&st);  // none since: cleared
+  EXPECT_FALSE(st.fault_flags & node_status_t::FAULT_INPUT_REFUSED);
+  EXPECT_EQ(st.auth_refused, 1);
 }
 
 // The size LCM 1.3.1 reported for a cut datagram (-1): refused before a byte is read.

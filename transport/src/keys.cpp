@@ -13,6 +13,7 @@
 #include <sodium.h>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/secret_file.hpp"
 
 namespace elaslam::transport {
 namespace {
@@ -28,30 +29,10 @@ int hex_value(char c) {
   return -1;
 }
 
-std::string mode_text(mode_t m) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "%04o", static_cast<unsigned>(m & 07777));
-  return buf;
-}
-
-/// Is `path` a file directly in $CREDENTIALS_DIRECTORY (a systemd service's credentials)?
-bool in_credentials_directory(const std::string& path) {
-  const char* dir = std::getenv("CREDENTIALS_DIRECTORY");
-  if (dir == nullptr || *dir != '/') return false;
-  std::string d = dir;
-  while (d.size() > 1 && d.back() == '/') d.pop_back();
-  return path.size() > d.size() + 1 && path.compare(0, d.size(), d) == 0 && path[d.size()] == '/' &&
-         path.find('/', d.size() + 1) == std::string::npos;
-}
-
-/// Closes a descriptor and wipes a buffer on every way out.
+/// Wipes a buffer on every way out.
 struct Scratch {
-  int fd = -1;
   std::uint8_t buf[160] = {};
-  ~Scratch() {
-    if (fd >= 0) close(fd);
-    sodium_memzero(buf, sizeof buf);
-  }
+  ~Scratch() { sodium_memzero(buf, sizeof buf); }
 };
 
 void init_sodium() {
@@ -105,62 +86,18 @@ std::uint32_t key_id(const PublicKey& k) {
 
 bool load_secret_key_file(const std::string& path, std::array<std::uint8_t, kKeyBytes>* seed, std::string* why) {
   const std::string where = "key file " + path + ": ";
-  struct stat link {};
-  if (lstat(path.c_str(), &link) != 0) {
-    *why = where + std::strerror(errno);
-    return false;
-  }
-  if (S_ISLNK(link.st_mode)) {
-    *why = where + "is a symbolic link; give the real file (a link could be redirected by whoever can change it)";
-    return false;
-  }
   Scratch s;
-  // O_NOFOLLOW: the file checked above cannot be swapped for a link meanwhile;
-  // O_NONBLOCK: a FIFO put in its place does not hang the program.
-  s.fd = open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-  if (s.fd < 0) {
-    *why = where + std::strerror(errno);
-    return false;
-  }
-  struct stat st {};
-  if (fstat(s.fd, &st) != 0) {
-    *why = where + std::strerror(errno);
-    return false;
-  }
-  if (!S_ISREG(st.st_mode)) {
-    *why = where + "is not a regular file";
-    return false;
-  }
-  if (in_credentials_directory(path)) {
-    // Passed by systemd (LoadCredential=): a read-only copy that only this service's
-    // user can read, made by systemd, whose owner and mode bits (an ACL for a
-    // DynamicUser=, root shown as nobody under PrivateUsers=) say nothing more.
-  } else if (st.st_uid != geteuid() && st.st_uid != 0) {
-    *why = where + "is owned by uid " + std::to_string(st.st_uid) + ", neither this user (uid " +
-           std::to_string(geteuid()) + ") nor root";
-    return false;
-  } else if ((st.st_mode & 077) != 0) {
-    *why = where + "has mode " + mode_text(st.st_mode) +
-           ": group or others may access it; a secret key must be readable by its owner only (chmod 600 " + path + ")";
-    return false;
-  }
-  ssize_t n = 0, got = 0;
-  while ((got = read(s.fd, s.buf + n, sizeof s.buf - static_cast<std::size_t>(n))) > 0) {
-    n += got;
-    if (n == static_cast<ssize_t>(sizeof s.buf)) break;
-  }
-  if (got < 0) {
-    *why = where + std::strerror(errno);
-    return false;
-  }
-  std::size_t len = static_cast<std::size_t>(n);
+  std::size_t n = 0;
+  bool more = false;
+  if (!files::read_secret_file(path, "key file", s.buf, sizeof s.buf, &n, &more, why)) return false;
+  std::size_t len = n;
   if (len == kKeyBytes) {
     std::memcpy(seed->data(), s.buf, len);
   } else {
     if (len == 2 * kKeyBytes + 1 && s.buf[len - 1] == '\n') --len;
     if (!from_hex(reinterpret_cast<const char*>(s.buf), len, seed->data(), kKeyBytes)) {
       sodium_memzero(seed->data(), seed->size());
-      *why = where + "has " + std::to_string(n) + (n == static_cast<ssize_t>(sizeof s.buf) ? " or more" : "") +
+      *why = where + "has " + std::to_string(n) + (more ? " or more" : "") +
              " bytes that are not a key: a secret key is 32 random bytes, raw or as 64 hexadecimal characters "
              "(make one with elaslam-keys new FILE)";
       return false;

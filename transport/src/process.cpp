@@ -339,7 +339,7 @@ int check_transport(const TransportArgs& args, const std::string& config_path, c
 
 std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
                                     bool sends, std::int64_t incarnation, const std::string& who, int* exit_code,
-                                    std::FILE* log, std::array<std::uint8_t, kKeyBytes>* file_key, bool* keyed) {
+                                    std::FILE* log, AuthInfo* info) {
   auth::AuthSetup setup;
   bool on = false;
   std::string description;
@@ -357,9 +357,13 @@ std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string
     *exit_code = 1;
     return nullptr;
   }
-  if (keyed != nullptr) *keyed = on && !setup.key.empty();
+  if (info != nullptr) {
+    info->on = on;
+    info->signs = on && !setup.key.empty();
+    info->mission = on ? setup.mission : 0;
+    if (info->signs) info->file_key = setup.key.file_key(setup.mission);
+  }
   if (!on) return lcm;
-  if (file_key != nullptr && !setup.key.empty()) *file_key = setup.key.file_key(setup.mission);
   std::fprintf(stderr, "%s: %s, incarnation %lld\n", who.c_str(), description.c_str(), static_cast<long long>(incarnation));
   setup.incarnation = incarnation;
   setup.channel_suffix = args.channel_suffix;

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/faults.hpp"
 
 namespace elaslam::viewer {
 namespace {
@@ -24,13 +25,10 @@ nlohmann::json trail_json(const std::deque<std::array<double, 2>>& t) {
   return a;
 }
 
-// node_status_t.fault_flags as words (the page lists them).
+// node_status_t.fault_flags as words (the page lists them; common/faults.hpp).
 nlohmann::json faults_json(std::int32_t f) {
   nlohmann::json a = nlohmann::json::array();
-  if (f & node_status_t::FAULT_DUPLICATE_SENDER) a.push_back("duplicate sender");
-  if (f & node_status_t::FAULT_UNREPAIRED_GAP) a.push_back("unrepaired gap");
-  if (f & node_status_t::FAULT_CAPACITY) a.push_back("capacity");
-  if (f & node_status_t::FAULT_INCONSISTENT) a.push_back("inconsistent");
+  for (const std::string& name : fault_names(f)) a.push_back(name);
   return a;
 }
 

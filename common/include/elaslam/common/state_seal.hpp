@@ -13,7 +13,7 @@
 // covered as well as the body). Unkeyed, it finds damage (a flipped bit, a truncated
 // write, a file of another format) but anyone who can write the file can recompute
 // it; keyed, only a holder of the key can make a file that opens.
-// docs/security_main_state.md. No I/O: files::read_all and files::write_atomic move
+// docs/security.md, "main_robot's state file". No I/O: files::read_all and files::write_atomic move
 // the text.
 #pragma once
 

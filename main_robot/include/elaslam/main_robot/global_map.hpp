@@ -151,6 +151,14 @@ struct RobotStream {
   int previous_frame = -1;             // ... of previous_incarnation: as it was when replaced, then as heard
   int duplicate_until_frame = -1;      // a second live sender was seen: flagged until this frame
   int last_frame = -1;
+  // Another incarnation, older than the one followed, heard: a replay, a second
+  // sender, or the robot restarted with its start count reset (a lost state
+  // directory, another computer), which is followed once its frames run on past the
+  // followed incarnation's while that one is not heard (observe_incarnation).
+  std::int64_t challenger = 0;
+  int challenger_frame = -1;            // its newest frame
+  int challenger_heard = 0;             // its messages, each with a newer frame than any before
+  bool restarted_back = false;          // the last restart took an older incarnation
 
   /// A gap: chunks with a seq of at least `seq` must cover every id again (a pending
   /// repair that needs older chunks only is kept).
@@ -193,7 +201,14 @@ class GlobalMap {
   /// a gap is pending until its snapshot has covered every id); an older one is
   /// refused, and when it is the one just replaced, counted as a second live sender
   /// (flagged for 50 frames from the third such message).
+  /// An older incarnation never seen before is followed (kRestarted, stream.restarted_back) once three of
+  /// its messages with newer frames came and its newest frame is more than
+  /// kQuietFrames past the followed incarnation's newest: the robot restarted with
+  /// its start count or clock reset, and the old one is no longer heard. A live
+  /// followed incarnation keeps up (then it is a second sender); a replay of old
+  /// messages never gets past it.
   IncarnationVerdict observe_incarnation(int robot_id, std::int64_t incarnation, int frame);
+  static constexpr int kQuietFrames = 3;
   /// True while a second live sender with robot r's id is flagged.
   bool duplicate_sender(int robot_id) const;
 

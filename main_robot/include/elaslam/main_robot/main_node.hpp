@@ -64,6 +64,14 @@ class MainNode {
   void count_decode_error() { ++counters_.decode_errors; }
   /// The state file was damaged and moved aside at start (map_state.hpp).
   void count_state_damaged() { ++counters_.state_damaged; }
+  /// The outcome of the last state save: FAULT_SAVE_FAILED while the last one failed,
+  /// an alert at the first failure of a series.
+  void note_save(bool ok, const std::string& why);
+  /// Faults stay flagged this many frames of the team after their last sign.
+  static constexpr int kAlertFrames = 100;
+  /// More of a robot's frames than this missing between two of its POSEs: a partition
+  /// (or a lossy stretch) healed when it is heard again (FAULT_PARTITION_HEALED).
+  static constexpr int kPartitionFrames = 10;
 
   /// Notices produced since the last call, as messages (seq assigned); clears them.
   const std::vector<dynamic_notice_t>& take_notices(std::int64_t now_utime);
@@ -186,6 +194,10 @@ class MainNode {
   std::array<int, kMaxTeamRobots> resync_frame_;  // robot frame of the last request, per robot
   std::array<JumpGuard, kMaxTeamRobots> frame_guard_{}, event_guard_{}, snapshot_guard_{};  // per robot
   bool capacity_fault_ = false;  // the last GLOBAL_MAP could not carry the whole map
+  std::array<int, kMaxTeamRobots> pose_frame_;                 // newest POSE frame per robot, -1: none
+  std::array<int, kMaxTeamRobots> incarnation_refused_frame_;  // team frame of the last refusal as another incarnation
+  int healed_frame_ = -1;        // a robot heard again after a partition (FAULT_PARTITION_HEALED)
+  bool save_failed_ = false;     // FAULT_SAVE_FAILED
   std::array<bool, kMaxTeamRobots> alerted_duplicate_{};
   static constexpr std::size_t kAlertCapacity = 4096;
   std::string alert_;

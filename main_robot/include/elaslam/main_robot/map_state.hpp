@@ -5,7 +5,7 @@
 // A file that is too large, does not open (damaged, altered, another key) or fails a
 // check is moved aside to PATH.corrupt and main starts fresh: the robots' snapshots
 // rebuild the map, and a bad file must not keep the team's main down.
-// docs/security_main_state.md. The process (main_robot/main.cpp) and any in-process
+// docs/security.md, "main_robot's state file". The process (main_robot/main.cpp) and any in-process
 // caller use the same functions.
 #pragma once
 

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -160,6 +161,17 @@ class RobotNode {
   /// Empty string when valid, else the problem and `reason` (when given) its kind.
   std::string validate(const sensor_frame_t& msg, Refusal* reason = nullptr) const;
 
+  /// main_robot heard (a message on one of its channels): what FAULT_MAIN_SILENT watches.
+  void main_heard(std::int64_t now_utime);
+  /// FAULT_MAIN_SILENT when main_robot has not been heard for node.main_silent_s while
+  /// frames are processed (a FAULT line when it starts); when main is heard again
+  /// after that, FAULT_PARTITION_HEALED for kAlertFrames frames and a line saying how
+  /// long it was silent. Called at every processed frame and STATUS.
+  void check_main(std::int64_t now_utime);
+  /// The outcome of the last state save (the process's --state): FAULT_SAVE_FAILED
+  /// while the last one failed, a FAULT line at the first failure of a series.
+  void note_save(bool ok, const std::string& why);
+
   /// A line for stderr when an operator must see something (a capacity exceeded:
   /// the filter full), at most once per kAlertFrames frames; else "".
   std::string take_alert();
@@ -176,6 +188,10 @@ class RobotNode {
   void apply_team_estimates();
   void note_inconsistent(bool recovered);  // FAULT_INCONSISTENT and a rate-limited alert
   void note_filter_full(int n);  // landmarks left out this frame: FAULT_CAPACITY and a rate-limited alert
+  void note_frames_lost(int from, int to);  // frames never received: FAULT_FRAMES_LOST and a rate-limited alert
+  /// The one frame processed so far was not the stream's (a forged or stray first
+  /// frame): the node starts over, fresh, with the next incarnation.
+  void start_over();
   void prepare_snapshot_chunks();
   std::string validate(const global_map_t& msg, Refusal* reason) const;
   /// A refused message: counted per reason, `why` (when given) says why; returns false.
@@ -200,6 +216,13 @@ class RobotNode {
   int inconsistent_alerted_ = -1000000;
   int full_frame_ = -1;          // last frame the filter was found full (FAULT_CAPACITY for kAlertFrames)
   int alerted_frame_ = -1000000; // last frame a capacity alert went out
+  int lost_frame_ = -1;          // last frame that followed a gap (FAULT_FRAMES_LOST for kAlertFrames)
+  int lost_alerted_ = -1000000;  // last frame a frames-lost alert went out
+  std::int64_t main_heard_utime_ = 0;    // when main_robot was last heard, 0: not since the first frame
+  std::int64_t first_frame_utime_ = 0;   // when this run's first frame was processed
+  bool main_silent_ = false;             // FAULT_MAIN_SILENT
+  int healed_frame_ = -1;                // main heard again after a silence (FAULT_PARTITION_HEALED)
+  bool save_failed_ = false;             // FAULT_SAVE_FAILED
   std::string alert_;
   std::int64_t seq_ = 0;
   pose_estimate_t pose_{};
@@ -329,6 +352,8 @@ class RobotPorts {
   }
 
   void publish_status() {
+    node_.check_main(shell_.now_utime());
+    say_alert();
     node_status_t m = node_.status_msg(shell_.now_utime());
     shell_.stamp_auth(&m);
     shell_.publish(status_, m);
@@ -348,7 +373,8 @@ class RobotPorts {
     const auto v = node_.on_sensor(msg, received, &why);
     if (v == RobotNode::Verdict::kInvalid) shell_.refuse("sensor frame refused: " + why);
     if (v != RobotNode::Verdict::kProcessed) return;
-    if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
+    node_.check_main(received);
+    say_alert();
     if (after_frame_) after_frame_(node_);
     // The POSE first: it ends the robot's frame for whoever waits on it (a lockstep
     // simulator, the latency); it carries the seq of the frame's last event, which
@@ -366,27 +392,50 @@ class RobotPorts {
     if (node_.snapshot_ready()) publish_snapshot();
     if (node_.candidates_ready()) shell_.publish(candidates_, node_.candidates_msg());
     const std::int64_t sent = shell_.now_utime();
-    stages_.receive.add(received - msg.utime);
+    stages_.receive.add(span_us(msg.utime, received));
     stages_.frame.add(now - received);
     stages_.pose.add(posed - now);
     stages_.outputs.add(sent - posed);
+  }
+
+  /// `to - from` [us], saturated: `from` is a message's stamp, any int64 (one near
+  /// INT64_MIN overflowed the subtraction: found by fuzz_datagrams).
+  static std::int64_t span_us(std::int64_t from, std::int64_t to) {
+    std::int64_t d = 0;
+    if (!__builtin_sub_overflow(to, from, &d)) return d;
+    return to > from ? std::numeric_limits<std::int64_t>::max() : std::numeric_limits<std::int64_t>::min();
   }
 
   void publish_snapshot() {
     for (int i = 0; i < node_.num_snapshot_chunks(); ++i) shell_.publish(snapshot_, node_.snapshot_chunk(i));
   }
 
+  // Main's messages (its moving set, notices, team map, resync requests) each tell
+  // that main is heard (FAULT_MAIN_SILENT); refused ones too: they came (and, with
+  // the team's keys, verified as main's), their content is what was wrong.
+  void heard_main() {
+    node_.main_heard(shell_.now_utime());
+    say_alert();
+  }
+
+  void say_alert() {
+    if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
+  }
+
   void on_map(const global_map_t& msg) {
+    heard_main();
     std::string why;
     if (!node_.on_global_map(msg, &why)) shell_.refuse("global map refused: " + why);
   }
 
   void on_team_map(const global_map_t& msg) {
+    heard_main();
     std::string why;
     if (!node_.on_team_map(msg, &why)) shell_.refuse("team map refused: " + why);
   }
 
   void on_resync(const resync_request_t& msg) {
+    heard_main();
     if (node_.on_resync(msg, shell_.now_utime())) publish_snapshot();
   }
 
@@ -397,6 +446,7 @@ class RobotPorts {
   }
 
   void on_notice(const dynamic_notice_t& msg) {
+    heard_main();
     std::string why;
     if (!node_.on_notice(msg, &why)) return shell_.refuse("dynamic notice refused: " + why);
     // Only an accepted notice moves the tracker: a forged seq must not hide real losses.

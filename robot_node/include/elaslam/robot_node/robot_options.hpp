@@ -132,6 +132,9 @@ struct RobotOptions {
   /// confirms it (continues it within this many frames): one forged frame number
   /// never makes the robot refuse the real ones. Up to node.max_frame_gap.
   int confirm_jump_frames = 5;
+  /// main_robot not heard (none of its channels) for this long while frames are
+  /// processed: FAULT_MAIN_SILENT in STATUS and a FAULT line (0: not watched).
+  double main_silent_s = 5.0;  // [s]
 };
 
 /// Read the `robot:` section (see config/paper.yaml for every key and its unit).

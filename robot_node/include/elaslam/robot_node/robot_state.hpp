@@ -8,8 +8,9 @@
 // times (DurationHistogram) nor the message layer's notice seq (RobotPorts).
 //
 // Format: JSON (nlohmann; doubles round-trip exactly) {"format", "version",
-// "fnv1a64", "state"}: the checksum is FNV-1a 64 over state.dump(), so a flipped
-// byte anywhere is caught. The covariance is kept as its lower triangle (symmetric
+// ["mission",] "fnv1a64", "state"}: the checksum is FNV-1a 64 over state.dump(), so
+// a flipped byte anywhere in the state is caught; "mission" (16 hexadecimal digits,
+// with the team's keys on) says which mission the state belongs to. The covariance is kept as its lower triangle (symmetric
 // by construction). Loading validates like a message (finite, bounded, ids and
 // counts within the configuration, slots consistent with the L-map, P positive
 // semi-definite) into a scratch node and swaps it in only when everything passed.
@@ -26,12 +27,14 @@ constexpr const char* kRobotStateFormat = "elaslam.robot_state";
 constexpr int kRobotStateVersion = 1;
 
 /// The state file's text for `node` (start-up and between frames; allocates).
-std::string save_robot_state(const RobotNode& node);
+/// `mission` (not 0: the team's keys are on) is written in the file's head.
+std::string save_robot_state(const RobotNode& node, std::uint64_t mission = 0);
 
 /// Restore `node` from a state file's text. false with `why` (the field and the
 /// problem) when the text is not a valid state for this node's robot id, capacity,
-/// max_landmark_id and mode; `node` is then unchanged. Never throws.
-bool load_robot_state(const std::string& text, RobotNode* node, std::string* why);
+/// max_landmark_id and mode, or, with a `mission` (not 0), when the file is not of
+/// that mission (a new mission starts fresh); `node` is then unchanged. Never throws.
+bool load_robot_state(const std::string& text, RobotNode* node, std::string* why, std::uint64_t mission = 0);
 
 /// FNV-1a 64 of a dumped "state" object, as hex: for tests and tools that edit a
 /// state on purpose and must seal it again.

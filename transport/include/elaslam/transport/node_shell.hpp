@@ -132,14 +132,29 @@ class NodeShell {
   const std::string& suffix() const { return options_.channel_suffix; }
   Transport& transport() { return transport_; }
   ShellCounters counters() const;
-  /// Fill a node's STATUS message (node_status_t) with the transport's authentication
-  /// refusals: they happen before any input, so the node's own counters never see them.
+  /// Fill a node's STATUS message (node_status_t) with the transport's refusals
+  /// (authentication, malformed datagrams): they happen before any input, so the
+  /// node's own counters never see them. FAULT_INPUT_REFUSED when some came since the
+  /// last STATUS stamped here, with a line at the first STATUS of a series (one that
+  /// follows kQuietStatuses STATUS without any).
   template <class Status>
-  void stamp_auth(Status* status) const {
+  void stamp_auth(Status* status) {
     const ShellCounters c = counters();
     status->auth_refused = c.auth_refused;
     status->auth_unauthenticated = c.auth_unauthenticated;
+    if (c.auth_refused > stamped_refused_) {
+      status->fault_flags |= Status::FAULT_INPUT_REFUSED;
+      if (quiet_statuses_ >= kQuietStatuses)
+        say("FAULT: " + std::to_string(c.auth_refused - stamped_refused_) +
+            " messages refused by the transport since the last status (" + std::to_string(c.auth_refused) +
+            " in all): someone without the team's keys sends on its network, or a member is misconfigured");
+      quiet_statuses_ = 0;
+    } else if (quiet_statuses_ < kQuietStatuses) {
+      ++quiet_statuses_;
+    }
+    stamped_refused_ = c.auth_refused;
   }
+  static constexpr int kQuietStatuses = 10;
 
  private:
   class InputBase {
@@ -205,6 +220,8 @@ class NodeShell {
   std::vector<Timer> timers_;
   std::function<void()> on_decode_error_;
   std::int64_t published_ = 0, publish_errors_ = 0, warnings_ = 0;
+  std::int64_t stamped_refused_ = 0;     // the transport's refusals at the last stamp_auth
+  int quiet_statuses_ = kQuietStatuses;  // stamp_auth calls in a row without refusals (capped)
 };
 
 }  // namespace elaslam::transport

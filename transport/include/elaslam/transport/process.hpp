@@ -128,11 +128,15 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
 /// configuration error (a key file, the team: section, a URL without room for the
 /// channel groups: restarting will not help) and 1 for LCM.
 /// Refused messages are said on `log` at a bounded rate (nullptr: counted only).
-/// `file_key` (optional): set, when the process signs, to the key of its own files of
-/// this mission (SigningKey::file_key), else left as it is.
+/// `auth` (optional): what authentication the process runs with (for its own files).
+struct AuthInfo {
+  bool on = false;                               // the team's roster is configured
+  bool signs = false;                            // ... and this process signs with its own key
+  std::uint64_t mission = 0;                     // the mission (on)
+  std::array<std::uint8_t, kKeyBytes> file_key{};  // the key of its own files of this mission (signs)
+};
 std::unique_ptr<Transport> open_lcm(const TransportArgs& args, const std::string& config_path, std::int16_t sender_id,
                                     bool sends, std::int64_t incarnation, const std::string& who, int* exit_code,
-                                    std::FILE* log = stderr, std::array<std::uint8_t, kKeyBytes>* file_key = nullptr,
-                                    bool* keyed = nullptr);
+                                    std::FILE* log = stderr, AuthInfo* auth = nullptr);
 
 }  // namespace elaslam::transport

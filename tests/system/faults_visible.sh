@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# System test `system_faults` (docs/faults.md, "Faults an operator sees"): conditions
+# that used to leave every STATUS at faults=0 are flagged and said, over LCM in a
+# private namespace, with the team's keys:
+#   - main_robot down for the first 8 s of the run: the robots flag FAULT_MAIN_SILENT
+#     and say so; main started late: "heard again" and FAULT_PARTITION_HEALED;
+#   - robot 1's state file cannot be saved (its directory does not exist):
+#     FAULT_SAVE_FAILED and one "cannot save its state" line;
+#   - malformed and unsigned datagrams sent to the team (raw_datagrams.py):
+#     FAULT_INPUT_REFUSED in the robots' and main's STATUS.
+# The flags are read from the recorded STATUS messages (verified with the roster).
+# Needs root and ip netns (exit 77 otherwise) and the .venv (tools/setup.sh).
+#   tests/system/faults_visible.sh BUILD_DIR
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+HERE="$ROOT/tests/system"
+PY="$ROOT/.venv/bin/python"
+CONFIG="$ROOT/config/paper.yaml"
+FRAMES=150
+
+if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
+  BUILD="$2" OUT="$3" KEYS="$4"
+  B="$BUILD/bin"
+  PIDS=()
+  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
+  "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
+  "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_1.key" --robot 1 --state "$OUT/no/such/dir/robot1.json" \
+    > "$OUT/robot_1.log" 2>&1 & PIDS+=($!)
+  "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_2.key" --robot 2 > "$OUT/robot_2.log" 2>&1 & PIDS+=($!)
+  python3 "$HERE/raw_datagrams.py" --rounds 1000 --period 2 > "$OUT/attacker.txt" 2>&1 &
+  ATTACKER=$!
+  rc=0
+  "$B/simulator" "${K[@]}" --key-file "$KEYS/simulator.key" --frames $FRAMES --wait-for-nodes 2 \
+    > "$OUT/simulator.log" 2>&1 &
+  SIM=$!
+  sleep 8  # the robots run without main_robot
+  "$B/main_robot" "${K[@]}" --key-file "$KEYS/main.key" > "$OUT/main_robot.log" 2>&1 & PIDS+=($!)
+  wait $SIM || rc=$?
+  sleep 1.5  # a last STATUS of everyone
+  kill -TERM $ATTACKER 2>/dev/null || true  # (a background job ignores SIGINT)
+  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
+  wait $ATTACKER || true
+  for p in "${PIDS[@]}"; do wait "$p" || true; done
+  PIDS=()
+  exit $rc
+fi
+
+BUILD="$(cd "${1:?usage: faults_visible.sh BUILD_DIR}" && pwd)"
+[ "$(id -u)" -eq 0 ] || { echo "faults: skipped (needs root for network namespaces)"; exit 77; }
+ip netns list >/dev/null 2>&1 || { echo "faults: skipped (no ip netns)"; exit 77; }
+[ -x "$PY" ] || { echo "faults: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
+OUT="$(mktemp -d)"
+[ -n "${KEEP_OUT:-}" ] && echo "faults: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+fail() { echo "faults: $*"; for f in "$OUT"/*.log; do echo "== $f"; tail -n 6 "$f"; done; exit 1; }
+"$BUILD/bin/keys" team "$OUT/keys" --robots 1,2 > /dev/null
+"$ROOT/tools/netns_run.sh" --port 7726 -- "$0" --inner "$BUILD" "$OUT" "$OUT/keys" > "$OUT/inner.txt" 2>&1 ||
+  { cat "$OUT/inner.txt"; fail "the team did not run"; }
+
+for r in 1 2; do
+  grep -q "FAULT: robot $r has not heard main_robot for" "$OUT/robot_$r.log" || fail "robot $r did not say main was silent"
+  grep -q "robot $r: main_robot heard again after" "$OUT/robot_$r.log" || fail "robot $r did not say main was back"
+done
+[ "$(grep -c "FAULT: robot 1 cannot save its state" "$OUT/robot_1.log")" -eq 1 ] || fail "robot 1: not one 'cannot save' line"
+grep -q "FAULT: [0-9]* messages refused by the transport" "$OUT/robot_2.log" || fail "robot 2 did not say it refused input"
+"$PY" - "$BUILD" "$OUT/run.lcmlog" <<'PY' || fail "the STATUS flags"
+import os, sys
+sys.path.insert(0, os.path.join(sys.argv[1], "lcmgen", "python"))
+import lcm, elaslam
+T = elaslam.node_status_t
+seen = {}
+for ev in lcm.EventLog(sys.argv[2], "r"):
+    # Only what the team signed (the attacker's datagrams are in the recording too).
+    if ev.channel in ("STATUS_ROBOT_1", "STATUS_ROBOT_2", "STATUS_MAIN") and ev.data[-98:-94] == b"ELA2":
+        seen[ev.channel] = seen.get(ev.channel, 0) | T.decode(ev.data).fault_flags
+want = {
+    "STATUS_ROBOT_1": T.FAULT_MAIN_SILENT | T.FAULT_PARTITION_HEALED | T.FAULT_SAVE_FAILED | T.FAULT_INPUT_REFUSED,
+    "STATUS_ROBOT_2": T.FAULT_MAIN_SILENT | T.FAULT_PARTITION_HEALED | T.FAULT_INPUT_REFUSED,
+    "STATUS_MAIN": T.FAULT_INPUT_REFUSED,
+}
+bad = {ch: (seen.get(ch, 0), w) for ch, w in want.items() if seen.get(ch, 0) & w != w}
+print("faults: flags seen in the recorded STATUS:", {ch: hex(f) for ch, f in sorted(seen.items())})
+sys.exit(1 if bad else 0)
+PY
+! grep -q "FAULT_SAVE_FAILED\|cannot save" "$OUT/robot_2.log" || fail "robot 2 (no --state) said a save failed"
+echo "faults: main's absence, its return, a failed save and refused input are flagged and said"
