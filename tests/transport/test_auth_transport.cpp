@@ -609,6 +609,22 @@ TEST_F(KeyFile, TheToolMakesATeamWhoseRosterVerifiesEveryMember) {
   EXPECT_NE(m1, m2);
 }
 
+// The key of a node's own files (main's state) is its key's and its mission's: the same
+// pair gives the same key at every start, another mission or another node another one, and
+// it is neither zero nor the public key (a key derived with BLAKE2b keyed by the seed).
+TEST(FileKey, DependsOnTheKeyAndTheMissionAndOnNothingElse) {
+  const SigningKey a = test::test_key(1), b = test::test_key(2);
+  const auto a1 = a.file_key(0x1122334455667788ULL);
+  EXPECT_EQ(a1, test::test_key(1).file_key(0x1122334455667788ULL));
+  EXPECT_NE(a1, a.file_key(0x1122334455667789ULL));  // one bit of the mission
+  EXPECT_NE(a1, a.file_key(0x8877665544332211ULL));  // its bytes in another order
+  EXPECT_NE(a1, b.file_key(0x1122334455667788ULL));
+  const std::array<std::uint8_t, kKeyBytes> zero{};
+  EXPECT_NE(a1, zero);
+  const PublicKey pub = a.public_key();
+  EXPECT_FALSE(std::equal(pub.begin(), pub.end(), a1.begin()));
+}
+
 TEST_F(KeyFile, RawAndHexKeysLoad) {
   write(dir + "/raw", std::string(32, '\x5a'), 0600);
   EXPECT_EQ(load(dir + "/raw"), "");
