@@ -221,10 +221,11 @@ void final_line(const RobotNode& node, const FrameStages& st) {
     const TeamCounters& t = node.robot().team_counters();
     std::fprintf(stderr,
                  "robot_node %d: team_map chunks=%lld stale=%lld offered=%lld fused=%lld gated=%lld refused=%lld "
-                 "mean_nis=%.2f\n",
+                 "mean_nis=%.2f lost=%lld relocalised=%lld\n",
                  node.robot_id(), (long long)c.team_map_chunks, (long long)c.team_map_stale, (long long)t.offered,
                  (long long)t.fused, (long long)t.gated, (long long)t.refused,
-                 t.fused > 0 ? t.nis_sum / static_cast<double>(t.fused) : 0.0);
+                 t.fused > 0 ? t.nis_sum / static_cast<double>(t.fused) : 0.0, (long long)t.lost,
+                 (long long)t.relocalised);
   }
 }
 

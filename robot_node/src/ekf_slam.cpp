@@ -644,6 +644,37 @@ EkfStatus EkfSlam::assign(const EkfSlam& other) {
   return EkfStatus::kOk;
 }
 
+EkfStatus EkfSlam::apply_rigid_motion(double rotation, const Eigen::Vector2d& translation) {
+  if (!std::isfinite(rotation) || !translation.allFinite()) return EkfStatus::kBadInput;
+  settle();
+  if (upper_stale_) complete_upper_triangle();
+  const double c = std::cos(rotation), s = std::sin(rotation);
+  const Index n = state_dim();
+  // A = blockdiag(R on the robot's position, 1 on its heading, R on each landmark):
+  // rows first (A P), then columns ((A P) A^T), each block's pair in place.
+  const auto turn_pair = [c, s](double* a, double* b) {
+    const double u = *a, v = *b;
+    *a = c * u - s * v;
+    *b = s * u + c * v;
+  };
+  const auto position_block = [](int k) { return k == 0 ? Index{Layout::kX} : Layout::landmark_offset(k - 1); };
+  for (int k = 0; k <= num_landmarks_; ++k) {
+    const Index o = position_block(k);
+    for (Index j = 0; j < n; ++j) turn_pair(&P_(o, j), &P_(o + 1, j));
+  }
+  for (int k = 0; k <= num_landmarks_; ++k) {
+    const Index o = position_block(k);
+    for (Index i = 0; i < n; ++i) turn_pair(&P_(i, o), &P_(i, o + 1));
+    Eigen::Vector2d p = x_.segment<kL>(o);
+    turn_pair(&p.x(), &p.y());
+    x_.segment<kL>(o) = p + translation;
+  }
+  static_assert(Layout::kY == Layout::kX + 1, "the robot's position is one block");
+  x_(Layout::kTheta) = wrap_angle(x_(Layout::kTheta) + rotation);
+  upper_stale_ = false;  // A P A^T of a symmetric P: both triangles current
+  return EkfStatus::kOk;
+}
+
 bool EkfSlam::has_landmark(int id) const { return slot_of(id) >= 0; }
 
 int EkfSlam::slot_of(int id) const {

@@ -1,5 +1,7 @@
 #include "elaslam/robot_node/lmap.hpp"
 
+#include "elaslam/common/geometry.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -113,6 +115,15 @@ void LMap::archive(int id, const Eigen::Vector2d& position, const Eigen::Matrix2
   e.cov = cov;
   e.missing_frames = 0;
   e.outside_streak = 0;
+}
+
+void LMap::apply_rigid_motion(double rotation, const Eigen::Vector2d& translation) {
+  const Eigen::Matrix2d R = elaslam::rotation(rotation);
+  for (LMapEntry& e : entries_) {
+    if (e.status == LandmarkStatus::kUnknown) continue;
+    e.position = R * e.position + translation;
+    e.cov = R * e.cov * R.transpose();
+  }
 }
 
 bool LMap::confirm(int id, int frame) {

@@ -2,6 +2,8 @@
 
 #include "elaslam/common/stats.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -56,6 +58,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
                                                                   : std::numeric_limits<double>::infinity();
   restore_threshold_ = chi2_quantile(options.drift_gate_probability, 2);
   updated_.reserve(static_cast<std::size_t>(options.max_observations));
+  pairs_.reserve(static_cast<std::size_t>(options.ekf.capacity));
   events_.reserve(event_capacity(options));
 }
 
@@ -510,8 +513,73 @@ bool Robot::team_eligible(int id) const {
   return aided_ && lmap_.valid_id(id) && lmap_[id].status == LandmarkStatus::kStatic && aided_->has_landmark(id);
 }
 
-bool Robot::apply_team_map(const TeamEstimate* estimates, int n) {
-  if (!aided_) return false;
+const char* to_string(TeamVerdict v) {
+  switch (v) {
+    case TeamVerdict::kNone: return "none";
+    case TeamVerdict::kHeld: return "held";
+    case TeamVerdict::kLost: return "lost";
+    case TeamVerdict::kRelocalised: return "relocalised";
+  }
+  return "?";
+}
+
+// The gauge test on filter `f` (rigid_fit.hpp): the team's estimates of the
+// landmarks the robot holds as STATIC, each tested against f's (the team-map test,
+// team_map_gate_probability); when at least kTeamMinTested were tested and more
+// than half disagree, the weighted rigid motion that carries f's estimates onto the
+// team's. It fires when more than half agree after it, and jointly, at the same
+// probability: the motion explains the disagreement (its likelihood ratio against no
+// motion, 3 dof) and leaves nothing unexplained (the cost after it, 2n - 3 dof).
+Robot::GaugeTest Robot::gauge_test(const EkfSlam& f, const TeamEstimate* estimates, int n) {
+  GaugeTest g;
+  pairs_.clear();  // reserved: one per slot of the filter, and eligible ones are held
+  double cost_before = 0.0;  // the sum of the d2: the cost of no motion
+  for (int k = 0; k < n; ++k) {
+    const TeamEstimate& e = estimates[k];
+    if (!team_eligible(e.landmark_id) || !f.has_landmark(e.landmark_id) || pairs_.size() >= pairs_.capacity()) continue;
+    PointPair p;
+    p.a = f.landmark(e.landmark_id);
+    p.A = f.landmark_cov(e.landmark_id);
+    p.b = e.position;
+    p.B = e.cov;
+    const double d2 = f.check_position(e.landmark_id, e.position, e.cov).d2;
+    g.disagreed += d2 > team_gate_threshold_ ? 1 : 0;
+    cost_before += d2;
+    pairs_.push_back(p);
+  }
+  g.tested = static_cast<int>(pairs_.size());
+  if (g.tested < kTeamMinTested || 2 * g.disagreed <= g.tested) return g;
+  if (!fit_rigid_motion(pairs_.data(), g.tested, &g.motion)) return g;
+  for (const PointPair& p : pairs_) g.agreed_after += aligned_d2(p, g.motion) <= team_gate_threshold_ ? 1 : 0;
+  const double prob = options_.team_map_gate_probability;
+  g.fires = 2 * g.agreed_after > g.tested && cost_before - g.motion.cost > chi2_quantile(prob, 3) &&
+            g.motion.cost <= chi2_quantile(prob, 2 * g.tested - 3);
+  return g;
+}
+
+TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
+  if (!aided_) return TeamVerdict::kNone;
+  // The robot is wrong as a whole when both its filters are: the own one (what it
+  // reports, what its gate runs on; the team map is the fusion of the others' own
+  // maps, like with like) and the aided one each fail the team map and are carried
+  // onto it by one rigid motion, the same for both (their motions agree within their
+  // covariances, at the same probability). A robot whose aided filter the team's
+  // estimates kept right, or whose two filters disagree with each other, is not
+  // moved: then it is likelier the team's own maps that drifted together (a turn
+  // bias every odometer shares turns every own map the same way; docs/decisions.md,
+  // "A map that agrees with itself").
+  GaugeTest own;
+  if (options_.team_map_gauge_test) own = gauge_test(ekf_, estimates, n);
+  if (own.fires) {
+    const GaugeTest aided = gauge_test(*aided_, estimates, n);
+    const Eigen::Vector3d d(wrap_angle(own.motion.rotation - aided.motion.rotation),
+                            own.motion.translation.x() - aided.motion.translation.x(),
+                            own.motion.translation.y() - aided.motion.translation.y());
+    const Eigen::LDLT<Eigen::Matrix3d> C(own.motion.cov + aided.motion.cov);
+    own.fires = aided.fires && C.info() == Eigen::Success &&
+                d.dot(C.solve(d)) <= chi2_quantile(options_.team_map_gate_probability, 3);
+    if (own.fires) relocalise(own, aided);
+  }
   int tested = 0, disagree = 0;
   for (int k = 0; k < n; ++k) {
     const TeamEstimate& e = estimates[k];
@@ -520,14 +588,45 @@ bool Robot::apply_team_map(const TeamEstimate* estimates, int n) {
     if (aided_->check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) ++disagree;
   }
   team_counters_.offered += tested;
-  // Most of it disagrees, and the robot saw trouble itself lately: the robot, not
-  // the team, is wrong.
+  if (tested == 0 && !own.fires) return TeamVerdict::kNone;
+  TeamVerdict verdict = own.fires ? TeamVerdict::kRelocalised : TeamVerdict::kHeld;
   const bool trouble = trouble_frame_ >= 0 && last_frame_ - trouble_frame_ <= kTroubleMemoryFrames;
-  const bool lost = tested >= kTeamMinTested && 2 * disagree > tested && trouble;
+  if (!own.fires && tested >= kTeamMinTested && 2 * disagree > tested && trouble) {
+    // Most of it disagrees and the robot saw trouble itself lately: the robot, not
+    // the team, is wrong.
+    verdict = TeamVerdict::kLost;
+    ++team_counters_.lost;
+  }
   for (int k = 0; k < n; ++k)
-    if (team_eligible(estimates[k].landmark_id)) fuse_team_estimate(estimates[k], /*test=*/!lost);
-  if (lost) ++team_counters_.lost;
-  return lost;
+    if (team_eligible(estimates[k].landmark_id))
+      fuse_team_estimate(estimates[k], /*test=*/verdict != TeamVerdict::kLost);
+  return verdict;
+}
+
+// Each motion is taken as exact: the state moves, its covariance turns with it and
+// grows by nothing. The robot's covariance already holds the uncertainty of the
+// pose it lost (it drifted without landmarks); the team's estimates fused next into
+// the aided filter (tested, now that they agree) are the information its fit used,
+// counted once. The L-map's positions are the own filter's (record_sighting).
+void Robot::relocalise(const GaugeTest& own, const GaugeTest& aided) {
+  const RigidMotion& T = own.motion;
+  if (ekf_.apply_rigid_motion(T.rotation, T.translation) != EkfStatus::kOk) return;
+  aided_->apply_rigid_motion(aided.motion.rotation, aided.motion.translation);
+  lmap_.apply_rigid_motion(T.rotation, T.translation);
+  restart_history();
+  monitor_.restart();
+  trouble_frame_ = -1;
+  ++team_counters_.relocalised;
+  relocalisation_ = Relocalisation{};
+  relocalisation_.frame = last_frame_;
+  relocalisation_.rotation = T.rotation;
+  relocalisation_.translation = T.translation;
+  relocalisation_.rotation_sigma = std::sqrt(std::max(0.0, T.cov(0, 0)));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> t_cov(T.cov.bottomRightCorner<2, 2>(), Eigen::EigenvaluesOnly);
+  relocalisation_.translation_sigma = std::sqrt(std::max(0.0, t_cov.eigenvalues()(1)));
+  relocalisation_.shared = own.tested;
+  relocalisation_.disagreed = own.disagreed;
+  relocalisation_.agreed_after = own.agreed_after;
 }
 
 // A team estimate that contradicts the robot's own (its chi-square test at

@@ -227,9 +227,10 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   counters_.restored += s.restored;
   if (s.inconsistent) note_inconsistent(s.recovered);
   fill_events(now_utime);
-  if (msg.frame % options_.snapshot_period_frames == 0) {
+  if (msg.frame % options_.snapshot_period_frames == 0 || snapshot_due_) {
     make_snapshot(now_utime);
     snapshot_ready_ = true;
+    snapshot_due_ = false;
   }
   fill_candidates(now_utime);
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count();
@@ -630,10 +631,34 @@ void RobotNode::apply_team_estimates() {
     --team_pending_count_;
   }
   if (team_due_.empty()) return;
-  // Lost: most of the team's map disagrees with this robot. Flagged like the
-  // consistency monitor's verdict (FAULT_INCONSISTENT, a rate-limited alert).
-  if (robot_.apply_team_map(team_due_.data(), static_cast<int>(team_due_.size())))
-    note_inconsistent(/*recovered=*/true);
+  switch (robot_.apply_team_map(team_due_.data(), static_cast<int>(team_due_.size()))) {
+    case TeamVerdict::kLost:  // flagged like the consistency monitor's verdict
+      note_inconsistent(/*recovered=*/true);
+      break;
+    case TeamVerdict::kRelocalised:
+      note_relocalised();
+      break;
+    case TeamVerdict::kNone:
+    case TeamVerdict::kHeld:
+      break;
+  }
+}
+
+// Not rate-limited (a relocalisation is rare and each one moves the robot's map):
+// an alert that waits for the last one to be said is replaced.
+void RobotNode::note_relocalised() {
+  const Relocalisation& r = robot_.last_relocalisation();
+  relocalised_frame_ = last_frame_;
+  snapshot_due_ = true;  // main's copy of this robot's map moves with it
+  char line[kAlertBytes];
+  std::snprintf(line, sizeof line,
+                "FAULT: robot %d relocalised at frame %d: its map was right in itself, wrong as a whole (%d of %d "
+                "landmarks shared with the team map disagreed, %d agree after the motion); moved by rotation %.2f deg "
+                "(sigma %.2f), translation (%.3f, %.3f) m (sigma %.3f); %lld so far",
+                robot_id_, r.frame, r.disagreed, r.shared, r.agreed_after, rad2deg(r.rotation), rad2deg(r.rotation_sigma),
+                r.translation.x(), r.translation.y(), r.translation_sigma,
+                static_cast<long long>(robot_.team_counters().relocalised));
+  alert_.assign(line);
 }
 
 bool RobotNode::on_resync(const resync_request_t& msg, std::int64_t now_utime) {
@@ -675,6 +700,14 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   if (main_silent_) s.fault_flags |= node_status_t::FAULT_MAIN_SILENT;
   if (healed_frame_ >= 0 && last_frame_ - healed_frame_ < kAlertFrames)
     s.fault_flags |= node_status_t::FAULT_PARTITION_HEALED;
+  if (relocalised_frame_ >= 0 && last_frame_ - relocalised_frame_ < kAlertFrames)
+    s.fault_flags |= node_status_t::FAULT_RELOCALISED;
+  const Relocalisation& r = robot_.last_relocalisation();
+  s.relocalisations = static_cast<int32_t>(std::min<std::int64_t>(robot_.team_counters().relocalised, INT32_MAX));
+  s.relocalised_frame = r.frame;
+  s.relocalised_rotation = static_cast<float>(r.rotation);
+  s.relocalised_x = static_cast<float>(r.translation.x());
+  s.relocalised_y = static_cast<float>(r.translation.y());
   for (int k = 0; k < kNumRefusals; ++k) s.refused[k] = counters_.refused.n[static_cast<std::size_t>(k)];
   s.frames = frames_this_run_;
   s.frames_dropped = counters_.frames_gap + counters_.frames_duplicate + counters_.frames_out_of_order;

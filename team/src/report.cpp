@@ -88,6 +88,8 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
       r["evictions"] = rm.evictions;
       r["restored"] = rm.restored;
       r["final_landmarks"] = rm.final_landmarks;
+      r["team_lost"] = rm.team_lost;
+      r["relocalised"] = rm.relocalised;
     }
     robots.push_back(std::move(r));
   }

@@ -263,6 +263,8 @@ RunResult InProcessTeam::finish() {
       rm.evictions = node.counters().evictions;
       rm.restored = node.counters().restored;
       rm.final_landmarks = node.robot().filter().num_landmarks();
+      rm.team_lost = node.robot().team_counters().lost;
+      rm.relocalised = node.robot().team_counters().relocalised;
     }
   for (int id = 0; id < main_.map().max_landmark_id(); ++id) {
     const GlobalEntry& g = main_.map().entry(id);

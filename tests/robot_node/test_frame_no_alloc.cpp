@@ -14,6 +14,7 @@
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/world.hpp"
 #include "elaslam/team/team_config.hpp"
+#include "scene.hpp"
 
 namespace elaslam {
 namespace {
@@ -127,6 +128,43 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       EXPECT_GT(rebuilds, 50);
     }
   }
+}
+
+// A relocalisation (Robot::apply_team_map's gauge test: the fit, both filters and
+// the L-map moved, the alert line, the snapshot the next frame sends) allocates
+// nothing either: a robot whose whole map the team map shows turned by 0.3 rad.
+TEST(FrameNoAlloc, ARelocalisationAllocatesNothing) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.team_map_fuse = true;
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  const Pose2 zero{0.0, 0.0, 0.0};
+  std::vector<sensor_frame_t> frames;
+  for (int k = 0; k < 10; ++k) frames.push_back(test::to_msg(test::frame_from(k, zero, zero, lms, test::all_ids(6)), 2));
+  global_map_t g{};
+  g.version = 1;
+  g.num_chunks = 1;
+  g.id_end = 1000;
+  contract::set_count(&g.landmarks, &g.num_landmarks, static_cast<int>(lms.size()));
+  for (int k = 0; k < static_cast<int>(lms.size()); ++k) {
+    global_landmark_t& l = g.landmarks[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d p = rotation(0.3) * lms[static_cast<std::size_t>(k)];
+    l.id = k;
+    l.x = p.x();
+    l.y = p.y();
+    l.cov[0][0] = l.cov[1][1] = 1e-4;
+    l.contributors = 0b1;
+  }
+  RobotNode node(o, 2);
+  for (int k = 0; k < 8; ++k) ASSERT_EQ(node.on_sensor(frames[static_cast<std::size_t>(k)], 0), RobotNode::Verdict::kProcessed);
+  {
+    test::NoAllocRegion region;
+    ASSERT_TRUE(node.on_team_map(g));
+    ASSERT_EQ(node.on_sensor(frames[8], 0), RobotNode::Verdict::kProcessed);
+    node.status_msg(0);
+  }
+  EXPECT_EQ(test::allocations_in_region(), 0);
+  EXPECT_EQ(node.robot().team_counters().relocalised, 1);
+  EXPECT_TRUE(node.snapshot_ready());
 }
 
 TEST(FrameNoAlloc, TheCounterSeesAnAllocation) {

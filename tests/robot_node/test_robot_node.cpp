@@ -336,11 +336,33 @@ TEST(RobotNodeTeamMap, TeamEstimatesGoIntoTheAidedFilterOnly) {
   EXPECT_GT(robot.team_counters().fused, fused);
 }
 
+// The team's map of test::ring(6, 3.0): every landmark rotated by 0.3 rad about the
+// origin and its distance from the origin scaled by `scale`, certain (1 cm).
+global_map_t turned_team_map(const std::vector<Eigen::Vector2d>& lms, double scale) {
+  global_map_t g{};
+  g.version = 1;
+  g.num_chunks = 1;
+  g.id_end = 1000;
+  contract::set_count(&g.landmarks, &g.num_landmarks, static_cast<int>(lms.size()));
+  const Eigen::Rotation2Dd rot(0.3);
+  for (int k = 0; k < static_cast<int>(lms.size()); ++k) {
+    global_landmark_t& l = g.landmarks[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d p = scale * (rot * lms[static_cast<std::size_t>(k)]);
+    l.id = k;
+    l.x = p.x();
+    l.y = p.y();
+    l.cov[0][0] = l.cov[1][1] = 1e-4;
+    l.contributors = 0b1;
+  }
+  return g;
+}
+
 // Most of a team map disagrees with the robot, which has just seen every landmark in
 // view fail its test (its heading was kicked by 0.3 rad): the robot is the one that
 // is wrong. It says so (FAULT_INCONSISTENT) and fuses the map untested. A robot with
 // no such trouble of its own refuses the same map; one disagreeing landmark of six
-// is refused alone.
+// is refused alone. The map is turned and stretched (x1.15: 0.45 m at 3 m), no
+// rigid motion of the robot's: the gauge test (next test) does not fire.
 TEST(RobotNodeTeamMap, ARobotInTroubleThatMostOfItsTeamMapDisagreesWithIsLost) {
   RobotOptions o = test::robot_options(Mode::kEla);
   o.team_map_fuse = true;
@@ -356,22 +378,7 @@ TEST(RobotNodeTeamMap, ARobotInTroubleThatMostOfItsTeamMapDisagreesWithIsLost) {
     }
     return node;
   };
-  // The team's map: every landmark rotated by 0.3 rad about the origin, certain.
-  global_map_t g{};
-  g.version = 1;
-  g.num_chunks = 1;
-  g.id_end = 1000;
-  contract::set_count(&g.landmarks, &g.num_landmarks, 6);
-  const Eigen::Rotation2Dd rot(0.3);
-  for (int k = 0; k < 6; ++k) {
-    global_landmark_t& l = g.landmarks[static_cast<std::size_t>(k)];
-    const Eigen::Vector2d p = rot * lms[static_cast<std::size_t>(k)];
-    l.id = k;
-    l.x = p.x();
-    l.y = p.y();
-    l.cov[0][0] = l.cov[1][1] = 1e-4;
-    l.contributors = 0b1;
-  }
+  global_map_t g = turned_team_map(lms, 1.15);
   const auto lost = make(true);
   const int held = static_cast<int>(lost->robot().estimate().num_landmarks());
   ASSERT_TRUE(lost->on_team_map(g));
@@ -400,6 +407,56 @@ TEST(RobotNodeTeamMap, ARobotInTroubleThatMostOfItsTeamMapDisagreesWithIsLost) {
   ASSERT_TRUE(one_off->on_team_map(g));
   EXPECT_EQ(one_off->robot().team_counters().lost, 0);
   EXPECT_EQ(one_off->robot().team_counters().gated, 1);
+}
+
+// The same team map turned only (a rigid motion of the robot's map): the gauge test
+// moves the robot, in trouble or not, onto it. Its STATUS says so (FAULT_RELOCALISED,
+// the motion in relocalised_*), its alert line gives the motion, both filters moved,
+// the next frame sends a snapshot (main's copy of its map moves too) and every
+// landmark of the map is then fused, tested.
+TEST(RobotNodeTeamMap, ARobotWhoseWholeMapIsTurnedIsRelocalisedAndSaysSo) {
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.team_map_fuse = true;
+  o.snapshot_period_frames = 1000;
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  const Pose2 zero{0.0, 0.0, 0.0};
+  RobotNode node(o, 2);
+  for (int k = 0; k < 8; ++k)
+    ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(k, zero, zero, lms, test::all_ids(6)), 2), 0),
+              RobotNode::Verdict::kProcessed);
+  EXPECT_EQ(node.status_msg(0).relocalisations, 0);
+  EXPECT_EQ(node.status_msg(0).fault_flags & node_status_t::FAULT_RELOCALISED, 0);
+  node.take_alert();
+  ASSERT_TRUE(node.on_team_map(turned_team_map(lms, 1.0)));
+  const TeamCounters& t = node.robot().team_counters();
+  EXPECT_EQ(t.relocalised, 1);
+  EXPECT_EQ(t.lost, 0);
+  EXPECT_EQ(t.gated, 0);
+  EXPECT_EQ(t.fused, 6);
+  for (const EkfSlam* f : {&node.robot().filter(), &node.robot().estimate()}) {
+    EXPECT_NEAR(f->pose().theta, 0.3, 1e-6);
+    EXPECT_NEAR(f->landmark(2).x(), (Eigen::Rotation2Dd(0.3) * lms[2]).x(), 1e-6);
+  }
+  const node_status_t st = node.status_msg(0);
+  EXPECT_NE(st.fault_flags & node_status_t::FAULT_RELOCALISED, 0);
+  EXPECT_EQ(st.relocalisations, 1);
+  EXPECT_EQ(st.relocalised_frame, 7);
+  EXPECT_NEAR(st.relocalised_rotation, 0.3, 1e-6);
+  EXPECT_NEAR(st.relocalised_x, 0.0, 1e-6);
+  EXPECT_NEAR(st.relocalised_y, 0.0, 1e-6);
+  const std::string alert = node.take_alert();
+  EXPECT_NE(alert.find("robot 2 relocalised at frame 7"), std::string::npos) << alert;
+  EXPECT_NE(alert.find("rotation 17.19 deg"), std::string::npos) << alert;
+  EXPECT_NE(alert.find("6 of 6 landmarks"), std::string::npos) << alert;
+  EXPECT_FALSE(node.snapshot_ready());
+  // The same sightings as before: a rigid motion of the whole state predicts them all.
+  ASSERT_EQ(node.on_sensor(to_msg(test::frame_from(8, zero, zero, lms, test::all_ids(6)), 2), 0),
+            RobotNode::Verdict::kProcessed);
+  EXPECT_TRUE(node.snapshot_ready());
+  EXPECT_GT(node.pose_msg().snapshot_chunks, 0);
+  EXPECT_EQ(node.pose_msg().num_accepted, 6);
+  EXPECT_EQ(node.pose_msg().num_rejected, 0);
+  EXPECT_EQ(node.robot().team_counters().relocalised, 1);
 }
 
 TEST(RobotNodeTeamMap, RefusedWhenTheOptionIsOff) {

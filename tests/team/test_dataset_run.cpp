@@ -135,6 +135,29 @@ TEST_F(RealSlice, OneRobotsWrongMapDoesNotPullTheOthers) {
   EXPECT_LT(mean_of_rms(with_check), 0.8 * mean_of_rms(without));
 }
 
+// The gauge test (Robot::apply_team_map) never moves a robot on dataset6, whose
+// maps agree with the team's or disagree in ways no rigid motion explains: `ela`,
+// with and without the robots' barcodes, from three start times to the end of the
+// recording (tools/mrclam_starts.py gives the fourteen starts of docs/mrclam.md),
+// each run as it would be without the test, to the digit.
+TEST_F(RealSlice, TheGaugeTestNeverMovesARobotOnDataset6) {
+  cfg_.dataset.duration_s = 0.0;
+  for (const double start : {0.0, 250.0, 550.0}) {
+    for (const bool barcodes : {false, true}) {
+      SCOPED_TRACE("start " + std::to_string(start) + (barcodes ? ", barcodes" : ""));
+      const RunResult with = run(Mode::kEla, barcodes, -1.0, start);
+      cfg_.robot.team_map_gauge_test = false;
+      const RunResult without = run(Mode::kEla, barcodes, -1.0, start);
+      cfg_.robot.team_map_gauge_test = true;
+      ASSERT_EQ(with.metrics.robots.size(), without.metrics.robots.size());
+      for (std::size_t i = 0; i < with.metrics.robots.size(); ++i) {
+        EXPECT_EQ(with.metrics.robots[i].relocalised, 0) << "robot " << i + 1;
+        EXPECT_EQ(with.metrics.robots[i].error_rms, without.metrics.robots[i].error_rms) << "robot " << i + 1;
+      }
+    }
+  }
+}
+
 // main.team_map_check_probability is checked like every key: outside 0 or
 // [0.5, 0.999999], or not a number, stops the start with the key's name; 0 is off.
 TEST(DatasetConfig, ATeamMapCheckProbabilityOutOfRangeIsRefusedNamingTheKey) {

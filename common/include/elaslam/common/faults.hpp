@@ -28,6 +28,7 @@ inline std::vector<std::string> fault_names(std::int32_t flags) {
       {node_status_t::FAULT_MAIN_SILENT, "main silent"},
       {node_status_t::FAULT_INCARNATION, "incarnation refused"},
       {node_status_t::FAULT_PARTITION_HEALED, "partition healed"},
+      {node_status_t::FAULT_RELOCALISED, "relocalised"},
   };
   std::vector<std::string> out;
   for (const Bit& b : kBits)

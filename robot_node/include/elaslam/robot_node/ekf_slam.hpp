@@ -165,6 +165,15 @@ class EkfSlam {
   /// state of both, never the capacity's; allocates nothing (FilterHistory).
   EkfStatus assign(const EkfSlam& other);
 
+  /// Move the whole state by the rigid motion p -> R(rotation) p + translation of
+  /// the world frame: the robot's position and every landmark's carried, its
+  /// heading turned by `rotation`, P <- A P A^T (A rotates each position block).
+  /// Every range and bearing the filter predicts is unchanged (the motion is a
+  /// change of gauge), and so is every relative uncertainty: it re-anchors a map
+  /// that is right in itself but wrong as a whole (Robot::apply_team_map). O(n^2);
+  /// allocates nothing. kBadInput (filter unchanged) for a non-finite motion.
+  EkfStatus apply_rigid_motion(double rotation, const Eigen::Vector2d& translation);
+
   // ---- state file (robot_state.cpp) -------------------------------------------
   /// Replace the whole state by a saved one: mean x (dim(n)), covariance P (dim(n)
   /// square, symmetric; the caller has checked it), slot_ids[slot] = landmark id in

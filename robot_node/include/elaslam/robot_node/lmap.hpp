@@ -150,6 +150,12 @@ class LMap {
   /// robot does not hold it; MOVING when it `left_filter` for it.
   void told_moving(int id, int frame, bool left_filter);
 
+  // ---- the whole map ------------------------------------------------------------------
+  /// Every recorded position (last sightings, archived estimates) carried by the
+  /// rigid motion p -> R(rotation) p + translation, covariances turned with it
+  /// (Robot::relocalise moves the filters by the same motion).
+  void apply_rigid_motion(double rotation, const Eigen::Vector2d& translation);
+
   // ---- state file (robot_state.cpp, which validates the entry) ------------------------
   void restore(int id, const LMapEntry& e) { at(id) = e; }
 

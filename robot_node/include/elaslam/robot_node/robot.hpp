@@ -19,6 +19,7 @@
 #include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/filter_history.hpp"
 #include "elaslam/robot_node/lmap.hpp"
+#include "elaslam/robot_node/rigid_fit.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/team_aid.hpp"
 
@@ -89,6 +90,28 @@ struct TeamCounters {
   std::int64_t refused = 0;  // increments the aided filter refused (its health checks)
   double nis_sum = 0.0;      // sum of the fused increments' d2 (2 dof each: about 2 per increment when consistent)
   std::int64_t lost = 0;     // team maps most of whose estimates disagreed with the robot's: the robot was lost
+  std::int64_t relocalised = 0;  // team maps that moved the robot's whole state by a rigid motion (apply_team_map)
+};
+
+/// What one team map did (Robot::apply_team_map).
+enum class TeamVerdict : std::uint8_t {
+  kNone,         // no aided filter, or nothing the robot holds as STATIC in it
+  kHeld,         // the estimates that agree were fused; the robot kept its map
+  kLost,         // most disagreed and the robot saw trouble itself: every one fused, untested
+  kRelocalised,  // most disagreed, one rigid motion made most agree: the robot moved by it
+};
+const char* to_string(TeamVerdict v);
+
+/// The rigid motion of the last relocalisation and what it was found on.
+struct Relocalisation {
+  int frame = -1;            // the robot's last frame when it happened (-1: never)
+  double rotation = 0.0;     // [rad] the motion applied to the robot's state: p -> R p + t
+  Eigen::Vector2d translation = Eigen::Vector2d::Zero();  // [m]
+  double rotation_sigma = 0.0;     // [rad] its standard deviations (the fit's)
+  double translation_sigma = 0.0;  // [m] sqrt of the larger eigenvalue of t's covariance
+  int shared = 0;            // landmarks tested (held STATIC by the robot, in the team map)
+  int disagreed = 0;         // ... that failed the team-map test before the motion
+  int agreed_after = 0;      // ... that passed it after the motion
 };
 
 class Robot {
@@ -111,17 +134,28 @@ class Robot {
   /// The estimates of one team map that are due (TEAM_MAP_<r>, the map without this
   /// robot; team_aid.hpp), with options.team_map_fuse: for each STATIC landmark the
   /// robot holds, what it adds to what was fused before goes into the aided filter.
-  /// Each is tested against the aided filter's estimate (team_map_gate_probability):
-  /// - when at least kTeamMinTested were tested, more than half disagree, and the
-  ///   robot saw trouble itself in the last kTroubleMemoryFrames frames (a frame in
-  ///   which every mapped landmark it judged, at least kTeamMinTested, failed, or
-  ///   the consistency monitor's verdict),
-  ///   the robot, not the team, is wrong (lost): every one is fused, untested (the
-  ///   aided filter relocalises against the team's map); returns true;
-  /// - otherwise those that disagree are not fused (one robot's divergence must not
-  ///   pull the others). Returns false.
-  /// The own filter is left alone (it holds the robot's own data only).
-  bool apply_team_map(const TeamEstimate* estimates, int n);
+  /// Each is tested against the aided filter's estimate (team_map_gate_probability).
+  /// - The gauge test first (options.team_map_gauge_test): when, for each of the
+  ///   two filters, at least kTeamMinTested were tested, more than half disagree,
+  ///   and one weighted rigid motion that carries the filter's estimates onto the
+  ///   team's (rigid_fit.hpp) makes more than half agree (and passes the joint
+  ///   tests of gauge_test), and the two filters' motions agree, the robot's map is
+  ///   right in itself and wrong as a whole (a heading lost where it saw nothing,
+  ///   then everything mapped from there): each filter moves by its motion, the
+  ///   L-map with the own one (relocalise), and the estimates that agree then are
+  ///   fused: kRelocalised. Maps corrupted in different ways are not one rigid
+  ///   motion: no fit makes most of them agree.
+  /// - Otherwise, when more than half of at least kTeamMinTested disagree with the
+  ///   aided filter and the robot saw trouble itself in the last
+  ///   kTroubleMemoryFrames frames (a frame in which every mapped landmark it
+  ///   judged, at least kTeamMinTested, failed, or the consistency monitor's
+  ///   verdict), the robot, not the team, is wrong (lost): every one is fused,
+  ///   untested (the aided filter relocalises against the team's map): kLost.
+  /// - Otherwise those that disagree are not fused (one robot's divergence must not
+  ///   pull the others): kHeld.
+  /// Only a relocalisation changes the own filter (it otherwise holds the robot's own
+  /// data only). No allocation.
+  TeamVerdict apply_team_map(const TeamEstimate* estimates, int n);
   static constexpr int kTeamMinTested = 3;
   /// "Lately" for the robot's own trouble: the frames a FAULT stays flagged in STATUS.
   static constexpr int kTroubleMemoryFrames = 100;
@@ -140,6 +174,7 @@ class Robot {
   /// the own one. Its pose is the robot's pose (POSE).
   const EkfSlam& estimate() const { return aided_ ? *aided_ : ekf_; }
   const TeamCounters& team_counters() const { return team_counters_; }
+  const Relocalisation& last_relocalisation() const { return relocalisation_; }
   const TeamChannel& team_channel() const { return team_; }
   const LMap& lmap() const { return lmap_; }
   /// The own filter's history (options.candidate_history_frames).
@@ -188,6 +223,17 @@ class Robot {
   bool team_eligible(int id) const;
   /// Fuse what the team estimate adds (TeamChannel); `test`: only when it agrees.
   bool fuse_team_estimate(const TeamEstimate& e, bool test);
+  /// The gauge test of one filter against a team map (apply_team_map).
+  struct GaugeTest {
+    int tested = 0, disagreed = 0, agreed_after = 0;
+    RigidMotion motion;
+    bool fires = false;
+  };
+  GaugeTest gauge_test(const EkfSlam& f, const TeamEstimate* estimates, int n);
+  /// Move the own filter and the L-map by `own`'s motion, the aided filter by
+  /// `aided`'s (apply_team_map); the histories, the consistency window and the
+  /// trouble memory start over.
+  void relocalise(const GaugeTest& own, const GaugeTest& aided);
   EkfStatus mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s);
   /// The operation on the aided filter (when there is one), recorded in its history
   /// when it succeeds, counted in s->filter_faults (when given) when not.
@@ -210,6 +256,8 @@ class Robot {
   void restart_history();
   TeamChannel team_;
   TeamCounters team_counters_;
+  Relocalisation relocalisation_;
+  std::vector<PointPair> pairs_;  // the team map's landmarks the robot holds (reserved: filter capacity)
   double team_gate_threshold_ = 0.0;  // chi2 quantile, 2 dof, of team_map_gate_probability
   double restore_threshold_ = 0.0;    // chi2 quantile, 2 dof, of drift_gate_probability (restore_archived)
   int trouble_frame_ = -1;  // last frame all of whose judged landmarks failed, or found inconsistent

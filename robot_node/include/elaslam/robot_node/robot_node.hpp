@@ -176,7 +176,7 @@ class RobotNode {
   /// the filter full), at most once per kAlertFrames frames; else "".
   std::string take_alert();
   static constexpr int kAlertFrames = 100;
-  static constexpr std::size_t kAlertBytes = 256;  // an alert line's buffer, reserved at construction
+  static constexpr std::size_t kAlertBytes = 384;  // an alert line's buffer, reserved at construction
 
  private:
   friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
@@ -187,6 +187,7 @@ class RobotNode {
   /// The held team estimates whose map's frame this robot has passed go to the Robot.
   void apply_team_estimates();
   void note_inconsistent(bool recovered);  // FAULT_INCONSISTENT and a rate-limited alert
+  void note_relocalised();                 // FAULT_RELOCALISED, an alert with the motion, a snapshot due
   void note_filter_full(int n);  // landmarks left out this frame: FAULT_CAPACITY and a rate-limited alert
   void note_frames_lost(int from, int to);  // frames never received: FAULT_FRAMES_LOST and a rate-limited alert
   /// The one frame processed so far was not the stream's (a forged or stray first
@@ -214,6 +215,8 @@ class RobotNode {
   int odo_streak_ = 0;           // consecutive refused readings continuing it
   int inconsistent_frame_ = -1;  // last frame found inconsistent (FAULT_INCONSISTENT for kAlertFrames)
   int inconsistent_alerted_ = -1000000;
+  int relocalised_frame_ = -1;   // last relocalisation by the team map (FAULT_RELOCALISED for kAlertFrames)
+  bool snapshot_due_ = false;    // the map moved as a whole: the next frame sends a snapshot whatever its number
   int full_frame_ = -1;          // last frame the filter was found full (FAULT_CAPACITY for kAlertFrames)
   int alerted_frame_ = -1000000; // last frame a capacity alert went out
   int lost_frame_ = -1;          // last frame that followed a gap (FAULT_FRAMES_LOST for kAlertFrames)

@@ -77,6 +77,9 @@ struct RobotOptions {
   /// of the landmark: (g - l)^T (P_ll + G)^-1 (g - l) within the chi-square
   /// quantile of this probability (2 dof). 1: no test.
   double team_map_gate_probability = 0.9999;
+  /// The gauge test (Robot::apply_team_map): a robot whose map is right in itself
+  /// but wrong as a whole moves onto the team map by one rigid motion.
+  bool team_map_gauge_test = true;
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
   /// Whether a mapped landmark that fails its test while it is the only one in view
   /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.

@@ -66,6 +66,9 @@ struct RobotMetrics {
   std::int64_t evictions = 0;     // landmarks that left the full filter to make room
   std::int64_t restored = 0;      // evicted landmarks seen again and back in the filter
   int final_landmarks = 0;        // landmarks in the filter at the end (candidates included)
+  // The team map's verdicts on the robot (Robot::apply_team_map), from its counters.
+  std::int64_t team_lost = 0;     // team maps fused untested: the robot was lost and saw it itself
+  std::int64_t relocalised = 0;   // team maps whose gauge test moved the robot's whole state
 };
 
 struct RunMetrics {
