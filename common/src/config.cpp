@@ -81,6 +81,11 @@ Reader::Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> st
   }
 }
 
+Reader::Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> state, YAML::Node effective)
+    : node_(std::move(node)), path_(std::move(path)), state_(std::move(state)) {
+  effective_.reset(effective);
+}
+
 std::string Reader::key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
 bool Reader::has(const std::string& key) const {
@@ -210,7 +215,12 @@ void Reader::section(const std::string& key, const std::function<void(Reader&)>&
     fail(key, "wrong type: expected a map of keys, got " + scalar_text(n));
     return;
   }
-  Reader sub(n, key_path(key), state_);
+  YAML::Node effective = effective_[key];
+  if (!effective.IsMap()) {
+    effective_[key] = YAML::Node(YAML::NodeType::Map);
+    effective = effective_[key];
+  }
+  Reader sub(n, key_path(key), state_, effective);
   fn(sub);
   sub.finish();
 }

@@ -99,6 +99,21 @@ bool random_layout(const ScenarioOptions& o, std::vector<Eigen::Vector2d>* p, st
   return true;
 }
 
+// The empty region's landmarks left out after the layout placed them all, so that
+// the layout outside the region is the one without it; the ids of the rest stay
+// consecutive, in the layout's order.
+bool leave_out(const EmptyRegion& e, std::vector<Eigen::Vector2d>* p, std::string* why) {
+  if (!e.enabled) return true;
+  const auto n = p->size();
+  p->erase(std::remove_if(p->begin(), p->end(), [&](const Eigen::Vector2d& q) { return e.contains(q.x(), q.y()); }),
+           p->end());
+  if (p->empty()) {
+    *why = "the empty region holds all " + std::to_string(n) + " landmarks of the layout: shrink empty_region";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 bool generate_layout(const ScenarioOptions& o, std::vector<Eigen::Vector2d>* p_LinW, std::string* why) {
@@ -109,13 +124,14 @@ bool generate_layout(const ScenarioOptions& o, std::vector<Eigen::Vector2d>* p_L
     return false;
   }
   p_LinW->reserve(static_cast<std::size_t>(std::max(o.landmarks.count, 0)));
+  bool ok = false;
   switch (o.landmarks.layout) {
-    case Layout::kGrid: return grid(o, p_LinW, why);
-    case Layout::kCloister: return cloister(o, p_LinW, why);
-    case Layout::kRandom: return random_layout(o, p_LinW, why);
+    case Layout::kGrid: ok = grid(o, p_LinW, why); break;
+    case Layout::kCloister: ok = cloister(o, p_LinW, why); break;
+    case Layout::kRandom: ok = random_layout(o, p_LinW, why); break;
   }
-  *why = "unknown layout";
-  return false;
+  if (!ok) return false;
+  return leave_out(o.landmarks.empty_region, p_LinW, why);
 }
 
 }  // namespace elaslam::sim

@@ -14,6 +14,15 @@ namespace {
 
 constexpr double kBig = 1e6;  // [m] generous bound for coordinates and lengths
 
+// OdometerError's bounds: MRCLAM's odometers turn 0.87-0.95 of what they report;
+// beyond a factor of 2 either way an odometer is broken, not miscalibrated. A turn
+// rate bias of 0.5 rad/s (29 deg/s) is far beyond any working one.
+constexpr double kScaleMin = 0.5, kScaleMax = 2.0;
+constexpr double kTurnBiasMaxRadS = 0.5;
+// At most 180 degrees of turn in a frame: beyond it the increment between two
+// odometer readings is ambiguous (angles wrap).
+constexpr double kMaxTurnPerFrameRad = kPi;
+
 std::string num(double v) {
   std::ostringstream os;
   os << v;
@@ -29,10 +38,19 @@ void parse_sensor(config::Reader& r, SensorOptions* s) {
   r.read_optional("max_observations", &s->max_observations, 1, contract::kMaxObsPerFrameLimit);
 }
 
-void parse_odometry(config::Reader& r, OdometryOptions* o) {
+// The systematic odometer error's keys (scenario.odometry: every robot's default;
+// scenario.robots[i].odometry: that robot's), each optional: *e keeps the default.
+void parse_odometer_error(config::Reader& r, OdometerError* e) {
+  r.read_optional("turn_scale", &e->turn_scale, kScaleMin, kScaleMax);
+  r.read_optional("speed_scale", &e->speed_scale, kScaleMin, kScaleMax);
+  r.read_optional("turn_bias_rad_s", &e->turn_bias_rad_s, -kTurnBiasMaxRadS, kTurnBiasMaxRadS);
+}
+
+void parse_odometry(config::Reader& r, OdometryOptions* o, OdometerError* every_robot) {
   r.read("var_trans_per_m", &o->var_trans_per_m, 0.0, 10.0);
   r.read("var_rot_per_rad", &o->var_rot_per_rad, 0.0, 10.0);
   r.read("var_rot_per_m", &o->var_rot_per_m, 0.0, 10.0);
+  parse_odometer_error(r, every_robot);
 }
 
 // The keys of the chosen layout are required; the others are optional (checked
@@ -51,9 +69,20 @@ void parse_landmarks(config::Reader& r, LandmarkOptions* l) {
   if (want(Layout::kCloister, "cloister_outer_half_width_m"))
     r.read("cloister_outer_half_width_m", &l->cloister_outer_half_width_m, 1e-3, kBig);
   if (want(Layout::kRandom, "min_spacing_m")) r.read("min_spacing_m", &l->min_spacing_m, 0.0, kBig);
+  r.section(
+      "empty_region",
+      [&](config::Reader& s) {
+        EmptyRegion& e = l->empty_region;
+        e.enabled = true;
+        s.read("x_min_m", &e.x_min_m, -kBig, kBig);
+        s.read("x_max_m", &e.x_max_m, -kBig, kBig);
+        s.read("y_min_m", &e.y_min_m, -kBig, kBig);
+        s.read("y_max_m", &e.y_max_m, -kBig, kBig);
+      },
+      /*optional=*/true);
 }
 
-void parse_robot(config::Reader& r, RobotPathOptions* p) {
+void parse_robot(config::Reader& r, RobotPathOptions* p, const OdometerError& every_robot) {
   r.read("id", &p->id, 1, contract::kMaxRobots);
   std::vector<double> c{p->center_x_m, p->center_y_m};
   r.read_vector("center_m", &c, 2, -kBig, kBig);
@@ -65,24 +94,69 @@ void parse_robot(config::Reader& r, RobotPathOptions* p) {
   r.read_enum("direction", &dir, {"ccw", "cw"});
   p->ccw = dir == "ccw";
   r.read("speed_mps", &p->speed_mps, 0.0, 1000.0);
+  r.section(
+      "spin",
+      [&](config::Reader& s) {
+        s.read("start_s", &p->spin.start_s, 0.0, kBig);
+        s.read("duration_s", &p->spin.duration_s, 1e-3, kBig);
+        s.read("turn_deg", &p->spin.turn_deg, -3600.0, 3600.0);
+      },
+      /*optional=*/true);
+  p->odometer = every_robot;
+  r.section("odometry", [&](config::Reader& s) { parse_odometer_error(s, &p->odometer); }, /*optional=*/true);
 }
+
+bool has_spin(const RobotPathOptions& p) { return p.spin.duration_s > 0.0; }
 
 // Is every point of the part of the semicircle the robot drives inside the world?
 // Sampled every 0.5 degrees of arc plus the end point (error < 1e-5 x radius).
 bool path_inside(const ScenarioOptions& o, const RobotPathOptions& p, std::string* where) {
   if (!(p.radius_m > 0.0 && p.speed_mps >= 0.0)) return true;  // out of range: reported by parse
   const double t_end = (o.frames - 1) / o.rate_hz;
-  const double arc_end = std::min(p.speed_mps * t_end, kPi * p.radius_m);
+  const double arc_end = std::min(p.speed_mps * drive_time(p, t_end), kPi * p.radius_m);
   const int n = static_cast<int>(std::ceil(arc_end / p.radius_m / deg2rad(0.5))) + 1;
   for (int i = 0; i <= n; ++i) {
     const double s = arc_end * i / n;
-    const Pose2 T = path_pose(p, p.speed_mps > 0.0 ? s / p.speed_mps : 0.0);
+    double t = p.speed_mps > 0.0 ? s / p.speed_mps : 0.0;
+    if (has_spin(p) && t > p.spin.start_s) t += p.spin.duration_s;  // the arc after the turn in place
+    const Pose2 T = path_pose(p, t);
     if (T.x < o.world.x_min_m || T.x > o.world.x_max_m || T.y < o.world.y_min_m || T.y > o.world.y_max_m) {
       *where = "(" + num(T.x) + ", " + num(T.y) + ")";
       return false;
     }
   }
   return true;
+}
+
+// The odometer error within its bounds (code-built options reach here unchecked),
+// and the largest turn it can report in a frame below 180 degrees.
+void check_odometer(const ScenarioOptions& o, const RobotPathOptions& p, const std::string& key,
+                    std::vector<Problem>* out) {
+  const OdometerError& e = p.odometer;
+  const std::size_t problems_before = out->size();
+  const std::string scales = "[" + num(kScaleMin) + ", " + num(kScaleMax) + "]";
+  if (!(e.turn_scale >= kScaleMin && e.turn_scale <= kScaleMax))
+    out->push_back({key + ".odometry.turn_scale", "must be in " + scales + ", got " + num(e.turn_scale)});
+  if (!(e.speed_scale >= kScaleMin && e.speed_scale <= kScaleMax))
+    out->push_back({key + ".odometry.speed_scale", "must be in " + scales + ", got " + num(e.speed_scale)});
+  if (!(std::abs(e.turn_bias_rad_s) <= kTurnBiasMaxRadS))
+    out->push_back({key + ".odometry.turn_bias_rad_s",
+                    "must be in [" + num(-kTurnBiasMaxRadS) + ", " + num(kTurnBiasMaxRadS) + "] rad/s, got " +
+                        num(e.turn_bias_rad_s)});
+  if (has_spin(p) && !(p.spin.start_s >= 0.0))
+    out->push_back({key + ".spin.start_s", "must be >= 0, got " + num(p.spin.start_s)});
+  // The bound below needs sane values (a bad radius or speed is reported by parse).
+  if (out->size() > problems_before || !(p.radius_m > 0.0 && p.speed_mps >= 0.0)) return;
+  // Upper bound of the true turn in a frame (driving and turning in place may share
+  // one), then what the odometer reports of it.
+  const double dt = o.dt_s();
+  const double turn = p.speed_mps * dt / p.radius_m +
+                      (has_spin(p) ? std::abs(deg2rad(p.spin.turn_deg)) * dt / p.spin.duration_s : 0.0);
+  const double reported = (turn + std::abs(e.turn_bias_rad_s) * dt) / e.turn_scale;
+  if (!(reported < kMaxTurnPerFrameRad))
+    out->push_back({key, "its odometer would report up to " + num(rad2deg(reported)) +
+                             " deg of turn in a frame, which must stay below 180 deg (angles wrap): raise rate_hz, "
+                             "slow the spin (spin.duration_s) or lower odometry.turn_bias_rad_s"});
 }
 
 void check_robots(const ScenarioOptions& o, std::vector<Problem>* out) {
@@ -101,14 +175,16 @@ void check_robots(const ScenarioOptions& o, std::vector<Problem>* out) {
                                               " m (paper eq 14): lower the speed or raise rate_hz"});
     std::string where;
     if (!path_inside(o, p, &where))
-      out->push_back({key, "the path leaves the world at " + where + ": move center_m or shrink radius_m"});
+      out->push_back({key, "the path leaves the world at " + where + ": move center_m or shrink radius_m" +
+                               (has_spin(p) ? " or change spin (the rest of the path turns with it)" : "")});
+    check_odometer(o, p, key, out);
   }
 }
 
 }  // namespace
 
-int ScenarioOptions::moving_count() const {
-  return static_cast<int>(std::lround(dynamism_percent * landmarks.count / 100.0));
+int ScenarioOptions::moving_count(int num_landmarks) const {
+  return static_cast<int>(std::lround(dynamism_percent * num_landmarks / 100.0));
 }
 
 const char* layout_name(Layout l) {
@@ -157,6 +233,15 @@ std::vector<Problem> check_scenario(const ScenarioOptions& o) {
   if (o.robots.empty() || o.robots.size() > static_cast<std::size_t>(contract::kMaxRobots))
     out.push_back({"robots", "need 1 to " + std::to_string(contract::kMaxRobots) + " robots"});
   check_robots(o, &out);
+  const EmptyRegion& e = o.landmarks.empty_region;
+  if (e.enabled) {
+    if (!(e.x_min_m < e.x_max_m))
+      out.push_back({"landmarks.empty_region.x_max_m", "must be greater than landmarks.empty_region.x_min_m"});
+    if (!(e.y_min_m < e.y_max_m))
+      out.push_back({"landmarks.empty_region.y_max_m", "must be greater than landmarks.empty_region.y_min_m"});
+    if (!(e.x_min_m < w.x_max_m && e.x_max_m > w.x_min_m && e.y_min_m < w.y_max_m && e.y_max_m > w.y_min_m))
+      out.push_back({"landmarks.empty_region", "lies outside the world: it would leave nothing out"});
+  }
   std::vector<Eigen::Vector2d> layout;
   std::string why;
   if (!generate_layout(o, &layout, &why)) out.push_back({"landmarks", why});
@@ -174,7 +259,8 @@ void parse(config::Reader& r, ScenarioOptions* o) {
   r.read("rate_hz", &o->rate_hz, limits::kRateMinHz, limits::kRateMaxHz);
   r.read("seed", &o->seed, 0, limits::kSeedMax);
   r.section("sensor", [&](config::Reader& s) { parse_sensor(s, &o->sensor); });
-  r.section("odometry", [&](config::Reader& s) { parse_odometry(s, &o->odometry); });
+  OdometerError every_robot;  // scenario.odometry's default for robots[i].odometry
+  r.section("odometry", [&](config::Reader& s) { parse_odometry(s, &o->odometry, &every_robot); });
   r.section("landmarks", [&](config::Reader& s) { parse_landmarks(s, &o->landmarks); });
   r.read("dynamism_percent", &o->dynamism_percent, 0.0, limits::kDynamismMaxPercent);
   r.read("landmark_speed_mps", &o->landmark_speed_mps, 0.0, limits::kLandmarkSpeedMaxMps);
@@ -184,7 +270,7 @@ void parse(config::Reader& r, ScenarioOptions* o) {
       "robots",
       [&](config::Reader& s, std::size_t) {
         o->robots.emplace_back();
-        parse_robot(s, &o->robots.back());
+        parse_robot(s, &o->robots.back(), every_robot);
       },
       1, static_cast<std::size_t>(contract::kMaxRobots));
   if (o->robots.empty()) return;  // the list itself was bad: reported already
@@ -213,6 +299,9 @@ ScenarioOptions load_scenario(const std::string& path, std::string* effective_ya
 }
 
 std::string describe(const ScenarioOptions& o) {
+  std::vector<Eigen::Vector2d> layout;
+  std::string why;
+  const int n = generate_layout(o, &layout, &why) ? static_cast<int>(layout.size()) : o.landmarks.count;
   std::ostringstream os;
   os << "scenario: world [" << o.world.x_min_m << ", " << o.world.x_max_m << "] x [" << o.world.y_min_m << ", "
      << o.world.y_max_m << "] m, " << o.frames << " frames at " << o.rate_hz << " Hz, seed " << o.seed << "\n"
@@ -221,13 +310,24 @@ std::string describe(const ScenarioOptions& o) {
      << "\n"
      << "  odometry: var_trans " << o.odometry.var_trans_per_m << " m^2/m, var_rot " << o.odometry.var_rot_per_rad
      << " rad^2/rad + " << o.odometry.var_rot_per_m << " rad^2/m\n"
-     << "  landmarks: " << o.landmarks.count << " (" << layout_name(o.landmarks.layout) << "), dynamism "
-     << o.dynamism_percent << " % (" << o.moving_count() << " moving) at " << o.landmark_speed_mps
+     << "  landmarks: " << n << " (" << layout_name(o.landmarks.layout) << "), dynamism "
+     << o.dynamism_percent << " % (" << o.moving_count(n) << " moving) at " << o.landmark_speed_mps
      << " m/s, reversal every " << o.reversal_period_frames << " frames\n";
-  for (const auto& p : o.robots)
+  const EmptyRegion& e = o.landmarks.empty_region;
+  if (e.enabled)
+    os << "  empty region: [" << e.x_min_m << ", " << e.x_max_m << "] x [" << e.y_min_m << ", " << e.y_max_m
+       << "] m (" << o.landmarks.count - n << " of the layout's " << o.landmarks.count << " landmarks left out)\n";
+  for (const auto& p : o.robots) {
     os << "  robot " << p.id << ": centre (" << p.center_x_m << ", " << p.center_y_m << ") m, radius "
        << p.radius_m << " m, start " << p.start_angle_deg << " deg, " << (p.ccw ? "ccw" : "cw") << ", "
        << p.speed_mps << " m/s\n";
+    if (has_spin(p))
+      os << "    spin: " << p.spin.turn_deg << " deg in place from " << p.spin.start_s << " s for "
+         << p.spin.duration_s << " s\n";
+    if (!p.odometer.none())
+      os << "    odometer: turn scale " << p.odometer.turn_scale << ", speed scale " << p.odometer.speed_scale
+         << ", turn bias " << p.odometer.turn_bias_rad_s << " rad/s (true = scale x reported + bias x dt)\n";
+  }
   return os.str();
 }
 

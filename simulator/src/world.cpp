@@ -47,7 +47,7 @@ void World::pick_moving_set() {
   Rng pick(static_cast<std::uint64_t>(options_.seed), stream::kMovingSet);
   for (std::size_t i = n; i > 1; --i) std::swap(perm[i - 1], perm[pick.below(i)]);  // Fisher-Yates
   moving_.assign(n, 0);
-  const int m = options_.moving_count();
+  const int m = options_.moving_count(static_cast<int>(n));
   for (int i = 0; i < m; ++i) moving_[static_cast<std::size_t>(perm[static_cast<std::size_t>(i)])] = 1;
 
   Rng dirs(static_cast<std::uint64_t>(options_.seed), stream::kDirections);
@@ -65,17 +65,20 @@ void World::step() {
     reflected_[i] = 0;
     if (!moving_[i]) continue;
     if (reverse) dir_[i] = -dir_[i];
-    if (advance_landmark(&p_LinW_[i], &dir_[i], step_m, options_.world)) {
+    if (advance_landmark(&p_LinW_[i], &dir_[i], step_m, options_.world, options_.landmarks.empty_region)) {
       reflected_[i] = 1;
       ++counters_.border_reflections;
     }
   }
-  // Robots follow their paths exactly; the odometer integrates the noisy increment.
+  // Robots follow their paths exactly; the odometer integrates what it reports of
+  // the true increment (its systematic error inverted), with noise on top.
   const double t_next = (k + 1) / options_.rate_hz;
   for (std::size_t r = 0; r < robot_T_WB_.size(); ++r) {
-    const Pose2 T_next = path_pose(options_.robots[r], t_next);
+    const RobotPathOptions& robot = options_.robots[r];
+    const Pose2 T_next = path_pose(robot, t_next);
     const Pose2 u = between(robot_T_WB_[r], T_next);  // true increment, in B at frame k
-    odometer_[r] = compose(odometer_[r], noisy_increment(u, options_.odometry, &odometry_rng_[r]));
+    const Pose2 u_reported = reported_increment(u, robot.odometer, options_.dt_s());
+    odometer_[r] = compose(odometer_[r], noisy_increment(u_reported, options_.odometry, &odometry_rng_[r]));
     robot_T_WB_[r] = T_next;
   }
   frame_ = k + 1;

@@ -93,6 +93,41 @@ TEST(Config, EffectiveConfigEchoesValuesAndDefaults) {
   EXPECT_EQ(eff["robot"]["start"].size(), 3u);
 }
 
+// A section inside a list item (scenario.robots[i].odometry) is echoed inside that
+// item, with the errors named by the item's path.
+TEST(Config, ASectionInAListItemIsEchoedInTheItem) {
+  const char* text = R"(
+robot:
+  robots:
+    - {id: 1, wheel: {radius_m: 0.1}}
+    - {id: 2}
+)";
+  auto parse_robots = [](Reader& r) {
+    r.list("robots", [&](Reader& item, std::size_t) {
+      int id = 0;
+      double radius_m = 0.05;
+      item.read("id", &id, 1, 8);
+      item.section("wheel", [&](Reader& w) { w.read_optional("radius_m", &radius_m, 0.01, 1.0); }, true);
+    }, 1, 8);
+  };
+  Document doc = Document::from_string(text, "test.yaml");
+  doc.section("robot", parse_robots);
+  doc.finish();
+  const YAML::Node eff = YAML::Load(doc.effective_yaml());
+  EXPECT_DOUBLE_EQ(eff["robot"]["robots"][0]["wheel"]["radius_m"].as<double>(), 0.1) << doc.effective_yaml();
+  EXPECT_FALSE(eff["robot"]["robots"][0]["robot"].IsDefined()) << doc.effective_yaml();
+  EXPECT_FALSE(eff["robot"]["robots"][1]["wheel"].IsDefined()) << doc.effective_yaml();  // absent: not echoed
+  try {
+    Document bad = Document::from_string(replace(text, "radius_m: 0.1", "radius_m: 5"), "test.yaml");
+    bad.section("robot", parse_robots);
+    bad.finish();
+    FAIL() << "accepted an out-of-range key in a list item's section";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("robot.robots[0].wheel.radius_m: out of range"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Config, MissingKeyNamed) {
   const std::string e = errors_of(replace(kGood, "  capacity: 128\n", ""));
   EXPECT_NE(e.find("robot.capacity: missing"), std::string::npos) << e;

@@ -1,11 +1,16 @@
 // Shared helpers of the simulator tests.
 #pragma once
 
+#include <cstdint>
+#include <cstdio>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
+#include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/scenario.hpp"
+#include "elaslam/simulator/world.hpp"
 
 namespace elaslam::sim::test {
 
@@ -13,6 +18,37 @@ inline std::string paper_yaml_path() { return std::string(ELASLAM_SOURCE_DIR) + 
 
 /// The default scenario (config/paper.yaml), for tests to modify.
 inline ScenarioOptions paper() { return load_scenario(paper_yaml_path()); }
+
+template <typename Msg>
+void append_encoded(const Msg& m, std::vector<std::uint8_t>* out) {
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  out->insert(out->end(), buf.begin(), buf.end());
+}
+
+/// Every message of a whole run (each robot's sensor_frame_t and the ground_truth_t
+/// of every frame), encoded and concatenated: equal bytes are a bit-identical run.
+inline std::vector<std::uint8_t> run_bytes(const ScenarioOptions& o) {
+  std::vector<std::uint8_t> bytes;
+  World w(o);
+  for (int k = 0; k < o.frames; ++k) {
+    if (k > 0) w.step();
+    for (int r = 0; r < w.num_robots(); ++r) append_encoded(to_message(w.sensor_frame(r), k), &bytes);
+    append_encoded(to_message(w, k), &bytes);
+  }
+  return bytes;
+}
+
+/// The text of a file (tests read config/*.yaml to edit it).
+inline std::string read_text(const std::string& path) {
+  std::string text;
+  if (FILE* f = std::fopen(path.c_str(), "rb")) {
+    char buf[4096];
+    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, f)) > 0;) text.append(buf, n);
+    std::fclose(f);
+  }
+  return text;
+}
 
 /// Sample mean and variance accumulator (Welford).
 struct Moments {

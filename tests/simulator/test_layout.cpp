@@ -78,5 +78,35 @@ TEST(SimLayout, RandomIsSeededAndSpaced) {
   EXPECT_NE(a, c);
 }
 
+TEST(SimLayout, EmptyRegionLeavesItsLandmarksOutAndKeepsTheRest) {
+  // GIVEN every layout with and without config/odometry_bias.yaml's empty region
+  for (Layout layout : {Layout::kGrid, Layout::kCloister, Layout::kRandom}) {
+    ScenarioOptions o = test::paper();
+    o.landmarks.layout = layout;
+    std::vector<Eigen::Vector2d> all, kept;
+    std::string why;
+    ASSERT_TRUE(generate_layout(o, &all, &why)) << why;
+    o.landmarks.empty_region = {true, 0.1, 8.4, -8.4, -0.1};
+    ASSERT_TRUE(generate_layout(o, &kept, &why)) << why;
+    // THEN the landmarks outside it are the same, in the same order (ids consecutive)
+    std::vector<Eigen::Vector2d> outside;
+    for (const auto& q : all)
+      if (!o.landmarks.empty_region.contains(q.x(), q.y())) outside.push_back(q);
+    EXPECT_EQ(kept, outside) << layout_name(layout);
+    EXPECT_LT(kept.size(), all.size()) << layout_name(layout);
+  }
+  // The grid: columns x = 2.22, 4.44, 6.67 and rows y = -1.25, -3.75, -6.25 fall inside.
+  ScenarioOptions o = test::paper();
+  o.landmarks.empty_region = {true, 0.1, 8.4, -8.4, -0.1};
+  std::vector<Eigen::Vector2d> p;
+  std::string why;
+  ASSERT_TRUE(generate_layout(o, &p, &why)) << why;
+  EXPECT_EQ(p.size(), 63u);
+  // A region that holds every landmark cannot be built, and says why.
+  o.landmarks.empty_region = {true, -20.0, 20.0, -20.0, 20.0};
+  EXPECT_FALSE(generate_layout(o, &p, &why));
+  EXPECT_NE(why.find("holds all 72 landmarks"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace elaslam::sim

@@ -1,5 +1,6 @@
 // Scenario configuration: the default file loads, every kind of bad input is
 // rejected with its key path and a message that says what was expected.
+#include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -91,7 +92,7 @@ TEST(SimScenario, MovingCountIsRoundedShareOfLandmarks) {
   const int expected[] = {0, 4, 14, 25, 36, 47, 58, 72};  // round(p / 100 * 72)
   for (int i = 0; i < 8; ++i) {
     o.dynamism_percent = dyn[i];
-    EXPECT_EQ(o.moving_count(), expected[i]) << dyn[i] << " %";
+    EXPECT_EQ(o.moving_count(72), expected[i]) << dyn[i] << " %";
   }
 }
 
@@ -191,6 +192,127 @@ TEST(SimScenario, AllProblemsReportedAtOnce) {
   } catch (const config::ConfigError& e) {
     EXPECT_GE(e.problems().size(), 2u) << e.what();
   }
+}
+
+// ---- Systematic odometer error, turns in place, empty regions (issue 42) ----------
+
+TEST(SimScenario, OdometerErrorIsNoneByDefaultForEveryRobotOrPerRobot) {
+  // GIVEN no odometer keys THEN no robot's odometer has an error
+  for (const RobotPathOptions& p : load_scenario_text(kBase).robots) {
+    EXPECT_TRUE(p.odometer.none());
+    EXPECT_EQ(p.spin.duration_s, 0.0);
+  }
+  EXPECT_FALSE(load_scenario_text(kBase).landmarks.empty_region.enabled);
+  // GIVEN scenario.odometry's keys THEN every robot has them
+  const std::string every = with("var_rot_per_m: 3.0e-4}",
+                                 "var_rot_per_m: 3.0e-4, turn_scale: 0.95, speed_scale: 1.02, turn_bias_rad_s: -0.01}");
+  for (const RobotPathOptions& p : load_scenario_text(every).robots) {
+    EXPECT_EQ(p.odometer.turn_scale, 0.95);
+    EXPECT_EQ(p.odometer.speed_scale, 1.02);
+    EXPECT_EQ(p.odometer.turn_bias_rad_s, -0.01);
+  }
+  // GIVEN robot 1's own keys THEN they apply to robot 1 only, the others' keys
+  // default to scenario.odometry's
+  std::string own = every;
+  own.replace(own.find("speed_mps: 1.2}"), 15, "speed_mps: 1.2, odometry: {turn_scale: 0.9}}");
+  const ScenarioOptions o = load_scenario_text(own);
+  EXPECT_EQ(o.robots[0].odometer.turn_scale, 0.9);
+  EXPECT_EQ(o.robots[0].odometer.speed_scale, 1.02);
+  EXPECT_EQ(o.robots[0].odometer.turn_bias_rad_s, -0.01);
+  EXPECT_EQ(o.robots[1].odometer.turn_scale, 0.95);
+  // AND the effective configuration says what each robot got
+  const std::string path = ::testing::TempDir() + "sim_scenario_odometer.yaml";
+  FILE* f = std::fopen(path.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs(own.c_str(), f);
+  std::fclose(f);
+  std::string effective;
+  load_scenario(path, &effective);
+  std::remove(path.c_str());
+  const YAML::Node echo = YAML::Load(effective)["scenario"];
+  EXPECT_EQ(echo["odometry"]["turn_scale"].as<double>(), 0.95) << effective;
+  EXPECT_EQ(echo["robots"][0]["odometry"]["turn_scale"].as<double>(), 0.9) << effective;
+  EXPECT_EQ(echo["robots"][0]["odometry"]["speed_scale"].as<double>(), 1.02) << effective;
+  EXPECT_FALSE(echo["robots"][1]["odometry"].IsDefined()) << effective;  // scenario.odometry's
+  EXPECT_FALSE(echo["robots"][1]["spin"].IsDefined()) << effective;
+  EXPECT_FALSE(echo["landmarks"]["empty_region"].IsDefined()) << effective;
+}
+
+TEST(SimScenario, OdometerErrorBadKeysAreNamed) {
+  expect_rejected(with("var_rot_per_m: 3.0e-4}", "var_rot_per_m: 3.0e-4, turn_scale: 0.3}"),
+                  "scenario.odometry.turn_scale", "out of range: got 0.3, expected a value in [0.5, 2]");
+  expect_rejected(with("speed_mps: 1.2}", "speed_mps: 1.2, odometry: {speed_scale: 2.5}}"),
+                  "scenario.robots[0].odometry.speed_scale", "out of range: got 2.5");
+  expect_rejected(with("speed_mps: 0.6}", "speed_mps: 0.6, odometry: {turn_bias_rad_s: 0.7}}"),
+                  "scenario.robots[1].odometry.turn_bias_rad_s", "expected a value in [-0.5, 0.5]");
+  expect_rejected(with("speed_mps: 1.2}", "speed_mps: 1.2, odometry: {turn_scale: fast}}"),
+                  "scenario.robots[0].odometry.turn_scale", "wrong type: expected a number");
+  expect_rejected(with("speed_mps: 1.2}", "speed_mps: 1.2, odometry: {var_trans_per_m: 1.0e-3}}"),
+                  "scenario.robots[0].odometry.var_trans_per_m",
+                  "unknown key (known keys here: turn_scale, speed_scale, turn_bias_rad_s)");
+  expect_rejected(with("var_rot_per_m: 3.0e-4}", "var_rot_per_m: 3.0e-4, turn_scael: 0.9}"),
+                  "scenario.odometry.turn_scael", "unknown key");
+  // Options built in code get the same bounds from check_scenario.
+  ScenarioOptions o = test::paper();
+  o.robots[2].odometer.turn_scale = 0.0;
+  const std::vector<Problem> problems = check_scenario(o);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].key, "robots[2].odometry.turn_scale");
+  EXPECT_EQ(problems[0].what, "must be in [0.5, 2], got 0");
+}
+
+TEST(SimScenario, SpinKeysAndChecks) {
+  const std::string spin = "speed_mps: 0.6, spin: {start_s: 2.0, duration_s: 3.0, turn_deg: 115.0}}";
+  const ScenarioOptions o = load_scenario_text(with("speed_mps: 0.6}", spin));
+  EXPECT_EQ(o.robots[1].spin.start_s, 2.0);
+  EXPECT_EQ(o.robots[1].spin.duration_s, 3.0);
+  EXPECT_EQ(o.robots[1].spin.turn_deg, 115.0);
+  EXPECT_EQ(o.robots[0].spin.duration_s, 0.0);
+  expect_rejected(with("speed_mps: 0.6}", "speed_mps: 0.6, spin: {start_s: 2.0, duration_s: 3.0}}"),
+                  "scenario.robots[1].spin.turn_deg", "missing (required key)");
+  expect_rejected(with("speed_mps: 0.6}", "speed_mps: 0.6, spin: {start_s: 2.0, duration_s: 0.0, turn_deg: 90}}"),
+                  "scenario.robots[1].spin.duration_s", "out of range");
+  expect_rejected(with("speed_mps: 0.6}", "speed_mps: 0.6, spin: {start_s: 2, duration_s: 3, turn_deg: 90, "
+                                          "rate_deg_s: 1}}"),
+                  "scenario.robots[1].spin.rate_deg_s", "unknown key");
+  // 3600 deg in 1 s at 10 Hz: 360 deg a frame, ambiguous.
+  expect_rejected(with("speed_mps: 0.6}", "speed_mps: 0.6, spin: {start_s: 2.0, duration_s: 1.0, turn_deg: 3600}}"),
+                  "scenario.robots[1]", "would report up to 361.1");
+  // A turn rate bias can do it too: at 0.3 Hz robot 1 turns 0.67 rad a frame, the
+  // bias adds 1.67 rad, and a turn scale of 0.5 doubles the report: 267 deg.
+  std::string slow = with("rate_hz: 10.0", "rate_hz: 0.3");
+  slow.replace(slow.find("speed_mps: 1.2}"), 15, "speed_mps: 1.2, odometry: {turn_scale: 0.5, turn_bias_rad_s: 0.5}}");
+  expect_rejected(slow, "scenario.robots[0]",
+                  "would report up to 267.38 deg of turn in a frame, which must stay below 180");
+  // The rest of the path turns with the spin and may leave the world.
+  expect_rejected(with("speed_mps: 1.2}", "speed_mps: 1.2, spin: {start_s: 3.0, duration_s: 3.0, turn_deg: -115}}"),
+                  "scenario.robots[0]", "the path leaves the world at (");
+  expect_rejected(with("speed_mps: 1.2}", "speed_mps: 1.2, spin: {start_s: 3.0, duration_s: 3.0, turn_deg: -115}}"),
+                  "scenario.robots[0]", "or change spin (the rest of the path turns with it)");
+}
+
+TEST(SimScenario, EmptyRegionKeysAndChecks) {
+  const std::string region = "grid_rows: 8, empty_region: {x_min_m: 0.1, x_max_m: 8.4, y_min_m: -8.4, y_max_m: -0.1}}";
+  const ScenarioOptions o = load_scenario_text(with("grid_rows: 8}", region));
+  EXPECT_TRUE(o.landmarks.empty_region.enabled);
+  EXPECT_EQ(o.landmarks.empty_region.x_max_m, 8.4);
+  EXPECT_EQ(o.landmarks.empty_region.y_min_m, -8.4);
+  expect_rejected(with("grid_rows: 8}", "grid_rows: 8, empty_region: {x_min_m: 0.1, x_max_m: 8.4, y_min_m: -8.4}}"),
+                  "scenario.landmarks.empty_region.y_max_m", "missing (required key)");
+  expect_rejected(
+      with("grid_rows: 8}", "grid_rows: 8, empty_region: {x_min_m: 5, x_max_m: 1, y_min_m: -8.4, y_max_m: -0.1}}"),
+      "scenario.landmarks.empty_region.x_max_m", "must be greater than landmarks.empty_region.x_min_m");
+  expect_rejected(
+      with("grid_rows: 8}", "grid_rows: 8, empty_region: {x_min_m: 11, x_max_m: 12, y_min_m: -8.4, y_max_m: -0.1}}"),
+      "scenario.landmarks.empty_region", "lies outside the world");
+  expect_rejected(
+      with("grid_rows: 8}", "grid_rows: 8, empty_region: {x_min_m: -11, x_max_m: 11, y_min_m: -11, y_max_m: 11}}"),
+      "scenario.landmarks", "the empty region holds all 72 landmarks of the layout: shrink empty_region");
+  expect_rejected(with("grid_rows: 8}", "grid_rows: 8, empty_region: {x_min_m: 0, x_max_m: 1, y_min_m: 0, "
+                                        "y_max_m: 1, radius_m: 2}}"),
+                  "scenario.landmarks.empty_region.radius_m", "unknown key");
+  expect_rejected(with("grid_rows: 8}", "grid_rows: 8, empty_region: [0, 1, 0, 1]}"),
+                  "scenario.landmarks.empty_region", "wrong type: expected a map of keys");
 }
 
 }  // namespace

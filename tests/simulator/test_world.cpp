@@ -16,24 +16,7 @@
 namespace elaslam::sim {
 namespace {
 
-template <typename Msg>
-void append_encoded(const Msg& m, std::vector<std::uint8_t>* out) {
-  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  ASSERT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
-  out->insert(out->end(), buf.begin(), buf.end());
-}
-
-/// Every message of a whole run, encoded and concatenated.
-std::vector<std::uint8_t> run_bytes(const ScenarioOptions& o) {
-  std::vector<std::uint8_t> bytes;
-  World w(o);
-  for (int k = 0; k < o.frames; ++k) {
-    if (k > 0) w.step();
-    for (int r = 0; r < w.num_robots(); ++r) append_encoded(to_message(w.sensor_frame(r), k), &bytes);
-    append_encoded(to_message(w, k), &bytes);
-  }
-  return bytes;
-}
+using test::run_bytes;
 
 std::set<int> moving_set(const ScenarioOptions& o) {
   World w(o);

@@ -216,6 +216,23 @@ TEST(TeamConfig, TheSimulatorsFullestFrameMustFitTheRobots) {
   EXPECT_TRUE(check_shared_config(path).empty());
 }
 
+// config/odometry_bias.yaml (issue 42, docs/simulator.md "Landmark-free stretches")
+// is a whole configuration like paper.yaml: every node takes it, and a team runs on
+// it with the world it describes (63 landmarks, robot 1 turning in place).
+TEST(TeamConfig, TheOdometryBiasExampleIsAWholeConfigThatRuns) {
+  const std::string path = std::string(ELASLAM_SOURCE_DIR) + "/config/odometry_bias.yaml";
+  EXPECT_TRUE(check_shared_config(path).empty());
+  const TeamConfig c = load_team_config(path);
+  EXPECT_EQ(c.scenario.robots[0].odometer.turn_scale, 0.9);
+  const RunResult r = run_team(c);
+  ASSERT_EQ(r.truth.size(), 3u);
+  ASSERT_EQ(r.truth[0].size(), 150u);
+  EXPECT_EQ(r.final_truth.size(), 63u);
+  // Robot 1 stands at the same place while it turns (frames 37..67).
+  EXPECT_EQ(r.truth[0][37].pose.x, r.truth[0][67].pose.x);
+  EXPECT_EQ(r.truth[0][37].pose.y, r.truth[0][67].pose.y);
+}
+
 // metrics.json says what ran: provenance, and the effective config with every
 // override applied (what the run used, not what the file said).
 TEST(TeamRun, MetricsJsonCarriesProvenanceAndTheConfigThatRan) {

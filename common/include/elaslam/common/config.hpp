@@ -102,6 +102,9 @@ class Reader {
   void finish();
 
  private:
+  // A nested section's reader: its effective map is `effective`, the parent's child
+  // (not found again from the root by `path`, which a list item's path cannot address).
+  Reader(YAML::Node node, std::string path, std::shared_ptr<ParseState> state, YAML::Node effective);
   std::string key_path(const std::string& key) const;
   YAML::Node child(const std::string& key, bool optional, bool* present);
   template <typename T>

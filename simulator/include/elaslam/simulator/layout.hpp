@@ -12,9 +12,10 @@
 
 namespace elaslam::sim {
 
-/// Fill *p_LinW with landmarks.count positions, index = landmark id. Returns false
-/// and says why (in *why) when the layout cannot be built (e.g. random spacing too
-/// large for the world); never throws.
+/// Fill *p_LinW with landmarks.count positions less those inside an enabled
+/// landmarks.empty_region, index = landmark id (consecutive, in the layout's
+/// order). Returns false and says why (in *why) when the layout cannot be built
+/// (e.g. random spacing too large for the world, no landmark left); never throws.
 bool generate_layout(const ScenarioOptions& o, std::vector<Eigen::Vector2d>* p_LinW, std::string* why);
 
 }  // namespace elaslam::sim

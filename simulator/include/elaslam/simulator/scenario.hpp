@@ -42,6 +42,38 @@ struct OdometryOptions {
   double var_rot_per_m = 3e-4;     // [rad^2/m]
 };
 
+/// A robot odometer's systematic error, the convention the filter estimates too
+/// (docs/simulator.md "Odometer"): over one frame of dt [s], with the reported
+/// increment (dx_r, dy_r, dtheta_r) in the body frame B at the step's start, the
+/// true increment is
+///   dx = speed_scale * dx_r,  dy = speed_scale * dy_r,
+///   dtheta = turn_scale * dtheta_r + turn_bias_rad_s * dt.
+/// On MRCLAM the true turn is 0.87-0.95 of the reported one (issue 42). The
+/// defaults are no error. sensor_frame_t says nothing of it: the noise model it
+/// carries stays the configured one.
+struct OdometerError {
+  double turn_scale = 1.0;        // s_w: true turn / reported turn
+  double speed_scale = 1.0;       // s_v: true translation / reported translation
+  double turn_bias_rad_s = 0.0;   // b [rad/s]: true turn rate the odometer does not report
+  bool none() const { return turn_scale == 1.0 && speed_scale == 1.0 && turn_bias_rad_s == 0.0; }
+};
+
+/// An axis-aligned rectangle of the world W [m] with no landmark in it: the layout
+/// leaves out the landmarks it would place inside, and moving landmarks bounce
+/// off its sides as off the world's border. A robot farther than D/2 inside it
+/// sees nothing (docs/simulator.md "Landmark-free stretches").
+struct EmptyRegion {
+  bool enabled = false;           // off by default: no landmark is left out
+  double x_min_m = 0.0;
+  double x_max_m = 0.0;
+  double y_min_m = 0.0;
+  double y_max_m = 0.0;
+  /// Strictly inside (a point on a side is outside: landmarks may sit there).
+  bool contains(double x_m, double y_m) const {
+    return enabled && x_m > x_min_m && x_m < x_max_m && y_m > y_min_m && y_m < y_max_m;
+  }
+};
+
 enum class Layout { kGrid, kCloister, kRandom };
 
 /// Initial landmark positions. Only the keys of the chosen layout are required.
@@ -58,10 +90,23 @@ struct LandmarkOptions {
   double cloister_outer_half_width_m = 8.0;
   // random: uniform in the world, at least min_spacing_m apart (layout stream).
   double min_spacing_m = 1.0;
+  // Any layout: the landmarks it places in here are left out (ids stay consecutive).
+  EmptyRegion empty_region;
 };
 
-/// A robot driving a semicircle (180 degrees of arc) at constant speed; it stops
-/// at the end of the semicircle if it gets there before the run ends.
+/// A turn in place on a robot's path: at start_s the robot stops, turns by
+/// turn_deg at a constant rate for duration_s, then drives on at the same speed
+/// and curvature, so the rest of its path is the rest of the semicircle rotated
+/// by turn_deg about the point where it turned (motion.hpp, path_pose).
+struct SpinOptions {
+  double start_s = 0.0;           // [s] after the run's start
+  double duration_s = 0.0;        // [s]; 0: no spin (the default)
+  double turn_deg = 0.0;          // [deg] counter-clockwise positive
+};
+
+/// One robot: a semicircle (180 degrees of arc) driven at constant speed (it stops
+/// at the end of the semicircle if it gets there before the run ends), optionally
+/// with a turn in place on the way, and its odometer's systematic error.
 struct RobotPathOptions {
   int id = 1;                     // 1..contract::kMaxRobots
   double center_x_m = 0.0;        // circle centre, world frame W [m]
@@ -70,6 +115,8 @@ struct RobotPathOptions {
   double start_angle_deg = 0.0;   // [deg] polar angle of the start point about the centre
   bool ccw = true;                // direction of travel along the circle
   double speed_mps = 1.0;         // [m/s] along the path
+  SpinOptions spin;               // scenario.robots[i].spin (none by default)
+  OdometerError odometer;         // scenario.odometry's, or scenario.robots[i].odometry's
 };
 
 struct ScenarioOptions {
@@ -86,8 +133,9 @@ struct ScenarioOptions {
   std::vector<RobotPathOptions> robots;
 
   double dt_s() const { return 1.0 / rate_hz; }
-  /// round(dynamism x N): the number of moving landmarks.
-  int moving_count() const;
+  /// round(dynamism x N): the number of moving landmarks among the N the world has
+  /// (landmarks.count, less those the empty region leaves out: generate_layout).
+  int moving_count(int num_landmarks) const;
 };
 
 /// The ranges of the scenario keys that command lines override too (simulator,
