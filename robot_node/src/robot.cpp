@@ -57,6 +57,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   team_gate_threshold_ = options.team_map_gate_probability < 1.0 ? chi2_quantile(options.team_map_gate_probability, 2)
                                                                   : std::numeric_limits<double>::infinity();
   restore_threshold_ = chi2_quantile(options.drift_gate_probability, 2);
+  drift3_threshold_ = chi2_quantile(options.team_map_gate_probability, 3);
   updated_.reserve(static_cast<std::size_t>(options.max_observations));
   pairs_.reserve(static_cast<std::size_t>(options.ekf.capacity));
   events_.reserve(event_capacity(options));
@@ -193,6 +194,8 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
 // (DESIGN.md section 5): step 3 for the mapped ones, all judged against the same
 // prior before any of them corrects the filter, then steps 1-2 for the others.
 void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
+  own_drifted_ = own_filter_drifted();
+  if (own_drifted_) ++s->drifted;
   // 3. The mapped landmarks in view and their verdicts (ElaGate: eq 16, the
   //    consensus clique or the single-landmark test, then the drift test).
   for (int k = 0; k < in.num_obs; ++k) {
@@ -226,7 +229,7 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
     // A landmark judged alone cannot tell its own motion from the robot's pose
     // error: unless configured otherwise, it is only skipped.
     if (!options_.lone_verdicts && verdict.alone) continue;
-    if (lmap_.outside_ela(v.id)) mark_moving(v.id, &v.z, s);
+    if (lmap_.outside_ela(v.id) && !own_drifted_) mark_moving(v.id, &v.z, s);
   }
   restore_archived(in, s);
   // 1-2. New landmarks and candidates.
@@ -235,6 +238,10 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   // Confirmed candidates' earlier sightings, into the filters (FilterHistory).
   s->filter_faults += history_.end_frame(in.frame, &ekf_);
   if (aided_) s->filter_faults += aided_history_.end_frame(in.frame, &*aided_);
+}
+
+bool Robot::own_filter_drifted() const {
+  return aided_ && options_.team_map_drift_check && pose_drifted(ekf_, *aided_, drift3_threshold_);
 }
 
 void Robot::restart_history() {
@@ -331,7 +338,7 @@ void Robot::check_missing(FrameSummary* s) {
     const LMapEntry& e = lmap_[id];
     if (e.status != LandmarkStatus::kStatic) continue;
     const bool expected = e.last_seen_frame != last_frame_ && expected_in_view(id, pose);
-    if (lmap_.missed(id, expected)) mark_moving(id, nullptr, s);
+    if (lmap_.missed(id, expected) && !own_drifted_) mark_moving(id, nullptr, s);
   }
 }
 

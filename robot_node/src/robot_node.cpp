@@ -225,6 +225,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   if (s.filter_full > 0) note_filter_full(s.filter_full);
   counters_.evictions += s.evicted;
   counters_.restored += s.restored;
+  counters_.own_drifted_frames += s.drifted;
   if (s.inconsistent) note_inconsistent(s.recovered);
   fill_events(now_utime);
   if (msg.frame % options_.snapshot_period_frames == 0 || snapshot_due_) {

@@ -108,6 +108,7 @@ void parse(config::Reader& r, RobotOptions* o) {
         t.read_optional("min_gain", &o->team_map_min_gain, 0.0, 100.0);
         t.read_optional("gate_probability", &o->team_map_gate_probability, 0.5, 1.0);
         t.read_optional("gauge_test", &o->team_map_gauge_test);
+        t.read_optional("drift_check", &o->team_map_drift_check);
       },
       /*optional=*/true);
   parse(r, &o->limits);

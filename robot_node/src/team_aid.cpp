@@ -1,5 +1,8 @@
 #include "elaslam/robot_node/team_aid.hpp"
 
+#include "elaslam/common/geometry.hpp"
+#include "elaslam/robot_node/ekf_slam.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -87,6 +90,14 @@ void TeamChannel::commit(int id, const TeamIncrement& inc) {
   }
   Y_[i] += inc.Y;
   y_[i] += inc.Y * inc.z;
+}
+
+bool pose_drifted(const EkfSlam& own, const EkfSlam& aided, double threshold) {
+  const Pose2 a = own.pose(), b = aided.pose();
+  const Eigen::Vector3d d(a.x - b.x, a.y - b.y, wrap_angle(a.theta - b.theta));
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(own.pose_cov());
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 0.0).all()) return false;
+  return d.dot(ldlt.solve(d)) > threshold;
 }
 
 }  // namespace elaslam

@@ -90,6 +90,7 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
       r["final_landmarks"] = rm.final_landmarks;
       r["team_lost"] = rm.team_lost;
       r["relocalised"] = rm.relocalised;
+      r["own_drifted_frames"] = rm.own_drifted_frames;
     }
     robots.push_back(std::move(r));
   }

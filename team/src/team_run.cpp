@@ -265,6 +265,7 @@ RunResult InProcessTeam::finish() {
       rm.final_landmarks = node.robot().filter().num_landmarks();
       rm.team_lost = node.robot().team_counters().lost;
       rm.relocalised = node.robot().team_counters().relocalised;
+      rm.own_drifted_frames = node.counters().own_drifted_frames;
     }
   for (int id = 0; id < main_.map().max_landmark_id(); ++id) {
     const GlobalEntry& g = main_.map().entry(id);

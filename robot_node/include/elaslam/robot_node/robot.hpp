@@ -73,6 +73,7 @@ struct FrameSummary {
   int events_dropped = 0; // events beyond the fixed event buffer (should stay 0)
   bool inconsistent = false;  // the consistency monitor's verdict after this frame
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
+  int drifted = 0;            // 1: the own filter had drifted from the aided one: no MOVING finding (own_filter_drifted)
 };
 
 /// One landmark of a team map (TEAM_MAP_<r>).
@@ -260,6 +261,9 @@ class Robot {
   std::vector<PointPair> pairs_;  // the team map's landmarks the robot holds (reserved: filter capacity)
   double team_gate_threshold_ = 0.0;  // chi2 quantile, 2 dof, of team_map_gate_probability
   double restore_threshold_ = 0.0;    // chi2 quantile, 2 dof, of drift_gate_probability (restore_archived)
+  double drift3_threshold_ = 0.0;     // chi2 quantile, 3 dof, of team_map_gate_probability (own_filter_drifted)
+  bool own_drifted_ = false;          // this frame's own_filter_drifted()
+  bool own_filter_drifted() const;
   int trouble_frame_ = -1;  // last frame all of whose judged landmarks failed, or found inconsistent
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   ElaGate gate_;  // this frame's verdicts and gate records

@@ -52,6 +52,7 @@ struct RobotNodeCounters {
   std::int64_t restored = 0;          // evicted landmarks seen again and back in the filter
   std::int64_t inconsistent_frames = 0;  // frames the consistency monitor found the filter inconsistent
   std::int64_t recoveries = 0;           // of those, pose covariance widened (consistency_recover)
+  std::int64_t own_drifted_frames = 0;   // frames whose own filter had drifted from the aided one: no MOVING finding
   std::int64_t team_map_chunks = 0;      // TEAM_MAP_<r> chunks applied (robot.team_map.fuse)
   std::int64_t team_map_stale = 0;       // ... ignored: older than one applied
 };

@@ -80,6 +80,10 @@ struct RobotOptions {
   /// The gauge test (Robot::apply_team_map): a robot whose map is right in itself
   /// but wrong as a whole moves onto the team map by one rigid motion.
   bool team_map_gauge_test = true;
+  /// No gate on a drifted filter: a frame in which the own filter's pose is beyond
+  /// its covariance from the aided filter's (pose_drifted, 3 dof at
+  /// team_map_gate_probability) finds no mover (ELA or missing).
+  bool team_map_drift_check = true;
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
   /// Whether a mapped landmark that fails its test while it is the only one in view
   /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.

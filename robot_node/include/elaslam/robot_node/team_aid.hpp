@@ -41,6 +41,18 @@
 
 namespace elaslam {
 
+class EkfSlam;
+
+/// The own filter's pose against the aided filter's, beyond the own filter's pose
+/// covariance: d^T P_own^-1 d > threshold (d = own - aided, heading wrapped; the
+/// caller's chi-square quantile, 3 dof). The aided filter holds the own filter's data
+/// and the team's increments besides, so their difference has covariance
+/// P_own - P_aided, at most P_own; that difference is near singular where the team
+/// added little, and rounding alone (the two filters group their covariance steps
+/// differently) then looks like drift: P_own is the bound that stays well
+/// conditioned. False when P_own is not positive definite.
+bool pose_drifted(const EkfSlam& own, const EkfSlam& aided, double threshold);
+
 struct TeamIncrement {
   int epoch = -1;                               // the team estimate's epoch (TeamChannel)
   Eigen::Vector2d z = Eigen::Vector2d::Zero();  // [m] the measurement of the landmark's position

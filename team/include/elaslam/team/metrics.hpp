@@ -69,6 +69,7 @@ struct RobotMetrics {
   // The team map's verdicts on the robot (Robot::apply_team_map), from its counters.
   std::int64_t team_lost = 0;     // team maps fused untested: the robot was lost and saw it itself
   std::int64_t relocalised = 0;   // team maps whose gauge test moved the robot's whole state
+  std::int64_t own_drifted_frames = 0;  // frames its own filter had drifted from the aided one: no MOVING finding
 };
 
 struct RunMetrics {
