@@ -263,6 +263,15 @@ RunResult InProcessTeam::finish() {
       rm.evictions = node.counters().evictions;
       rm.restored = node.counters().restored;
       rm.final_landmarks = node.robot().filter().num_landmarks();
+      const EkfSlam& f = node.robot().filter();
+      if (f.calibration_estimated()) {
+        const OdometryCalibration c = f.calibration();
+        const Eigen::Vector3d sigma = f.calibration_cov().diagonal().cwiseMax(0.0).cwiseSqrt();
+        rm.calibration_estimated = true;
+        rm.turn_scale = c.turn_scale, rm.turn_scale_sigma = sigma(0);
+        rm.speed_scale = c.speed_scale, rm.speed_scale_sigma = sigma(1);
+        rm.turn_bias_rad_s = c.turn_bias, rm.turn_bias_sigma_rad_s = sigma(2);
+      }
     }
   for (int id = 0; id < main_.map().max_landmark_id(); ++id) {
     const GlobalEntry& g = main_.map().entry(id);

@@ -66,6 +66,12 @@ struct RobotMetrics {
   std::int64_t evictions = 0;     // landmarks that left the full filter to make room
   std::int64_t restored = 0;      // evicted landmarks seen again and back in the filter
   int final_landmarks = 0;        // landmarks in the filter at the end (candidates included)
+  // The odometer's calibration the robot's own filter estimated, at the end
+  // (robot.odometry_calibration with a sigma or walk > 0; in-process runs only).
+  bool calibration_estimated = false;
+  double turn_scale = 1.0, turn_scale_sigma = 0.0;
+  double speed_scale = 1.0, speed_scale_sigma = 0.0;
+  double turn_bias_rad_s = 0.0, turn_bias_sigma_rad_s = 0.0;
 };
 
 struct RunMetrics {
