@@ -102,7 +102,7 @@ class DenseEkf {
     P_.noalias() += G_ * U * G_.transpose();
   }
   void update(int slot, const RangeBearing& y) {
-    const Eigen::Index off = StateLayout::landmark_offset(slot);
+    const Eigen::Index off = 3 + 2 * slot;  // its state is [R; M], without calibration states
     Eigen::Matrix<double, 2, 3> H_x;
     Eigen::Matrix2d H_l;
     const RangeBearing h = observe(pose(), X_.segment<2>(off), &H_x, &H_l);
@@ -130,16 +130,23 @@ class DenseEkf {
 
 // ---- benchmarks ----------------------------------------------------------------------------
 
-void run_ekf_frames(benchmark::State& state, bool joseph, bool full_view) {
+void run_ekf_frames(benchmark::State& state, bool joseph, bool full_view, bool calibrated = false) {
   const int n = static_cast<int>(state.range(0));
   const Scene scene(n);
-  EkfSlam ekf(options_for(n, joseph));
+  EkfOptions o = options_for(n, joseph);
+  if (calibrated) {  // the odometer's calibration states estimated (issue 42)
+    o.calibration.turn_scale_sigma = o.calibration.speed_scale_sigma = 0.1;
+    o.calibration.turn_bias_sigma = 0.02;
+    o.calibration.turn_scale_walk = o.calibration.speed_scale_walk = 1e-3;
+    o.calibration.turn_bias_walk = 1e-4;
+  }
+  EkfSlam ekf(o);
   ekf.reset(Pose2{}, scene.P0);
   for (int id = 0; id < n; ++id) ekf.add_landmark(id, scene.observations[static_cast<std::size_t>(id)]);
   int next = 0;
   int failures = 0;
   for (auto _ : state) {
-    failures += ekf.predict(Pose2{}, scene.U) != EkfStatus::kOk;
+    failures += ekf.predict(Pose2{}, scene.U, 0.1) != EkfStatus::kOk;
     for (int k = 0; k < kUpdatesPerFrame; ++k) {
       const int id = next;
       next = (next + 1) % n;
@@ -160,6 +167,9 @@ void BM_EkfSlamFrameJosephForm(benchmark::State& state) { run_ekf_frames(state, 
 // The same frame, then the full covariance view (completes the upper triangle):
 // what a caller pays per frame if it needs all of P rather than blocks of it.
 void BM_EkfSlamFrameWithFullView(benchmark::State& state) { run_ekf_frames(state, false, true); }
+// The default frame with the odometer's calibration states estimated (issue 42): the
+// prediction's cross terms read 6 columns instead of 3.
+void BM_EkfSlamFrameCalibrated(benchmark::State& state) { run_ekf_frames(state, false, false, true); }
 
 void BM_DenseEkfFrame(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
@@ -213,6 +223,7 @@ void dense_landmark_counts(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_EkfSlamFrame)->Apply(landmark_counts);
 BENCHMARK(BM_EkfSlamFrameJosephForm)->Apply(landmark_counts);
 BENCHMARK(BM_EkfSlamFrameWithFullView)->Apply(landmark_counts);
+BENCHMARK(BM_EkfSlamFrameCalibrated)->Apply(landmark_counts);
 BENCHMARK(BM_DenseEkfFrame)->Apply(dense_landmark_counts);
 BENCHMARK(BM_CovarianceStep)->Apply(landmark_counts);
 

@@ -15,6 +15,10 @@
 // window start): along track, across track, heading. var per m = variance / mean
 // window length (about the mean: the scale bias excluded); ms per m = mean square /
 // mean window length (bias included: what a filter that models no bias should use).
+// Odometer calibration (issue 42, the filter's robot.odometry_calibration): per robot,
+// least squares of Vicon's increments on the odometer's over every frame step
+// (mrclam::fit_odometry), over the whole run and each half, on the frames as the
+// filter gets them (--config's dataset section: the odometry delay matters).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -343,6 +347,7 @@ void print_sensor_row(const char* who, const Robust& rg, const Robust& br) {
 struct Args {
   std::string dataset_dir, robots = "1,2,3,4,5", json_path, config_path;
   double rate = 10.0;
+  double calibration_window_s = 5.0;
   double detect_range = 3.5, detect_half_deg = 17.0;
   std::vector<int> ids;
   bool check = false;
@@ -359,6 +364,10 @@ int parse_args(int argc, char** argv, Args* a) {
       ->capture_default_str()
       ->check(cli::range(mrclam::limits::kRateMinHz, mrclam::limits::kRateMaxHz));
   app.add_option("--json", a->json_path, "also write the numbers as JSON");
+  app.add_option("--calibration-window", a->calibration_window_s,
+                 "odometer calibration: fit over windows of this many seconds [s] (mrclam::fit_odometry)")
+      ->capture_default_str()
+      ->check(cli::range(0.0, 600.0));
   app.add_option("--detect-range", a->detect_range, "detection statistics: in view within this range [m]")
       ->capture_default_str()->check(cli::range(0.1, 100.0));
   app.add_option("--detect-half-angle", a->detect_half_deg, "... and this half-angle of the heading [deg]")
@@ -526,6 +535,45 @@ void report_odometry(const PerRobot& p, const Args& a, json* out) {
                          {"fit_odom_var_rot_per_m", fit_m}};
 }
 
+json to_json(const mrclam::OdometryFit& f) {
+  return {{"steps", f.steps},
+          {"speed_scale", f.speed_scale},
+          {"turn_scale", f.turn_scale},
+          {"turn_bias_rad_s", f.turn_bias_rad_s},
+          {"turn_scale_without_bias", f.turn_scale_without_bias},
+          {"reported_m", f.reported_m},
+          {"reported_rad", f.reported_rad}};
+}
+
+// The odometer's systematic error per robot (true = scale x reported, turn + bias dt),
+// over the run and its two halves, to set or check robot.odometry_calibration.
+void report_calibration(const mrclam::Dataset& d, const Args& a, json* out) {
+  mrclam::Options fo = a.frame_options;
+  fo.robots = a.ids;
+  fo.rate_hz = a.rate;
+  const mrclam::FrameSource src(d, fo);
+  const int n = src.num_frames(), half = n / 2;
+  const int window = std::max(1, static_cast<int>(std::lround(a.calibration_window_s * a.rate)));
+  std::printf("\nOdometer calibration (issue 42: true increment = speed scale x reported translation, turn scale x\n"
+              "reported turn + bias x dt), least squares of Vicon's increments on the odometer's over windows of\n"
+              "%d frames (%.3g s) at %.3g Hz, frames imported %s; whole run and each half (%d frames):\n",
+              window, window / a.rate, a.rate,
+              a.config_path.empty() ? "without a config (no odometry delay)" : ("with " + a.config_path).c_str(), n);
+  std::printf("%-6s %6s %9s %9s %11s %9s | %9s %9s %11s | %9s %9s %11s\n", "robot", "windows", "speed", "turn",
+              "bias_rad_s", "turn_only", "speed_1st", "turn_1st", "bias_1st", "speed_2nd", "turn_2nd", "bias_2nd");
+  for (std::size_t i = 0; i < a.ids.size(); ++i) {
+    const int r = static_cast<int>(i);
+    const mrclam::OdometryFit all = mrclam::fit_odometry(src, r, 0, -1, window),
+                              h1 = mrclam::fit_odometry(src, r, 0, half, window),
+                              h2 = mrclam::fit_odometry(src, r, half, -1, window);
+    std::printf("R%-5d %6d %9.4f %9.4f %11.5f %9.4f | %9.4f %9.4f %11.5f | %9.4f %9.4f %11.5f\n", a.ids[i], all.steps,
+                all.speed_scale, all.turn_scale, all.turn_bias_rad_s, all.turn_scale_without_bias, h1.speed_scale,
+                h1.turn_scale, h1.turn_bias_rad_s, h2.speed_scale, h2.turn_scale, h2.turn_bias_rad_s);
+    (*out)["robots"][std::to_string(a.ids[i])]["odometry_calibration"] = {
+        {"window_s", window / a.rate}, {"run", to_json(all)}, {"first_half", to_json(h1)}, {"second_half", to_json(h2)}};
+  }
+}
+
 int stats_main(int argc, char** argv) {
   Args a;
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
@@ -546,6 +594,7 @@ int stats_main(int argc, char** argv) {
     if (!a.config_path.empty()) report_frame_residuals(d, a, &out);
     report_detection(d, a, &out);
     report_odometry(p, a, &out);
+    report_calibration(d, a, &out);
   } catch (const mrclam::DatasetError& e) {
     std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
     return cli::kExitFailure;

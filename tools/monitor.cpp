@@ -7,6 +7,7 @@
 // STATUS_ROBOT_* through the node shell: a bad message is counted, never fatal.
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -62,6 +63,9 @@ class Progress {
     });
     on<node_status_t>(channels::any_status_robot(sfx), 50, [this](const node_status_t& m) {
       dropped_by_robot_[m.node_id] = m.frames_dropped;
+      // The odometer's calibration, when the robot estimates it (robot.odometry_calibration).
+      if (m.odom_turn_scale_sigma > 0.0f || m.odom_speed_scale_sigma > 0.0f || m.odom_turn_bias_sigma_rad_s > 0.0f)
+        calibration_[m.node_id] = {m.odom_turn_scale, m.odom_speed_scale};
       dropped_ = 0;
       for (const auto& [id, n] : dropped_by_robot_) dropped_ += n;
       note_health("robot " + std::to_string(m.node_id), m);
@@ -91,6 +95,14 @@ class Progress {
       if (!names.empty()) faults += " | FAULT " + node + ": " + names;
     }
     if (refused > 0) out += " | messages refused " + std::to_string(refused);
+    if (!calibration_.empty()) {
+      out += " | odometer turn/speed scale:";
+      for (const auto& [id, c] : calibration_) {
+        char s[64];
+        std::snprintf(s, sizeof s, " robot %d %.3f/%.3f", id, static_cast<double>(c[0]), static_cast<double>(c[1]));
+        out += s;
+      }
+    }
     out += faults;
     if (frame_ < 0) out = "waiting for the first frame" + std::string(frames_ > 0 ? " of " + std::to_string(frames_) : "");
     return out;
@@ -119,6 +131,7 @@ class Progress {
   long long poses_ = 0, notices_ = 0, dropped_ = 0;
   std::set<int> pose_robots_, moving_;
   std::map<int, long long> dropped_by_robot_;
+  std::map<int, std::array<float, 2>> calibration_;  // robot -> odometer turn and speed scale (STATUS)
   std::map<std::string, Health> health_;
 };
 

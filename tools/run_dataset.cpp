@@ -9,6 +9,7 @@
 // files under DIR/<mode>/ and DIR/<mode>_barcodes/.
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <exception>
 #include <mutex>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include <iostream>
 #include <sstream>
 #include <thread>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 
@@ -75,6 +77,45 @@ std::string f3(double v) {
   return s.str();
 }
 
+// report.md's odometer calibration (robot.odometry_calibration on): each robot's
+// final estimate per run, and the least-squares fit of Vicon's increments on the
+// odometer's over the same frames (mrclam::fit_odometry; mrclam_stats prints it too).
+void write_calibration(std::ofstream& out, const mrclam::FrameSource& src, const std::vector<DatasetRun>& runs) {
+  const bool any = std::any_of(runs.begin(), runs.end(), [](const DatasetRun& r) {
+    return std::any_of(r.result.metrics.robots.begin(), r.result.metrics.robots.end(),
+                       [](const RobotMetrics& m) { return m.calibration_estimated; });
+  });
+  if (!any) return;
+  const auto pm = [](double v, double s, int digits) {
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(digits) << v << " ± " << s;
+    return o.str();
+  };
+  out << "\nOdometer calibration (robot.odometry_calibration): true increment = speed scale x reported "
+         "translation, turn scale x reported turn + bias x dt. Each robot's own filter at the end of the run "
+         "(estimate ± sigma), and the offline least-squares fit against Vicon over the same frames (windows of 5 s: "
+         "mrclam_stats --calibration-window).\n\n"
+         "| run | robot | turn scale | speed scale | turn bias [rad/s] |\n|---|---|---|---|---|\n";
+  // Windows of 5 s: mrclam::fit_odometry says why.
+  const int window = std::max(1, static_cast<int>(std::lround(5.0 / src.dt_s())));
+  const int n = src.num_frames();
+  for (const auto& [name, first] : {std::pair<const char*, int>{"offline fit (Vicon), the run", 0},
+                                    std::pair<const char*, int>{"offline fit (Vicon), its second half", n / 2}})
+    for (std::size_t i = 0; i < src.robot_ids().size(); ++i) {
+      const mrclam::OdometryFit f = mrclam::fit_odometry(src, static_cast<int>(i), first, -1, window);
+      out << "| " << name << " | " << src.robot_ids()[i] << " | " << std::fixed << std::setprecision(4)
+          << f.turn_scale << " (" << f.turn_scale_without_bias << " without bias) | " << f.speed_scale << " | "
+          << std::setprecision(5) << f.turn_bias_rad_s << " |\n";
+    }
+  for (const auto& run : runs)
+    for (const auto& rm : run.result.metrics.robots) {
+      if (!rm.calibration_estimated) continue;
+      out << "| " << run.mode << (run.barcodes ? ", robot barcodes kept" : "") << " | " << rm.id << " | "
+          << pm(rm.turn_scale, rm.turn_scale_sigma, 4) << " | " << pm(rm.speed_scale, rm.speed_scale_sigma, 4)
+          << " | " << pm(rm.turn_bias_rad_s, rm.turn_bias_sigma_rad_s, 5) << " |\n";
+    }
+}
+
 // report.md: per robot RMS and mean position error of dead reckoning and of every
 // (mode, barcodes) run, the five-robot means, the global map error, and how many
 // robot-barcode observations each run let correct a pose.
@@ -114,6 +155,7 @@ void write_report(const std::string& path, const mrclam::FrameSource& src, const
   long avail = 0;
   for (const auto& s : src.stats().robots) avail += s.robot_barcodes;
   out << avail << ".\n";
+  write_calibration(out, src, runs);
 }
 
 struct Args {

@@ -544,4 +544,34 @@ void FrameSource::frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* 
   }
 }
 
+OdometryFit fit_odometry(const FrameSource& src, int i, int first, int last, int window) {
+  OdometryFit f;
+  const int end = last < 0 ? src.num_frames() - 1 : std::min(last, src.num_frames() - 1);
+  const int w = std::max(window, 1);
+  const double dt = w * src.dt_s();
+  double tr = 0.0, rr = 0.0;                               // translations: sum t.r, |r|^2
+  double a00 = 0.0, a01 = 0.0, a11 = 0.0, y0 = 0.0, y1 = 0.0;  // headings: normal equations in (s_w, b)
+  for (int k = std::max(first, 0) + w; k <= end; k += w) {
+    const Pose2 r = between(src.odometer(i, k - w), src.odometer(i, k));
+    const Pose2 t = between(src.true_pose(i, k - w), src.true_pose(i, k));
+    tr += t.x * r.x + t.y * r.y;
+    rr += r.x * r.x + r.y * r.y;
+    a00 += r.theta * r.theta, a01 += r.theta * dt, a11 += dt * dt;
+    y0 += t.theta * r.theta, y1 += t.theta * dt;
+    f.reported_m += std::hypot(r.x, r.y);
+    f.reported_rad += std::fabs(r.theta);
+    ++f.steps;
+  }
+  if (rr > 0.0) f.speed_scale = tr / rr;
+  if (a00 > 0.0) f.turn_scale_without_bias = y0 / a00;
+  const double det = a00 * a11 - a01 * a01;
+  if (det > 1e-12 * a00 * a11) {
+    f.turn_scale = (y0 * a11 - y1 * a01) / det;
+    f.turn_bias_rad_s = (a00 * y1 - a01 * y0) / det;
+  } else {
+    f.turn_scale = f.turn_scale_without_bias;
+  }
+  return f;
+}
+
 }  // namespace elaslam::mrclam

@@ -648,6 +648,7 @@ node_status_t MainNode::status_msg(std::int64_t now_utime) const {
   s.frame = map_.newest_frame();
   s.node_kind = node_status_t::MAIN;
   s.node_id = 0;
+  s.odom_turn_scale = s.odom_speed_scale = 1.0f;  // no odometer of its own: the identity
   s.incarnation = incarnation_;
   for (int r = 1; r <= kMaxTeamRobots; ++r) {
     if (map_.duplicate_sender(r)) {

@@ -345,6 +345,27 @@ ELASLAM_MULTIVERSION bool predict_cross_rows(Index m, const double* __restrict c
   return sum == 0.0;
 }
 
+// The same with the odometer's calibration estimated (eq 5 on the vehicle block
+// V = [R; C], F_V = [[F_x, F_c], [0, I]]): each landmark row becomes
+// F_x l_R + F_c l_C, with l_C its columns 3..5 (pointers d0..d2 at its first row);
+// l_C itself is unchanged. Twice the reads of predict_cross_rows, the same writes.
+ELASLAM_MULTIVERSION bool predict_cross_rows_calibrated(Index m, const double* __restrict c0,
+                                                        const double* __restrict c1, const double* __restrict c2,
+                                                        const double* __restrict d0, const double* __restrict d1,
+                                                        const double* __restrict d2, const double (&F)[3][3],
+                                                        const double (&G)[3][3], double* __restrict t0,
+                                                        double* __restrict t1, double* __restrict t2) {
+  double sum = 0.0;
+  for (Index i = 0; i < m; ++i) {
+    const double a = c0[i], b = c1[i], c = c2[i], p = d0[i], q = d1[i], r = d2[i];
+    t0[i] = F[0][0] * a + F[0][1] * b + F[0][2] * c + (G[0][0] * p + G[0][1] * q + G[0][2] * r);
+    t1[i] = F[1][0] * a + F[1][1] * b + F[1][2] * c + (G[1][0] * p + G[1][1] * q + G[1][2] * r);
+    t2[i] = F[2][0] * a + F[2][1] * b + F[2][2] * c + (G[2][0] * p + G[2][1] * q + G[2][2] * r);
+    sum += 0.0 * (t0[i] + t1[i] + t2[i]);  // NaN or infinity anywhere makes it NaN
+  }
+  return sum == 0.0;
+}
+
 // The committed update's O(n) part: x += a0 v0 + a1 v1 and diag -= scale (a0 b0 + a1 b1).
 ELASLAM_MULTIVERSION void commit_rows(Index n, double* __restrict x, double* __restrict diag,
                                       const double* __restrict a0, const double* __restrict a1,

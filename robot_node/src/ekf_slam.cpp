@@ -1,6 +1,9 @@
 // Fixed-memory planar EKF-SLAM (DESIGN.md section 4): prediction (paper eqs 3-6),
 // correction (eqs 7-13), augmentation (eq 15) and mean(diag(P)) (eq 19) on the
-// state of eqs 1-2; ekf_slam.hpp lists where the other equations live.
+// state of eqs 1-2 with the odometer's calibration states (issue 42: updates need
+// no change for them, H has zero columns there, and every row of the gain comes
+// from P's columns like the landmarks'); ekf_slam.hpp lists where the other
+// equations live.
 //
 // Cost per call, n = state dimension: predict O(n), update O(n k) for the k-th
 // update in a row (its gain against P and the k - 1 covariance steps still
@@ -31,15 +34,39 @@ namespace elaslam {
 namespace {
 
 // Dimensions of the state layout's blocks, for fixed-size block expressions.
-constexpr int kR = StateLayout::kPoseDim;      // the robot R = (x, y, theta)
-constexpr int kL = StateLayout::kLandmarkDim;  // one landmark l = (x, y)
-constexpr int kObs = 2;                        // one observation (range, bearing)
+constexpr int kR = StateLayout::kPoseDim;         // the robot R = (x, y, theta)
+constexpr int kC = StateLayout::kCalibrationDim;  // the odometer's calibration C = (s_w, s_v, b)
+constexpr int kV = StateLayout::kVehicleDim;      // the vehicle block V = [R; C]
+constexpr int kL = StateLayout::kLandmarkDim;     // one landmark l = (x, y)
+constexpr int kCal = StateLayout::kCalibration;   // offset of C in X and P
+constexpr int kObs = 2;                           // one observation (range, bearing)
 
 using Matrix5 = Eigen::Matrix<double, kR + kL, kR + kL>;  // robot and one landmark
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool finite(const RangeBearing& z) { return std::isfinite(z.range) && std::isfinite(z.bearing); }
+
+// ---- the order of three-term sums, as before the calibration states ------------------
+//
+// add_landmark's P_lX = G_x P_RX^T and update_landmark_only's P_RX H_x^T are sums
+// of three products per entry. Before issue 42 they were Eigen expressions, and
+// Eigen's coefficient-based product added an entry up either left to right,
+// (a0 + a1) + a2 (two entries at once, in a vector register), or as a0 + (a1 + a2)
+// (one entry alone), depending on where the entry sat in memory in that layout (3
+// pose states; a leading dimension of 3 + 2 capacity, odd). The calibration states
+// moved every landmark by 3 states, and with it that choice for some entries: the
+// last bit of a few sums, and through them the golden results. These loops add up
+// every entry in the order the filter without calibration states used for it
+// (measured for every size up to 128 landmarks), so that with the states frozen
+// the filter is that one bit for bit (tests/golden; both orders are equally
+// exact), and they never allocate.
+//
+// The index of state i in that layout (-1: a calibration state, which had none).
+Index index_before(Index i) { return i < kCal ? i : (i < kV ? -1 : i - kC); }
+double sum3(double a0, double a1, double a2, bool left_to_right) {
+  return left_to_right ? (a0 + a1) + a2 : a0 + (a1 + a2);
+}
 
 // The 2x2 diagonal block at `off` from the lower triangle.
 Eigen::Matrix2d diagonal_block(const Eigen::MatrixXd& P, Index off) {
@@ -149,6 +176,16 @@ EkfSlam::EkfSlam(const EkfOptions& options) : options_(options) {
     fail("bearing_sigma must be finite and > 0 [rad]");
   if (!(options.gate_probability > 0.0 && options.gate_probability < 1.0))
     fail("gate_probability must be in (0, 1)");
+  const CalibrationOptions& c = options.calibration;
+  if (!(c.prior.turn_scale > 0.0) || !(c.prior.speed_scale > 0.0) || !std::isfinite(c.prior.turn_scale) ||
+      !std::isfinite(c.prior.speed_scale) || !std::isfinite(c.prior.turn_bias))
+    fail("calibration prior: scales must be finite and > 0, the turn bias finite");
+  for (double v : {c.turn_scale_sigma, c.speed_scale_sigma, c.turn_bias_sigma, c.turn_scale_walk, c.speed_scale_walk,
+                   c.turn_bias_walk})
+    if (!(v >= 0.0) || !std::isfinite(v)) fail("calibration sigmas and random walks must be finite and >= 0");
+  calibration_estimated_ = c.estimated();
+  calibration_walk_var_ << c.turn_scale_walk * c.turn_scale_walk, c.speed_scale_walk * c.speed_scale_walk,
+      c.turn_bias_walk * c.turn_bias_walk;
 
   W_ = Eigen::Vector2d(options.range_sigma * options.range_sigma,
                        options.bearing_sigma * options.bearing_sigma)
@@ -182,51 +219,93 @@ void EkfSlam::reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov) {
   x_.setZero();
   x_.head<kR>() << pose.x, pose.y, wrap_angle(pose.theta);
   P_.topLeftCorner<kR, kR>() = 0.5 * (pose_cov + pose_cov.transpose());
+  const CalibrationOptions& c = options_.calibration;
+  x_.segment<kC>(kCal) << c.prior.turn_scale, c.prior.speed_scale, c.prior.turn_bias;
+  P_.block<kC, kC>(kCal, kCal) =
+      Eigen::Vector3d(c.turn_scale_sigma * c.turn_scale_sigma, c.speed_scale_sigma * c.speed_scale_sigma,
+                      c.turn_bias_sigma * c.turn_bias_sigma)
+          .asDiagonal();
   upper_stale_ = false;
 }
 
 // ---- prediction (eqs 3-6) -----------------------------------------------------
 
-EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U) {
+EkfStatus EkfSlam::predict(const Pose2& increment, const Eigen::Matrix3d& U, double dt) {
   // U must be a covariance: finite, symmetric, non-negative variances. (Positive
   // semi-definiteness beyond that is the caller's; a negative variance it causes
-  // is refused below.)
+  // is refused below.) dt: finite and >= 0.
   const bool finite_u = std::isfinite(increment.x) && std::isfinite(increment.y) &&
-                        std::isfinite(increment.theta) && U.allFinite();
+                        std::isfinite(increment.theta) && U.allFinite() && std::isfinite(dt);
   if (!finite_u || (U - U.transpose()).cwiseAbs().maxCoeff() > 1e-9 * U.cwiseAbs().maxCoeff() ||
-      (U.diagonal().array() < 0.0).any()) {
+      (U.diagonal().array() < 0.0).any() || dt < 0.0) {
     return EkfStatus::kBadInput;
   }
   settle();
-  Eigen::Matrix3d F_x, F_u;
-  const Pose2 next = motion(pose(), increment, &F_x, &F_u);  // eq 4
-  const Index m = state_dim() - Layout::kPoseDim;             // landmark part of X
+  // The calibrated increment u(c) and its Jacobians du/dc, du/du_r (models.hpp).
+  Eigen::Matrix3d F_x, F_u, J_c, J_r;
+  const Pose2 u = calibrated_increment(increment, calibration(), dt, &J_c, &J_r);
+  const Pose2 next = motion(pose(), u, &F_x, &F_u);  // eq 4
+  const Index m = state_dim() - Layout::kVehicleDim;  // landmark part of X
+  // The reported increment's noise in u's coordinates: J_r U J_r^T, J_r diagonal
+  // (entry by entry, so that J_r = I leaves U's bits as they are).
+  const Eigen::Vector3d j = J_r.diagonal();
+  const Eigen::Matrix3d U_u = (U.array() * (j * j.transpose()).array()).matrix();
 
   // Compute into temporaries, commit only when healthy.
   Eigen::Matrix3d P_RR = F_x * P_.topLeftCorner<kR, kR>() * F_x.transpose() +
-                         F_u * U * F_u.transpose();  // eq 5, robot block
+                         F_u * U_u * F_u.transpose();  // eq 5, robot block
+  Eigen::Matrix3d F_c = Eigen::Matrix3d::Zero(), P_CR, P_CC;
+  if (calibration_estimated_) {
+    // eq 5 on V = [R; C] with F_V = [[F_x, F_c], [0, I]]: the terms through C. P_CR
+    // and P_CC are read from the lower triangle.
+    F_c = F_u * J_c;
+    const Eigen::Matrix3d P_CR_old = P_.block<kC, kR>(kCal, Layout::kX);
+    const Eigen::Matrix3d P_CC_old = P_.block<kC, kC>(kCal, kCal).selfadjointView<Eigen::Lower>();
+    const Eigen::Matrix3d A = F_x * P_CR_old.transpose() * F_c.transpose();
+    P_RR += A + A.transpose() + F_c * P_CC_old * F_c.transpose();
+    P_CR = P_CR_old * F_x.transpose() + P_CC_old * F_c.transpose();
+    P_CC = P_CC_old;
+    P_CC.diagonal() += calibration_walk_var_ * dt;  // the random walk over the step
+  }
   P_RR = 0.5 * (P_RR + P_RR.transpose()).eval();
-  // eq 5, cross terms: landmarks do not move, so P_LR <- P_LR F_x^T and no more.
-  // P_LR sits below the robot block (lower storage): each row becomes F_x times
-  // itself, computed into the m x 3 scratch first.
+  // eq 5, cross terms: landmarks do not move, so P_LR <- P_LR F_x^T (+ P_LC F_c^T
+  // with the calibration estimated) and no more. P_LR sits below the vehicle block
+  // (lower storage): each row becomes F_x times itself (plus F_c times its P_LC
+  // part), computed into the m x 3 scratch first.
   const double F[3][3] = {{F_x(0, 0), F_x(0, 1), F_x(0, 2)},
                           {F_x(1, 0), F_x(1, 1), F_x(1, 2)},
                           {F_x(2, 0), F_x(2, 1), F_x(2, 2)}};
   const Index ld = P_.outerStride();
+  const Index first = Layout::landmark_offset(0);
   double* t0 = tmp_rows_.col(0).data();
   double* t1 = tmp_rows_.col(1).data();
   double* t2 = tmp_rows_.col(2).data();
-  const bool cross_ok = predict_cross_rows(m, P_.data() + Layout::kPoseDim, P_.data() + ld + Layout::kPoseDim,
-                                           P_.data() + 2 * ld + Layout::kPoseDim, F, t0, t1, t2);
+  const double* col = P_.data() + first;  // column 0 at the first landmark row
+  bool cross_ok = false;
+  if (calibration_estimated_) {
+    const double G[3][3] = {{F_c(0, 0), F_c(0, 1), F_c(0, 2)},
+                            {F_c(1, 0), F_c(1, 1), F_c(1, 2)},
+                            {F_c(2, 0), F_c(2, 1), F_c(2, 2)}};
+    cross_ok = predict_cross_rows_calibrated(m, col, col + ld, col + 2 * ld, col + kCal * ld, col + (kCal + 1) * ld,
+                                             col + (kCal + 2) * ld, F, G, t0, t1, t2);
+  } else {
+    cross_ok = predict_cross_rows(m, col, col + ld, col + 2 * ld, F, t0, t1, t2);
+  }
   if (!P_RR.allFinite() || (P_RR.diagonal().array() < 0.0).any() || !cross_ok) {
     return EkfStatus::kCovarianceFault;
   }
+  if (calibration_estimated_ && (!P_CR.allFinite() || !P_CC.allFinite())) return EkfStatus::kCovarianceFault;
 
   x_.head<kR>() << next.x, next.y, next.theta;  // theta wrapped by compose()
   P_.topLeftCorner<kR, kR>() = P_RR;
-  std::copy(t0, t0 + m, P_.data() + Layout::kPoseDim);
-  std::copy(t1, t1 + m, P_.data() + ld + Layout::kPoseDim);
-  std::copy(t2, t2 + m, P_.data() + 2 * ld + Layout::kPoseDim);
+  if (calibration_estimated_) {
+    P_.block<kC, kR>(kCal, Layout::kX) = P_CR;
+    P_.block<kC, kC>(kCal, kCal) = P_CC;
+    upper_stale_ = true;
+  }
+  std::copy(t0, t0 + m, P_.data() + first);
+  std::copy(t1, t1 + m, P_.data() + ld + first);
+  std::copy(t2, t2 + m, P_.data() + 2 * ld + first);
   upper_stale_ = upper_stale_ || m > 0;
   return EkfStatus::kOk;
 }
@@ -296,8 +375,19 @@ UpdateReport EkfSlam::update_landmark_only(int id, const RangeBearing& z) {
   // P H^T (n x 2) from the robot columns (complete) and the landmark's columns.
   load_landmark_columns(off);
   auto PHt = PHt_.topRows(n);
-  PHt.noalias() = P_.leftCols<kR>().topRows(n) * inn.H.leftCols<kR>().transpose();
-  PHt.noalias() += lm_cols_.topRows(n) * inn.H.rightCols<kL>().transpose();
+  // The robot part's three-term sums in the order of before (index_before): left
+  // to right but for the last row of column 0 and the first of column 1 (that
+  // layout's odd sizes left them alone); the landmark part's two-term sums have
+  // one order.
+  const Index n_before = n - kC;
+  for (Index i = 0; i < n; ++i) {
+    const Index b = index_before(i);
+    for (int c = 0; c < kObs; ++c) {
+      const bool left_to_right = c == 0 ? b != n_before - 1 : b != 0;
+      const double robot = sum3(P_(i, 0) * inn.H(c, 0), P_(i, 1) * inn.H(c, 1), P_(i, 2) * inn.H(c, 2), left_to_right);
+      PHt(i, c) = robot + (lm_cols_(i, 0) * inn.H(c, kR) + lm_cols_(i, 1) * inn.H(c, kR + 1));
+    }
+  }
   // K_l = (P H^T)_l Z^-1 with Z = L L^T.
   const Eigen::Matrix2d Z = inn.L * inn.L.transpose();
   const Eigen::Matrix2d K_l = PHt.middleRows<kL>(off) * Z.inverse();
@@ -519,6 +609,8 @@ void EkfSlam::complete_upper_triangle() const {
 
 // Augmentation by the inverse observation (eq 15): l = g(R, y),
 //   P_ll = G_x P_RR G_x^T + G_z W G_z^T,  P_lX = G_x P_RX.
+// g depends on the pose alone: the new landmark's cross terms with the calibration
+// states are G_x P_RC (rows 3..5 of the robot columns, P_CR).
 EkfStatus EkfSlam::add_landmark(int id, const RangeBearing& z) {
   if (!valid_id(id) || !finite(z) || !(z.range > 0.0)) return EkfStatus::kBadInput;
   if (has_landmark(id)) return EkfStatus::kAlreadyMapped;
@@ -538,7 +630,14 @@ EkfStatus EkfSlam::add_landmark(int id, const RangeBearing& z) {
   // filter's state untouched if the result is refused below. P_RX^T is the
   // (complete) robot columns 0..2.
   auto P_lX = P_.block(off, 0, Layout::kLandmarkDim, n);
-  P_lX.noalias() = G_x * P_.leftCols<kR>().topRows(n).transpose();
+  // Column j summed in the order of before (index_before): left to right where
+  // its two rows were aligned in that layout, at odd columns (the new landmark's
+  // rows were at an odd offset and the leading dimension odd).
+  for (Index j = 0; j < n; ++j) {
+    const bool left_to_right = index_before(j) % 2 != 0;
+    for (int r = 0; r < kL; ++r)
+      P_lX(r, j) = sum3(G_x(r, 0) * P_(j, 0), G_x(r, 1) * P_(j, 1), G_x(r, 2) * P_(j, 2), left_to_right);
+  }
   if (!p_LinW.allFinite() || !P_ll.allFinite() || (P_ll.diagonal().array() < 0.0).any() ||
       !P_lX.allFinite()) {
     P_lX.setZero();  // outside the active block P_ stays zero
@@ -683,6 +782,15 @@ int EkfSlam::slot_of(int id) const {
 
 Pose2 EkfSlam::pose() const { return {x_(Layout::kX), x_(Layout::kY), x_(Layout::kTheta)}; }
 
+OdometryCalibration EkfSlam::calibration() const {
+  return {x_(Layout::kTurnScale), x_(Layout::kSpeedScale), x_(Layout::kTurnBias)};
+}
+
+Eigen::Matrix3d EkfSlam::calibration_cov() const {
+  settle();
+  return P_.block<kC, kC>(kCal, kCal).selfadjointView<Eigen::Lower>();
+}
+
 Eigen::Matrix3d EkfSlam::pose_cov() const {
   settle();
   return P_.topLeftCorner<kR, kR>();
@@ -719,9 +827,13 @@ Eigen::Matrix<double, 3, 2> EkfSlam::pose_landmark_cov(int id) const {
   return P_.block<kL, kR>(Layout::landmark_offset(slot), 0).transpose();
 }
 
-double EkfSlam::mean_diag() const {  // eq 19
+double EkfSlam::mean_diag() const {  // eq 19, over R and M (not C)
   settle();
-  return P_.diagonal().head(state_dim()).mean();
+  // Summed in index order, as Eigen's mean() of the diagonal sums it.
+  double sum = P_(Layout::kX, Layout::kX);
+  for (Index i = Layout::kY; i < state_dim(); ++i)
+    if (i < kCal || i >= kCal + kC) sum += P_(i, i);
+  return sum / static_cast<double>(state_dim() - kC);
 }
 
 }  // namespace elaslam

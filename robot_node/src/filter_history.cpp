@@ -30,10 +30,11 @@ FilterHistory::Op sighting(FilterHistory::Kind kind, int frame, int id, const Ra
 
 }  // namespace
 
-FilterHistory::Op FilterHistory::predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U) {
+FilterHistory::Op FilterHistory::predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt) {
   Op op = op_of(Kind::kPredict, frame, -1);
   op.increment = increment;
   op.U = U;
+  op.dt = dt;
   return op;
 }
 FilterHistory::Op FilterHistory::update(int frame, int id, const RangeBearing& z) {
@@ -115,7 +116,7 @@ EkfStatus FilterHistory::restore(const Eigen::VectorXd& x, const Eigen::MatrixXd
 
 bool FilterHistory::apply(const Op& op, EkfSlam* f) {
   switch (op.kind) {
-    case Kind::kPredict: return f->predict(op.increment, op.U) == EkfStatus::kOk;
+    case Kind::kPredict: return f->predict(op.increment, op.U, op.dt) == EkfStatus::kOk;
     case Kind::kUpdate: return f->update(op.id, op.z, false).status == EkfStatus::kOk;
     case Kind::kLandmarkOnly: return f->update_landmark_only(op.id, op.z).status == EkfStatus::kOk;
     case Kind::kPosition: return f->update_position(op.id, op.p, op.R).status == EkfStatus::kOk;

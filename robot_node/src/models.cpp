@@ -1,6 +1,6 @@
-// Motion and observation models (paper eqs 3, 6, 7, 13, 15). Pure functions; the
-// Jacobians are analytic and checked against central differences in
-// tests/robot_node/test_models.cpp.
+// Motion and observation models (paper eqs 3, 6, 7, 13, 15) and the odometer's
+// calibration (issue 42). Pure functions; the Jacobians are analytic and checked
+// against central differences in tests/robot_node/test_models.cpp.
 #include "elaslam/robot_node/models.hpp"
 
 #include <algorithm>
@@ -43,6 +43,20 @@ Pose2 motion(const Pose2& pose, const Pose2& increment, Eigen::Matrix3d* F_x,
         0.0, 0.0, 1.0;
   }
   return compose(pose, increment);  // eq 3 (compose wraps the new heading)
+}
+
+Pose2 calibrated_increment(const Pose2& reported, const OdometryCalibration& c, double dt, Eigen::Matrix3d* J_c,
+                           Eigen::Matrix3d* J_r) {
+  if (J_c != nullptr) {
+    // Columns s_w, s_v, b: the scales multiply their own components, the bias
+    // integrates over the step.
+    *J_c << 0.0, reported.x, 0.0,  //
+        0.0, reported.y, 0.0,      //
+        reported.theta, 0.0, dt;
+  }
+  if (J_r != nullptr) *J_r = Eigen::Vector3d(c.speed_scale, c.speed_scale, c.turn_scale).asDiagonal();
+  // Not wrapped: compose() wraps the heading it produces.
+  return {c.speed_scale * reported.x, c.speed_scale * reported.y, c.turn_scale * reported.theta + c.turn_bias * dt};
 }
 
 Eigen::Matrix3d odometry_covariance(const Pose2& increment, const OdometryNoise& noise) {

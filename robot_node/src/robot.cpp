@@ -119,14 +119,24 @@ void Robot::check_consistency(FrameSummary* s) {
   if (!s->inconsistent || !options_.consistency_recover) return;
   const double xy = options_.recovery_sigma_xy * options_.recovery_sigma_xy;
   const double th = options_.recovery_sigma_theta * options_.recovery_sigma_theta;
-  mirror_predict(last_frame_, Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), s);
+  mirror_predict(last_frame_, Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), /*dt=*/0.0, s);
   monitor_.restart();
   s->recovered = true;
 }
 
+double Robot::step_seconds(const FrameInput& in) const {
+  const double frames = std::max(1, in.frame - last_frame_);
+  // In doubles: the stamps are the sender's, and any two int64 may be subtracted.
+  const double dt = (static_cast<double>(in.utime) - static_cast<double>(last_utime_)) * 1e-6;
+  return std::clamp(dt, 0.0, kMaxFramePeriodS * frames);
+}
+
 // Prediction from the odometer increment (eqs 4-5). The first frame sets the prior
 // at the odometer reading: robots start at known poses (paper section 4), and the
-// odometry frame O of each robot coincides with W at its start.
+// odometry frame O of each robot coincides with W at its start; the odometer's
+// calibration states start at their prior (EkfSlam::reset). Each increment is the
+// odometer's reported one: the filter applies its calibration estimate over the
+// time the step spans (step_seconds).
 void Robot::predict(const FrameInput& in, FrameSummary* s) {
   if (!initialised_) {
     Eigen::Matrix3d P0 = Eigen::Matrix3d::Zero();
@@ -144,18 +154,21 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     restart_history();
   } else if (in.reanchor) {
     // A new odometer origin: no increment, and the frames since the last one driven
-    // anywhere within the vehicle's bounds.
+    // anywhere within the vehicle's bounds. (The calibration's random walk still
+    // spans the time; its bias turns the robot by b dt, well inside this U.)
     const double k = std::max(1, in.frame - last_frame_);
     const double step = options_.max_step_m * k, turn = std::min(kPi, options_.max_turn * k);
     const Eigen::Matrix3d U = Eigen::Vector3d(step * step, step * step, turn * turn).asDiagonal();
-    mirror_predict(in.frame, Pose2{}, U, s);
+    mirror_predict(in.frame, Pose2{}, U, step_seconds(in), s);
   } else {
     // Frames missed since the last one (in.frame - last_frame_ > 1): the increment
     // spans them all, and its noise is theirs compounded.
     const Pose2 increment = between(last_odometer_, in.odometer);
-    mirror_predict(in.frame, increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise), s);
+    mirror_predict(in.frame, increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise),
+                   step_seconds(in), s);
   }
   last_odometer_ = in.odometer;
+  last_utime_ = in.utime;
 }
 
 // Modes ekf and gated: every observation of a mapped landmark corrects the filter
@@ -464,9 +477,10 @@ bool Robot::apply_notice(int landmark_id, int frame) {
 
 // ---- the own and the aided filter (team_aid.hpp) ------------------------------------
 
-EkfStatus Robot::mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s) {
-  const FilterHistory::Op op = FilterHistory::predict(frame, increment, U);
-  const EkfStatus st = ekf_.predict(increment, U);
+EkfStatus Robot::mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt,
+                                FrameSummary* s) {
+  const FilterHistory::Op op = FilterHistory::predict(frame, increment, U, dt);
+  const EkfStatus st = ekf_.predict(increment, U, dt);
   if (st == EkfStatus::kOk) {
     history_.record(op);
   } else {

@@ -210,6 +210,7 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
 
   const auto t0 = std::chrono::steady_clock::now();
   input_.frame = msg.frame;
+  input_.utime = msg.utime;
   input_.odometer = {msg.odom_x, msg.odom_y, wrap_angle(msg.odom_theta)};
   input_.noise = {msg.odom_var_trans_per_m, msg.odom_var_rot_per_rad, msg.odom_var_rot_per_m};
   input_.num_obs = msg.num_obs;
@@ -720,6 +721,18 @@ node_status_t RobotNode::status_msg(std::int64_t now_utime) const {
   s.processing_us_p50 = static_cast<int32_t>(processing_.quantile(0.5));
   s.processing_us_p99 = static_cast<int32_t>(processing_.quantile(0.99));
   s.processing_us_max = static_cast<int32_t>(std::min<std::int64_t>(processing_.max(), INT32_MAX));
+  // The odometer's calibration as the own filter estimates it (the configured
+  // constants, sigma 0, while frozen; before the first frame, the prior's means).
+  const EkfSlam& f = robot_.filter();
+  const OdometryCalibration c = f.calibration();
+  const Eigen::Matrix3d C = f.calibration_cov();
+  const auto sigma = [&C](int k) { return static_cast<float>(std::sqrt(std::max(C(k, k), 0.0))); };
+  s.odom_turn_scale = static_cast<float>(c.turn_scale);
+  s.odom_turn_scale_sigma = sigma(0);
+  s.odom_speed_scale = static_cast<float>(c.speed_scale);
+  s.odom_speed_scale_sigma = sigma(1);
+  s.odom_turn_bias_rad_s = static_cast<float>(c.turn_bias);
+  s.odom_turn_bias_sigma_rad_s = sigma(2);
   return s;
 }
 

@@ -101,6 +101,24 @@ void parse(config::Reader& r, RobotOptions* o) {
         o->recovery_sigma_theta = deg2rad(deg);
       },
       /*optional=*/true);
+  // The odometer's calibration states (issue 42; EkfSlam, CalibrationOptions): prior
+  // mean and std dev, random walk per sqrt(second). All sigmas and walks 0 (the
+  // defaults): frozen at the means.
+  r.section(
+      "odometry_calibration",
+      [&](config::Reader& c) {
+        CalibrationOptions& k = o->ekf.calibration;
+        c.read_optional("turn_scale", &k.prior.turn_scale, 0.5, 2.0);
+        c.read_optional("turn_scale_sigma", &k.turn_scale_sigma, 0.0, 1.0);
+        c.read_optional("turn_scale_walk_per_sqrt_s", &k.turn_scale_walk, 0.0, 1.0);
+        c.read_optional("speed_scale", &k.prior.speed_scale, 0.5, 2.0);
+        c.read_optional("speed_scale_sigma", &k.speed_scale_sigma, 0.0, 1.0);
+        c.read_optional("speed_scale_walk_per_sqrt_s", &k.speed_scale_walk, 0.0, 1.0);
+        c.read_optional("turn_bias_rad_s", &k.prior.turn_bias, -1.0, 1.0);
+        c.read_optional("turn_bias_sigma_rad_s", &k.turn_bias_sigma, 0.0, 1.0);
+        c.read_optional("turn_bias_walk_rad_s_per_sqrt_s", &k.turn_bias_walk, 0.0, 1.0);
+      },
+      /*optional=*/true);
   r.section(
       "team_map",
       [&](config::Reader& t) {

@@ -31,6 +31,12 @@ constexpr double kPsdTolerance = 1e-9;    // LDLT pivots >= -tol * max(1, max di
 constexpr int kMaxFrame = std::numeric_limits<int>::max();
 constexpr int kMinReportedFrame = -1000000;  // LMapEntry::reported_frame's "never"
 constexpr std::size_t kMaxHistoryOps = 1000000;  // robot.history.ops (a ring holds far fewer)
+// The odometer's calibration states (StateLayout::kTurnScale..kTurnBias): a scale
+// outside these, or a bias beyond this, is no odometer's.
+constexpr double kMinScale = 0.01, kMaxScale = 100.0;
+constexpr double kMaxTurnBias = 100.0;  // [rad/s]
+constexpr double kMaxStepSeconds = 1e6;  // [s] a history operation's dt
+constexpr double kMaxUtime = 1e18;       // [us]
 
 struct StateError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -251,6 +257,7 @@ json RobotStateAccess::save_history(const FilterHistory& h) {
         j.push_back(json::array({op.increment.x, op.increment.y, op.increment.theta}));
         j.push_back(json::array({op.U(0, 0), op.U(0, 1), op.U(0, 2), op.U(1, 0), op.U(1, 1), op.U(1, 2), op.U(2, 0),
                                  op.U(2, 1), op.U(2, 2)}));
+        j.push_back(op.dt);
         break;
       case FilterHistory::Kind::kUpdate:
       case FilterHistory::Kind::kLandmarkOnly:
@@ -287,7 +294,8 @@ json RobotStateAccess::save(const RobotNode& n) {
   const RobotOptions& o = r.options();
   json robot = {{"initialised", r.initialised_},
                 {"last_frame", r.last_frame_},
-                {"last_odometer", json::array({r.last_odometer_.x, r.last_odometer_.y, r.last_odometer_.theta})}};
+                {"last_odometer", json::array({r.last_odometer_.x, r.last_odometer_.y, r.last_odometer_.theta})},
+                {"last_utime", r.last_utime_}};
   // What the robot saw lately of its own trouble (a lost robot: Robot::apply_team_map)
   // and the consistency monitor's window: optional keys (absent in files of before
   // 2026-12-03: the window starts empty).
@@ -417,6 +425,7 @@ void RobotStateAccess::load_robot(const json& s, Robot* r, int node_last_frame) 
   r->last_odometer_.x = real(odo[0], "robot.last_odometer[0]", -bound, bound);
   r->last_odometer_.y = real(odo[1], "robot.last_odometer[1]", -bound, bound);
   r->last_odometer_.theta = real(odo[2], "robot.last_odometer[2]", -kPi - kAngleSlack, kPi + kAngleSlack);
+  r->last_utime_ = whole(need(robot, "robot", "last_utime"), "robot.last_utime", -kMaxUtime, kMaxUtime);
   r->trouble_frame_ = -1;
   if (robot.contains("trouble_frame"))
     r->trouble_frame_ = static_cast<int>(whole(robot.at("trouble_frame"), "robot.trouble_frame", -1, r->last_frame_));
@@ -451,9 +460,11 @@ void RobotStateAccess::parse_filter(const json& f, const std::string& key, const
   const json& mean = array(need(f, key, "mean"), key + ".mean", n_mean, n_mean);
   Eigen::VectorXd x(dim);
   for (Eigen::Index i = 0; i < dim; ++i) {
-    const bool heading = i == StateLayout::kTheta;
-    x(i) = real(mean[static_cast<std::size_t>(i)], key + ".mean[" + std::to_string(i) + "]",
-                heading ? -kPi - kAngleSlack : -lim.world_bound, heading ? kPi + kAngleSlack : lim.world_bound);
+    double lo = -lim.world_bound, hi = lim.world_bound;  // positions
+    if (i == StateLayout::kTheta) lo = -kPi - kAngleSlack, hi = kPi + kAngleSlack;
+    if (i == StateLayout::kTurnScale || i == StateLayout::kSpeedScale) lo = kMinScale, hi = kMaxScale;
+    if (i == StateLayout::kTurnBias) lo = -kMaxTurnBias, hi = kMaxTurnBias;
+    x(i) = real(mean[static_cast<std::size_t>(i)], key + ".mean[" + std::to_string(i) + "]", lo, hi);
   }
   const json& lower = array(need(f, key, "cov_lower"), key + ".cov_lower", n_lower, n_lower);
   Eigen::MatrixXd P(dim, dim);
@@ -465,6 +476,17 @@ void RobotStateAccess::parse_filter(const json& f, const std::string& key, const
       if (i == j && P(i, i) < 0.0) fail(w, "negative variance " + num(P(i, i)));
       if (i == j && P(i, i) > lim.cov_ceiling) fail(w, "variance " + num(P(i, i)) + " above limits.cov_ceiling_m2 " + num(lim.cov_ceiling));
     }
+  // Calibration states frozen by this node's configuration: exactly its constants,
+  // uncorrelated with anything (a file saved with them estimated is another filter).
+  if (!o.calibration.estimated()) {
+    const OdometryCalibration& c = o.calibration.prior;
+    const Eigen::Vector3d want(c.turn_scale, c.speed_scale, c.turn_bias);
+    const auto C = StateLayout::kCalibration, nc = StateLayout::kCalibrationDim;
+    if (x.segment(C, nc) != want || !P.middleRows(C, nc).isZero(0.0))
+      fail(key + ".mean[" + std::to_string(C) + ".." + std::to_string(C + nc - 1) + "]",
+           "the odometer's calibration states differ from robot.odometry_calibration's frozen constants (a file "
+           "saved with them estimated)");
+  }
   // Each landmark's own 2x2 block: what its snapshot would carry, so the same bounds.
   for (std::size_t slot = 0; slot < slot_ids.size(); ++slot) {
     const Eigen::Index o2 = StateLayout::landmark_offset(static_cast<int>(slot));
@@ -550,7 +572,7 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
   int previous = 0;  // frames in order, none after the robot's last
   for (std::size_t k = 0; k < ops.size(); ++k) {
     const std::string w = key + ".ops[" + std::to_string(k) + "]";
-    const json& j = array(ops[k], w, 3, 5);
+    const json& j = array(ops[k], w, 3, 6);
     FilterHistory::Op op;
     const json& kind = j[0];
     bool known = false;
@@ -562,9 +584,10 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
     previous = op.frame;
     const bool predict = op.kind == FilterHistory::Kind::kPredict;
     op.id = static_cast<int>(whole(j[2], w + "[2] (id)", predict ? -1 : 0, predict ? -1 : max_id));
-    const std::size_t values = predict || op.kind == FilterHistory::Kind::kPosition ? 2
-                               : op.kind == FilterHistory::Kind::kRemove         ? 0
-                                                                                  : 1;
+    const std::size_t values = predict                                       ? 3
+                               : op.kind == FilterHistory::Kind::kPosition ? 2
+                               : op.kind == FilterHistory::Kind::kRemove   ? 0
+                                                                           : 1;
     if (j.size() != 3 + values) fail(w, "has " + std::to_string(j.size()) + " entries, a " + FilterHistory::to_string(op.kind) + " has " + std::to_string(3 + values));
     switch (op.kind) {
       case FilterHistory::Kind::kPredict: {
@@ -577,6 +600,7 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
         const double scale = std::max(op.U.trace(), 1e-300);
         if ((op.U.diagonal().array() < 0.0).any()) fail(w + "[4] (U)", "negative variance");
         if ((op.U - op.U.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail(w + "[4] (U)", "not symmetric");
+        op.dt = real(j[5], w + "[5] (dt)", 0.0, kMaxStepSeconds);
         break;
       }
       case FilterHistory::Kind::kUpdate:

@@ -112,6 +112,7 @@ void SimNode::publish_status(int frame) {
   m.frame = frame;
   m.node_kind = node_status_t::SIMULATOR;
   m.node_id = 0;
+  m.odom_turn_scale = m.odom_speed_scale = 1.0f;  // no odometer of its own: the identity
   m.frames = stats_.published;
   m.frames_dropped = publish_errors_;  // the simulator loses a frame only if publish fails
   m.rejected_inputs = waiter_ ? waiter_->rejected() : 0;

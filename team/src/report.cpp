@@ -92,6 +92,13 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
       r["relocalised"] = rm.relocalised;
       r["own_drifted_frames"] = rm.own_drifted_frames;
     }
+    if (rm.calibration_estimated)  // robot.odometry_calibration on (absent otherwise)
+      r["odometry_calibration"] = {{"turn_scale", rm.turn_scale},
+                                   {"turn_scale_sigma", rm.turn_scale_sigma},
+                                   {"speed_scale", rm.speed_scale},
+                                   {"speed_scale_sigma", rm.speed_scale_sigma},
+                                   {"turn_bias_rad_s", rm.turn_bias_rad_s},
+                                   {"turn_bias_sigma_rad_s", rm.turn_bias_sigma_rad_s}};
     robots.push_back(std::move(r));
   }
   j["robots"] = robots;

@@ -266,6 +266,15 @@ RunResult InProcessTeam::finish() {
       rm.team_lost = node.robot().team_counters().lost;
       rm.relocalised = node.robot().team_counters().relocalised;
       rm.own_drifted_frames = node.counters().own_drifted_frames;
+      const EkfSlam& f = node.robot().filter();
+      if (f.calibration_estimated()) {
+        const OdometryCalibration c = f.calibration();
+        const Eigen::Vector3d sigma = f.calibration_cov().diagonal().cwiseMax(0.0).cwiseSqrt();
+        rm.calibration_estimated = true;
+        rm.turn_scale = c.turn_scale, rm.turn_scale_sigma = sigma(0);
+        rm.speed_scale = c.speed_scale, rm.speed_scale_sigma = sigma(1);
+        rm.turn_bias_rad_s = c.turn_bias, rm.turn_bias_sigma_rad_s = sigma(2);
+      }
     }
   for (int id = 0; id < main_.map().max_landmark_id(); ++id) {
     const GlobalEntry& g = main_.map().entry(id);

@@ -8,14 +8,15 @@ top-level list (report.json) is read as its elements; the effective `config` obj
 is one documented key (its keys are config/paper.yaml's). The dictionary's tables
 list keys in backticks in their first column; "`a.p50`, `.p99`" continues the
 previous key's stem; <R> is a robot id, <CHANNEL> a channel, <Q> range_m or
-bearing_rad, <KEY> and * anything. Exit 1 naming every undocumented key.
+bearing_rad, <SPAN> run, first_half or second_half, <KEY> and * anything. Exit 1 naming every undocumented key.
 """
 import csv
 import json
 import re
 import sys
 
-PLACEHOLDERS = {"<R>": r"\d+", "<CHANNEL>": r"[A-Za-z0-9_]+", "<Q>": r"(range_m|bearing_rad)", "<KEY>": r".+"}
+PLACEHOLDERS = {"<R>": r"\d+", "<CHANNEL>": r"[A-Za-z0-9_]+", "<Q>": r"(range_m|bearing_rad)",
+                "<SPAN>": r"(run|first_half|second_half)", "<KEY>": r".+"}
 
 
 def documented(path):

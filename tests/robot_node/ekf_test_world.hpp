@@ -20,30 +20,46 @@ using Vec2 = Eigen::Vector2d;
 
 // ---- dense textbook EKF: the known answer ------------------------------------------
 
-// Full X, full P, dense Jacobians of the whole state; eqs 4-5, 8-12 and 15 as
-// printed, with O(n^3) products. Landmarks are kept in insertion order and removed
+// Full X = [R; C; M], full P, dense Jacobians of the whole state; eqs 4-5, 8-12 and
+// 15 as printed, with O(n^3) products; the odometer's calibration states C as
+// issue 42 states them (F_V = [[F_x, F_u du/dc], [0, I]], noise F_u J_r U J_r^T F_u^T,
+// random walk over dt), propagated densely whether estimated or frozen. Landmarks are kept in insertion order and removed
 // by deleting their rows and columns, so slots differ from EkfSlam's after a removal:
 // the comparison goes by id.
 class DenseEkf {
  public:
-  explicit DenseEkf(const EkfOptions& o) : joseph_(o.joseph) {
+  explicit DenseEkf(const EkfOptions& o) : joseph_(o.joseph), cal_(o.calibration) {
     W_ = Vec2(o.range_sigma * o.range_sigma, o.bearing_sigma * o.bearing_sigma).asDiagonal();
   }
   void reset(const Pose2& pose, const Eigen::Matrix3d& cov) {
-    X_ = Eigen::Vector3d(pose.x, pose.y, pose.theta);
-    P_ = cov;
+    X_ = Eigen::VectorXd(Layout::kVehicleDim);
+    X_ << pose.x, pose.y, pose.theta, cal_.prior.turn_scale, cal_.prior.speed_scale, cal_.prior.turn_bias;
+    P_ = Eigen::MatrixXd::Zero(Layout::kVehicleDim, Layout::kVehicleDim);
+    P_.topLeftCorner<3, 3>() = cov;
+    P_.block<3, 3>(Layout::kCalibration, Layout::kCalibration) =
+        Eigen::Vector3d(cal_.turn_scale_sigma * cal_.turn_scale_sigma, cal_.speed_scale_sigma * cal_.speed_scale_sigma,
+                        cal_.turn_bias_sigma * cal_.turn_bias_sigma)
+            .asDiagonal();
     ids_.clear();
   }
-  void predict(const Pose2& u, const Eigen::Matrix3d& U) {
+  void predict(const Pose2& u_reported, const Eigen::Matrix3d& U, double dt = 0.0) {
     const Eigen::Index n = X_.size();
-    Eigen::Matrix3d F_x, F_u;
+    const OdometryCalibration c{X_(Layout::kTurnScale), X_(Layout::kSpeedScale), X_(Layout::kTurnBias)};
+    Eigen::Matrix3d F_x, F_u, J_c, J_r;
+    const Pose2 u = calibrated_increment(u_reported, c, dt, &J_c, &J_r);
     const Pose2 next = motion(pose(), u, &F_x, &F_u);
     Eigen::MatrixXd F = Eigen::MatrixXd::Identity(n, n);
     F.topLeftCorner<3, 3>() = F_x;
+    F.block<3, 3>(0, Layout::kCalibration) = F_u * J_c;
     Eigen::MatrixXd G = Eigen::MatrixXd::Zero(n, 3);
-    G.topRows<3>() = F_u;
+    G.topRows<3>() = F_u * J_r;
+    Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(n, n);
+    Q.block<3, 3>(Layout::kCalibration, Layout::kCalibration) =
+        (dt * Eigen::Vector3d(cal_.turn_scale_walk * cal_.turn_scale_walk, cal_.speed_scale_walk * cal_.speed_scale_walk,
+                              cal_.turn_bias_walk * cal_.turn_bias_walk))
+            .asDiagonal();
     X_.head<3>() << next.x, next.y, next.theta;
-    P_ = (F * P_ * F.transpose() + G * U * G.transpose()).eval();
+    P_ = (F * P_ * F.transpose() + G * U * G.transpose() + Q).eval();
   }
   // The dense H (2 x n), innovation and its covariance of an observation of `id`.
   void linearise(int id, const RangeBearing& y, Eigen::MatrixXd* H, Vec2* nu, Eigen::Matrix2d* Z) const {
@@ -115,7 +131,7 @@ class DenseEkf {
     }
     X_ = X;
     P_ = P;
-    ids_.erase(ids_.begin() + (off - 3) / 2);
+    ids_.erase(ids_.begin() + (off - Layout::kVehicleDim) / 2);
   }
 
   Pose2 pose() const { return {X_(0), X_(1), X_(2)}; }
@@ -145,6 +161,7 @@ class DenseEkf {
     return 0;
   }
   bool joseph_;
+  CalibrationOptions cal_;
   Eigen::Matrix2d W_;
   Eigen::VectorXd X_;
   Eigen::MatrixXd P_;
@@ -154,7 +171,7 @@ class DenseEkf {
 // Largest difference between the two filters, matching landmarks by id.
 inline double max_difference(const EkfSlam& ekf, const DenseEkf& ref) {
   if (ekf.state_dim() != ref.X().size()) return HUGE_VAL;
-  std::vector<Eigen::Index> index = {0, 1, 2};  // reference index -> EkfSlam index
+  std::vector<Eigen::Index> index = {0, 1, 2, 3, 4, 5};  // reference index -> EkfSlam index (the vehicle block)
   for (const int id : ref.ids()) {
     const int slot = ekf.slot_of(id);
     if (slot < 0) return HUGE_VAL;
@@ -203,6 +220,7 @@ struct RandomWorld {
 };
 
 inline const OdometryNoise kOdoNoise{1e-3, 1e-3, 1e-4};
+inline constexpr double kStepSeconds = 0.1;  // [s] the time each random prediction spans
 
 struct OpCounts {
   int predicts = 0, updates = 0, adds = 0, removes = 0;
@@ -218,8 +236,8 @@ inline OpCounts random_operation(RandomWorld& w, EkfSlam& ekf, DenseEkf* ref,
   if (r < 0.3) {
     const Pose2 u = w.move();
     const Eigen::Matrix3d U = odometry_covariance(u, kOdoNoise);
-    EXPECT_EQ(ekf.predict(u, U), EkfStatus::kOk);
-    if (ref != nullptr) ref->predict(u, U);
+    EXPECT_EQ(ekf.predict(u, U, kStepSeconds), EkfStatus::kOk);
+    if (ref != nullptr) ref->predict(u, U, kStepSeconds);
     c.predicts = 1;
   } else if (r < 0.7 && n > 0) {
     const int id = ekf.id_at(w.pick(n));

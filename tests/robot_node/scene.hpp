@@ -63,12 +63,16 @@ inline EkfSlam mapped_filter(const Pose2& pose, const std::vector<Eigen::Vector2
 class WorldSampler {
  public:
   WorldSampler(const EkfSlam& ekf, int num_landmarks)
-      : ekf_(ekf), n_(num_landmarks), mean_(ekf.mean()), L_(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance()).matrixL()) {}
+      : ekf_(ekf), n_(num_landmarks), mean_(ekf.mean()), L_(Eigen::LLT<Eigen::MatrixXd>(sampled_cov(ekf)).matrixL()) {}
   /// One draw: the true pose, the true landmarks, and the whole state x.
   void draw(std::mt19937_64* rng, Pose2* pose, std::vector<Eigen::Vector2d>* landmarks, Eigen::VectorXd* x = nullptr) const {
     std::normal_distribution<double> n01;
-    Eigen::VectorXd n(mean_.size());
-    for (Eigen::Index i = 0; i < n.size(); ++i) n[i] = n01(*rng);
+    Eigen::VectorXd n = Eigen::VectorXd::Zero(mean_.size());
+    const bool frozen = !ekf_.calibration_estimated();
+    for (Eigen::Index i = 0; i < n.size(); ++i) {
+      const bool calibration = i >= StateLayout::kCalibration && i < StateLayout::kVehicleDim;
+      if (!(frozen && calibration)) n[i] = n01(*rng);  // frozen: constants, no draw (sampled_cov)
+    }
     const Eigen::VectorXd s = mean_ + L_ * n;
     *pose = Pose2{s[0], s[1], s[2]};
     landmarks->clear();
@@ -77,6 +81,13 @@ class WorldSampler {
   }
 
  private:
+  // P, with a frozen calibration's zero block (constants: no variance, which a
+  // Cholesky factor does not take) replaced by the identity, and set back after each draw.
+  static Eigen::MatrixXd sampled_cov(const EkfSlam& ekf) {
+    Eigen::MatrixXd P = ekf.covariance();
+    if (!ekf.calibration_estimated()) P.block<3, 3>(StateLayout::kCalibration, StateLayout::kCalibration).setIdentity();
+    return P;
+  }
   const EkfSlam& ekf_;
   int n_;
   Eigen::VectorXd mean_;

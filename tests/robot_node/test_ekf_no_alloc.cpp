@@ -12,6 +12,8 @@
 #include <limits>
 #include <new>
 #include <random>
+#include <string>
+#include <tuple>
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
@@ -47,7 +49,7 @@ void run_frames(EkfSlam& ekf, std::mt19937_64& rng, int frames, Tally* tally) {
   const int max_id = ekf.options().max_landmark_id;
   for (int f = 0; f < frames; ++f) {
     const Pose2 u{0.3 + 0.1 * uni(rng), 0.05 * uni(rng), 0.1 * uni(rng)};
-    tally->add(ekf.predict(u, odometry_covariance(u, OdometryNoise{1e-3, 1e-3, 1e-4})));
+    tally->add(ekf.predict(u, odometry_covariance(u, OdometryNoise{1e-3, 1e-3, 1e-4}), 0.1));
     for (int k = 0; k < 12; ++k) {
       const int id = static_cast<int>((uni(rng) + 1.0) * 0.5 * (max_id - 1));
       const RangeBearing z{5.0 + 3.0 * uni(rng), 3.0 * uni(rng)};
@@ -97,13 +99,20 @@ void run_frames(EkfSlam& ekf, std::mt19937_64& rng, int frames, Tally* tally) {
   }
 }
 
-class EkfNoAlloc : public ::testing::TestWithParam<bool> {};
+// Parameters: (Joseph form, the odometer's calibration estimated).
+class EkfNoAlloc : public ::testing::TestWithParam<std::tuple<bool, bool>> {};
 
 TEST_P(EkfNoAlloc, FramePathAllocatesNothing) {
   EkfOptions o;
   o.capacity = 24;
   o.max_landmark_id = 40;
-  o.joseph = GetParam();
+  o.joseph = std::get<0>(GetParam());
+  if (std::get<1>(GetParam())) {
+    o.calibration.turn_scale_sigma = o.calibration.speed_scale_sigma = 0.1;
+    o.calibration.turn_bias_sigma = 0.01;
+    o.calibration.turn_scale_walk = o.calibration.speed_scale_walk = 1e-3;
+    o.calibration.turn_bias_walk = 1e-4;
+  }
   EkfSlam ekf(o);  // all allocation happens here
   ekf.reset({0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
   std::mt19937_64 rng(4242);
@@ -124,11 +133,13 @@ TEST_P(EkfNoAlloc, FramePathAllocatesNothing) {
   EXPECT_EQ(tally.of(EkfStatus::kCovarianceFault), 0);
   EXPECT_EQ(tally.of(EkfStatus::kSingular), 0);
   EXPECT_GT(ekf.num_landmarks(), 0);
+  EXPECT_EQ(ekf.calibration_cov()(0, 0) > 0.0, std::get<1>(GetParam()));
 }
 
-INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfNoAlloc, ::testing::Bool(),
-                         [](const ::testing::TestParamInfo<bool>& i) {
-                           return i.param ? std::string("Joseph") : std::string("Standard");
+INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfNoAlloc, ::testing::Combine(::testing::Bool(), ::testing::Bool()),
+                         [](const ::testing::TestParamInfo<std::tuple<bool, bool>>& i) {
+                           return std::string(std::get<0>(i.param) ? "Joseph" : "Standard") +
+                                  (std::get<1>(i.param) ? "Calibrated" : "");
                          });
 
 TEST(EkfNoAllocGuard, CounterSeesAnAllocation) {

@@ -7,6 +7,8 @@
 #include <functional>
 #include <random>
 #include <stdexcept>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -31,14 +33,29 @@ using Layout = StateLayout;
 
 // ---- known answer ------------------------------------------------------------------------
 
-class EkfKnownAnswer : public ::testing::TestWithParam<bool> {};
+// The odometer's calibration estimated (issue 42): a prior and a random walk on
+// every state, so that every term of the vehicle block's prediction counts.
+EkfOptions calibrated(EkfOptions o) {
+  o.calibration.prior = {0.95, 1.02, 0.01};
+  o.calibration.turn_scale_sigma = 0.05;
+  o.calibration.speed_scale_sigma = 0.05;
+  o.calibration.turn_bias_sigma = 0.02;
+  o.calibration.turn_scale_walk = 0.01;
+  o.calibration.speed_scale_walk = 0.01;
+  o.calibration.turn_bias_walk = 0.002;
+  return o;
+}
+
+// Parameters: (Joseph form, calibration estimated).
+class EkfKnownAnswer : public ::testing::TestWithParam<std::tuple<bool, bool>> {};
 
 TEST_P(EkfKnownAnswer, MatchesDenseTextbookEkf) {
   // GIVEN EkfSlam and a dense textbook EKF with the same options and prior
-  const EkfOptions o = small_options(GetParam());
+  const auto [joseph, with_calibration] = GetParam();
+  const EkfOptions o = with_calibration ? calibrated(small_options(joseph)) : small_options(joseph);
   EkfSlam ekf(o);
   DenseEkf ref(o);
-  RandomWorld w(0xE1F5EED + (GetParam() ? 1 : 0));
+  RandomWorld w(0xE1F5EED + (joseph ? 1 : 0) + (with_calibration ? 2 : 0));
   const Eigen::Matrix3d P0 = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
   ekf.reset(w.truth, P0);
   ref.reset(w.truth, P0);
@@ -63,9 +80,10 @@ TEST_P(EkfKnownAnswer, MatchesDenseTextbookEkf) {
   RecordProperty("max_difference", ::testing::PrintToString(worst));
 }
 
-INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfKnownAnswer, ::testing::Bool(),
-                         [](const ::testing::TestParamInfo<bool>& i) {
-                           return i.param ? std::string("Joseph") : std::string("Standard");
+INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfKnownAnswer, ::testing::Combine(::testing::Bool(), ::testing::Bool()),
+                         [](const ::testing::TestParamInfo<std::tuple<bool, bool>>& i) {
+                           return std::string(std::get<0>(i.param) ? "Joseph" : "Standard") +
+                                  (std::get<1>(i.param) ? "Calibrated" : "");
                          });
 
 // ---- batched covariance steps -------------------------------------------------------------
@@ -79,7 +97,8 @@ INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfKnownAnswer, ::testing::Bool(),
 class EkfBatch : public ::testing::TestWithParam<bool> {};
 
 TEST_P(EkfBatch, BatchedUpdatesEqualSequentialOnes) {
-  EkfOptions o = small_options(GetParam());
+  // The Joseph form with the calibration estimated, the standard form without.
+  EkfOptions o = GetParam() ? calibrated(small_options(true)) : small_options(false);
   o.capacity = 40;
   EkfSlam ekf(o), twin(o);
   DenseEkf ref(o);
@@ -99,9 +118,9 @@ TEST_P(EkfBatch, BatchedUpdatesEqualSequentialOnes) {
   for (int run = 0; run < 60; ++run) {
     const Pose2 u = w.move();
     const Eigen::Matrix3d U = odometry_covariance(u, kOdoNoise);
-    ASSERT_EQ(ekf.predict(u, U), EkfStatus::kOk);
-    ASSERT_EQ(twin.predict(u, U), EkfStatus::kOk);
-    ref.predict(u, U);
+    ASSERT_EQ(ekf.predict(u, U, test::kStepSeconds), EkfStatus::kOk);
+    ASSERT_EQ(twin.predict(u, U, test::kStepSeconds), EkfStatus::kOk);
+    ref.predict(u, U, test::kStepSeconds);
     const int k = 1 + w.pick(40);
     for (int i = 0; i < k; ++i) {
       const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
@@ -157,11 +176,12 @@ TEST_P(EkfBatch, RefusedUpdateInsideABatchLeavesThePendingSteps) {
   o.joseph = GetParam();
   o.range_sigma = 1e-3;
   EkfSlam ekf(o), twin(o);
-  Eigen::VectorXd x(7);
-  x << 0.0, 0.0, 0.0, 1.0, 0.0, 2.0, 1.0;
-  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(7, 7);
-  P.diagonal() << 1e-4, 1e-4, 1e-5, 1e-2, 1e-2, 1.0, 1.0;
-  P(3, 0) = P(0, 3) = 2e-3;  // correlation 2
+  Eigen::VectorXd x(Layout::dim(2));
+  x << 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 2.0, 1.0;  // pose, calibration (frozen: 1, 1, 0), landmarks 1, 2
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(Layout::dim(2), Layout::dim(2));
+  P.diagonal() << 1e-4, 1e-4, 1e-5, 0.0, 0.0, 0.0, 1e-2, 1e-2, 1.0, 1.0;
+  const Eigen::Index l1 = Layout::landmark_offset(0);
+  P(l1, Layout::kX) = P(Layout::kX, l1) = 2e-3;  // correlation 2
   for (EkfSlam* f : {&ekf, &twin}) ASSERT_EQ(f->restore(x, P, {1, 2}), EkfStatus::kOk);
   // The twin takes only the accepted update; the filter takes it and then the
   // refused one, in the same batch.
@@ -186,7 +206,8 @@ int after_random_operations(std::uint64_t seed,
                             const std::function<void(RandomWorld&, EkfSlam&, DenseEkf&, int)>& check) {
   int checked = 0;
   for (const bool joseph : {true, false}) {
-    const EkfOptions o = small_options(joseph);
+    // The Joseph form with the calibration estimated, the standard form without.
+    const EkfOptions o = joseph ? calibrated(small_options(true)) : small_options(false);
     EkfSlam ekf(o);
     DenseEkf ref(o);
     RandomWorld w(seed + (joseph ? 1 : 0));
@@ -258,7 +279,7 @@ TEST(EkfSlam, PositionUpdateMatchesTheDenseUpdate) {
 // before (more landmarks or fewer); both then go on identically. Capacity or id
 // range that differ are refused.
 TEST(EkfSlam, AssignMakesAnExactCopy) {
-  const EkfOptions o = small_options(false);
+  const EkfOptions o = calibrated(small_options(false));  // the calibration states are copied too
   for (const bool grow : {true, false}) {
     SCOPED_TRACE(grow ? "into a filter with fewer landmarks" : "into one with more");
     EkfSlam big(o), small(o);
@@ -335,7 +356,8 @@ TEST(EkfSlam, LandmarkOnlyUpdateRefusesUnknownAndBadInput) {
 // must agree with the completed view, which must be a covariance.
 TEST(EkfSlam, BlockAccessorsAgreeWithTheCovarianceView) {
   for (const bool joseph : {true, false}) {
-    EkfSlam ekf(small_options(joseph));
+    // The Joseph form with the calibration estimated, the standard form without.
+    EkfSlam ekf(joseph ? calibrated(small_options(true)) : small_options(false));
     RandomWorld w(77);
     ekf.reset(w.truth, Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal());
     for (int k = 0; k < 300; ++k) random_operation(w, ekf, nullptr, 20);
@@ -352,9 +374,18 @@ TEST(EkfSlam, BlockAccessorsAgreeWithTheCovarianceView) {
     }
     const Eigen::MatrixXd P = ekf.covariance();
     EXPECT_TRUE(P == P.transpose()) << "joseph = " << joseph;
-    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(P).info(), Eigen::Success);  // positive definite
+    // Positive definite; frozen calibration states have no variance: without them.
+    std::vector<Eigen::Index> kept;  // every state but C, in order
+    for (Eigen::Index i = 0; i < P.rows(); ++i)
+      if (i < Layout::kCalibration || i >= Layout::kVehicleDim) kept.push_back(i);
+    const Eigen::MatrixXd P_RM = P(kept, kept);
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(joseph ? P : P_RM).info(), Eigen::Success);
+    if (!joseph) {
+      EXPECT_TRUE(P.middleRows<3>(Layout::kCalibration).isZero(0.0));
+    }
     EXPECT_TRUE((pose_cov == P.topLeftCorner<3, 3>()));
-    EXPECT_EQ(mean_diag, P.diagonal().mean());
+    EXPECT_TRUE((ekf.calibration_cov() == P.block<3, 3>(Layout::kCalibration, Layout::kCalibration)));
+    EXPECT_EQ(mean_diag, P_RM.diagonal().mean());  // eq 19: the pose and the landmarks
     std::size_t k = 0;
     for (int i = 0; i < ekf.num_landmarks(); ++i) {
       const Eigen::Index oi = Layout::landmark_offset(i);
@@ -651,6 +682,9 @@ TEST_F(EkfRefusal, BadOdometryLeavesTheFilterUnchanged) {
   EXPECT_EQ(ekf_.predict({0.5, 0.0, 0.0}, Eigen::Matrix3d::Constant(HUGE_VAL)), EkfStatus::kBadInput);
   EXPECT_EQ(ekf_.predict({0.5, 0.0, 0.0}, asym_U), EkfStatus::kBadInput);
   EXPECT_EQ(ekf_.predict({0.5, 0.0, 0.0}, neg_U), EkfStatus::kBadInput);
+  EXPECT_EQ(ekf_.predict({0.5, 0.0, 0.0}, U, -0.1), EkfStatus::kBadInput);  // dt [s]
+  EXPECT_EQ(ekf_.predict({0.5, 0.0, 0.0}, U, std::nan("")), EkfStatus::kBadInput);
+  EXPECT_EQ(ekf_.predict({0.5, 0.0, 0.0}, U, HUGE_VAL), EkfStatus::kBadInput);
   EXPECT_TRUE(Snapshot(ekf_) == before);
 }
 
@@ -754,7 +788,10 @@ TEST(EkfSlam, AccessorsAndLayout) {
   EkfSlam ekf(o);
   EXPECT_EQ(ekf.capacity(), 4);
   EXPECT_EQ(ekf.num_landmarks(), 0);
-  EXPECT_EQ(ekf.state_dim(), 3);
+  EXPECT_EQ(ekf.state_dim(), 6);  // the pose and the (frozen) calibration states
+  EXPECT_EQ(Layout::kVehicleDim, 6);
+  EXPECT_EQ(Layout::landmark_offset(0), 6);
+  EXPECT_EQ(Layout::landmark_offset(2), 10);
   EXPECT_NEAR(ekf.measurement_cov()(0, 0), 0.04, 1e-15);
   EXPECT_NEAR(ekf.measurement_cov()(1, 1), 0.0025, 1e-15);
   EXPECT_EQ(ekf.measurement_cov()(0, 1), 0.0);
@@ -766,10 +803,16 @@ TEST(EkfSlam, AccessorsAndLayout) {
   EXPECT_EQ(ekf.id_at(0), 6);
   EXPECT_EQ(ekf.slot_of(5), -1);
   EXPECT_EQ(ekf.slot_of(100), -1);
-  EXPECT_EQ(ekf.state_dim(), 5);
-  EXPECT_NEAR(ekf.mean_diag(), ekf.covariance().trace() / 5.0, 1e-15);
-  EXPECT_TRUE((ekf.landmark_cov(6) == ekf.covariance().block<2, 2>(3, 3)));
-  EXPECT_TRUE((ekf.pose_landmark_cov(6) == ekf.covariance().block<3, 2>(0, 3)));
+  EXPECT_EQ(ekf.state_dim(), 8);
+  EXPECT_NEAR(ekf.mean_diag(), ekf.covariance().trace() / 5.0, 1e-15);  // 5: pose and landmark, not C
+  EXPECT_TRUE((ekf.landmark_cov(6) == ekf.covariance().block<2, 2>(6, 6)));
+  EXPECT_TRUE((ekf.pose_landmark_cov(6) == ekf.covariance().block<3, 2>(0, 6)));
+  // Frozen calibration: the configured constants, no variance.
+  EXPECT_EQ(ekf.calibration().turn_scale, 1.0);
+  EXPECT_EQ(ekf.calibration().speed_scale, 1.0);
+  EXPECT_EQ(ekf.calibration().turn_bias, 0.0);
+  EXPECT_TRUE(ekf.calibration_cov().isZero(0.0));
+  EXPECT_FALSE(ekf.calibration_estimated());
   EXPECT_TRUE(ekf.landmark_cross_cov(6, 1).hasNaN());
   EXPECT_TRUE(ekf.pose_landmark_cov(2).hasNaN());
   // reset forgets the map and frees the ids.

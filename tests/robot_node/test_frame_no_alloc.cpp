@@ -4,6 +4,7 @@
 // notices, snapshots.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -25,14 +26,29 @@ struct Tally {
 
 TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
   const TeamConfig base = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  // The last two runs with filters of 24 slots: robots evict (Robot::make_room).
-  const std::pair<Mode, int> runs[] = {{Mode::kEkf, 0}, {Mode::kGated, 0}, {Mode::kEla, 0}, {Mode::kConsensus, 0},
-                                       {Mode::kEkf, 24}, {Mode::kEla, 24}};
-  for (const auto& [mode, capacity] : runs) {
-    SCOPED_TRACE(std::string(to_string(mode)) + " capacity " + std::to_string(capacity));
+  // Two runs with filters of 24 slots: robots evict (Robot::make_room). The last two
+  // with the odometer's calibration estimated (robot.odometry_calibration, issue 42).
+  struct Run {
+    Mode mode;
+    int capacity;
+    bool calibrated;
+  };
+  const Run runs[] = {{Mode::kEkf, 0, false}, {Mode::kGated, 0, false}, {Mode::kEla, 0, false},
+                      {Mode::kConsensus, 0, false}, {Mode::kEkf, 24, false}, {Mode::kEla, 24, false},
+                      {Mode::kEla, 0, true}, {Mode::kConsensus, 24, true}};
+  for (const auto& [mode, capacity, calibrated] : runs) {
+    SCOPED_TRACE(std::string(to_string(mode)) + " capacity " + std::to_string(capacity) +
+                 (calibrated ? ", calibration estimated" : ""));
     TeamConfig c = base;
     c.robot.mode = mode;
     if (capacity > 0) c.robot.ekf.capacity = capacity;
+    if (calibrated) {
+      CalibrationOptions& k = c.robot.ekf.calibration;
+      k.turn_scale_sigma = k.speed_scale_sigma = 0.1;
+      k.turn_bias_sigma = 0.01;
+      k.turn_scale_walk = k.speed_scale_walk = 1e-3;
+      k.turn_bias_walk = 1e-4;
+    }
     c.scenario.dynamism_percent = 50.0;
     c.scenario.landmark_speed_mps = 0.5;
     // The consistency monitor and its recovery on (they fire at 50 % dynamism).
@@ -54,7 +70,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
     std::vector<sensor_frame_t> frames;
     for (int k = 0; k < c.scenario.frames; ++k) {
       if (k > 0) world.step();
-      for (int i = 0; i < R; ++i) frames.push_back(sim::to_message(world.sensor_frame(i), k));
+      // Stamped at the scenario's rate: the calibration's bias and random walk span dt.
+      const auto utime = static_cast<std::int64_t>(std::llround(k * c.scenario.dt_s() * 1e6));
+      for (int i = 0; i < R; ++i) frames.push_back(sim::to_message(world.sensor_frame(i), utime));
     }
     std::vector<RobotNode> robots;
     for (int i = 0; i < R; ++i) robots.emplace_back(c.robot, c.scenario.robots[static_cast<std::size_t>(i)].id);
@@ -94,6 +112,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       }
     }
     EXPECT_EQ(test::allocations_in_region(), 0);
+    if (calibrated) {  // the states moved: the estimated path ran
+      for (const auto& r : robots) EXPECT_GT(r.robot().filter().calibration_cov()(0, 0), 0.0);
+    }
     EXPECT_EQ(t.frames + t.missed, static_cast<long>(frames.size()));
     // The run exercised the paths it claims to cover.
     EXPECT_GT(t.events[landmark_event_t::ADD], 50);

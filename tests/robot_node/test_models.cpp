@@ -137,6 +137,67 @@ TEST(EkfModels, MotionIsCompose) {
   EXPECT_NEAR(next.theta, -kPi / 2, 1e-12);  // wrapped into [-pi, pi)
 }
 
+// ---- the odometer's calibration (issue 42) -------------------------------------------------
+
+Vec3 to_vec(const OdometryCalibration& c) { return {c.turn_scale, c.speed_scale, c.turn_bias}; }
+OdometryCalibration to_calibration(const Vec3& v) { return {v(0), v(1), v(2)}; }
+
+// du/dc and du/du_r of calibrated_increment, and the prediction's F_c = F_u du/dc:
+// the pose after the step, motion(R, u(c)), differentiated by c directly.
+void expect_calibration_jacobians(const Pose2& pose, const Pose2& u_r, const OdometryCalibration& c, double dt) {
+  Eigen::Matrix3d J_c, J_r, F_x, F_u;
+  const Pose2 u = calibrated_increment(u_r, c, dt, &J_c, &J_r);
+  motion(pose, u, &F_x, &F_u);
+  const Eigen::Matrix3d F_c = F_u * J_c;
+  const auto u_of_c = [&](const Vec3& v) { return to_vec(calibrated_increment(u_r, to_calibration(v), dt)); };
+  const auto u_of_r = [&](const Vec3& v) { return to_vec(calibrated_increment(to_pose(v), c, dt)); };
+  const auto pose_of_c = [&](const Vec3& v) {
+    return to_vec(motion(pose, calibrated_increment(u_r, to_calibration(v), dt)));
+  };
+  const auto cc = check_jacobian(u_of_c, to_vec(c), J_c);
+  const auto cr = check_jacobian(u_of_r, to_vec(u_r), J_r);
+  const auto cf = check_jacobian(pose_of_c, to_vec(c), F_c, kThetaOutput);
+  EXPECT_TRUE(cc.ok) << "du/dc: " << cc.message;
+  EXPECT_TRUE(cr.ok) << "du/du_r: " << cr.message;
+  EXPECT_TRUE(cf.ok) << "F_c: " << cf.message;
+}
+
+TEST(EkfModels, CalibrationJacobiansAtRandomPoints) {
+  Sampler s;
+  for (int k = 0; k < kRandomPoints; ++k) {
+    const OdometryCalibration c{s.uniform(0.7, 1.3), s.uniform(0.7, 1.3), s.uniform(-0.2, 0.2)};
+    expect_calibration_jacobians(s.pose(), s.increment(), c, s.uniform(0.0, 2.0));
+  }
+  // Across the pi seam, and a standing robot (only the bias moves it).
+  expect_calibration_jacobians({1.0, -2.0, kPi - 1e-9}, {0.3, 0.1, 1e-7}, {0.9, 0.95, 0.01}, 0.1);
+  expect_calibration_jacobians({0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.9, 0.95, 0.01}, 0.1);
+}
+
+TEST(EkfModels, CalibratedIncrementIsTheConvention) {
+  // true = (s_v dx_r, s_v dy_r, s_w dtheta_r + b dt), as the simulator produces it.
+  const Pose2 u = calibrated_increment({0.2, -0.05, 0.1}, {0.9, 0.95, 0.02}, 0.1);
+  EXPECT_DOUBLE_EQ(u.x, 0.95 * 0.2);
+  EXPECT_DOUBLE_EQ(u.y, 0.95 * -0.05);
+  EXPECT_DOUBLE_EQ(u.theta, 0.9 * 0.1 + 0.02 * 0.1);
+  // The identity leaves the increment's bits as they are.
+  const Pose2 r{0.123456789, -0.987654321, 0.314159};
+  const Pose2 same = calibrated_increment(r, OdometryCalibration{}, 0.1);
+  EXPECT_EQ(same.x, r.x);
+  EXPECT_EQ(same.y, r.y);
+  EXPECT_EQ(same.theta, r.theta);
+}
+
+TEST(EkfJacobianChecker, ReportsAWrongCalibrationJacobian) {
+  // du/dc with the bias column's dt left out is caught.
+  const Pose2 u_r{0.3, 0.02, 0.1};
+  const OdometryCalibration c{0.9, 0.95, 0.01};
+  Eigen::Matrix3d J_c;
+  calibrated_increment(u_r, c, 0.5, &J_c);
+  J_c(2, 2) = 1.0;
+  const auto u_of_c = [&](const Vec3& v) { return to_vec(calibrated_increment(u_r, to_calibration(v), 0.5)); };
+  EXPECT_FALSE(check_jacobian(u_of_c, to_vec(c), J_c).ok);
+}
+
 // ---- observation (eqs 7, 13) -----------------------------------------------------------
 
 TEST(EkfModels, ObserveJacobiansAtRandomPoints) {

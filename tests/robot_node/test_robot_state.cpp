@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -45,13 +46,15 @@ TeamConfig paper(Mode mode, int seed) {
   return c;
 }
 
-/// Every sensor frame of a seeded paper run, frame-major (frame k of robot i at k * R + i).
+/// Every sensor frame of a seeded paper run, frame-major (frame k of robot i at k * R + i),
+/// stamped at the scenario's rate (the odometer calibration's dt).
 std::vector<sensor_frame_t> sensor_frames(const TeamConfig& c) {
   sim::World world(c.scenario);
   std::vector<sensor_frame_t> frames;
   for (int k = 0; k < c.scenario.frames; ++k) {
     if (k > 0) world.step();
-    for (int i = 0; i < world.num_robots(); ++i) frames.push_back(sim::to_message(world.sensor_frame(i), k));
+    const auto utime = static_cast<std::int64_t>(std::llround(k * c.scenario.dt_s() * 1e6));
+    for (int i = 0; i < world.num_robots(); ++i) frames.push_back(sim::to_message(world.sensor_frame(i), utime));
   }
   return frames;
 }
@@ -72,8 +75,15 @@ std::vector<std::uint8_t> published(const RobotNode& n) {
   p.processing_us = 0;
   p.frames_processed = 0;
   std::vector<std::uint8_t> out = bytes(p);
-  const auto flags = static_cast<std::uint32_t>(n.status_msg(0).fault_flags);
+  const node_status_t status = n.status_msg(0);
+  const auto flags = static_cast<std::uint32_t>(status.fault_flags);
   for (int k = 0; k < 4; ++k) out.push_back(static_cast<std::uint8_t>(flags >> (8 * k)));
+  for (float v : {status.odom_turn_scale, status.odom_turn_scale_sigma, status.odom_speed_scale,
+                  status.odom_speed_scale_sigma, status.odom_turn_bias_rad_s, status.odom_turn_bias_sigma_rad_s}) {
+    std::uint8_t b[sizeof v];
+    std::memcpy(b, &v, sizeof v);
+    out.insert(out.end(), b, b + sizeof v);
+  }
   for (const auto& e : n.event_msgs()) {
     const auto b = bytes(e);
     out.insert(out.end(), b.begin(), b.end());
@@ -169,6 +179,38 @@ TEST(RobotState, RestoredNodeContinuesBitIdentically) {
       EXPECT_GT(held, 0);
     }
   }
+}
+
+// The odometer's calibration states (robot.odometry_calibration, issue 42) are in the
+// filter (and in the history's lagged filter), each prediction in the history carries
+// its dt, and the robot keeps its last frame's utime: restarts before every frame give
+// the uninterrupted run's messages (POSE, events, snapshots, STATUS's estimate) and
+// final state bit for bit. A node with the states frozen refuses such a file.
+TEST(RobotState, TheOdometerCalibrationSurvivesARestart) {
+  TeamConfig c = paper(Mode::kEla, 7);
+  ASSERT_GT(c.robot.candidate_history_frames, 0);  // the history's predictions are in the file too
+  CalibrationOptions& k = c.robot.ekf.calibration;
+  k.turn_scale_sigma = k.speed_scale_sigma = 0.1;
+  k.turn_bias_sigma = 0.01;
+  k.turn_scale_walk = k.speed_scale_walk = 1e-3;
+  k.turn_bias_walk = 1e-4;
+  std::string state;
+  restarts_change_nothing(c, 60, &state);
+  const json s = json::parse(state)["state"];
+  const auto mean = [&s](int i) { return s["filter"]["mean"][static_cast<std::size_t>(i)].get<double>(); };
+  EXPECT_NE(mean(StateLayout::kTurnScale), 1.0);  // estimated: moved off the prior
+  EXPECT_NE(mean(StateLayout::kSpeedScale), 1.0);
+  const auto calibration_variance = [&s](int i) {
+    return s["filter"]["cov_lower"][static_cast<std::size_t>(i * (i + 1) / 2 + i)].get<double>();
+  };
+  EXPECT_LT(calibration_variance(StateLayout::kTurnScale), 0.01);  // below the prior's 0.1^2
+  bool dt = false;
+  for (const auto& op : s["robot"]["history"]["ops"]) dt = dt || (op[0] == "predict" && op[5].get<double>() > 0.0);
+  EXPECT_TRUE(dt);
+  RobotNode frozen(paper(Mode::kEla, 7).robot, kRobot);
+  std::string why;
+  EXPECT_FALSE(load_robot_state(state, &frozen, &why));
+  EXPECT_NE(why.find("frozen constants"), std::string::npos) << why;
 }
 
 // The consistency monitor's window and the robot's last trouble frame are in the
@@ -516,8 +558,15 @@ TEST_F(RobotStateCorrupt, BadValuesAreRefusedNamingTheField) {
   std::string nan_text = good_;
   nan_text.replace(nan_text.find("\"mean\":[") + 8, 0, "NaN,");
   expect_refused(nan_text, "not valid JSON");
-  // P(3,3): the first landmark's x variance (lower triangle, row-major: index 3*4/2 + 3).
-  expect_refused(edited([](json& s) { s["filter"]["cov_lower"][9] = -1e-3; }), "negative variance");
+  // The first landmark's x variance (lower triangle, row-major: P(i,i) at i(i+1)/2 + i).
+  const int l0 = StateLayout::landmark_offset(0);
+  const auto diag = static_cast<std::size_t>(l0 * (l0 + 1) / 2 + l0);
+  expect_refused(edited([&](json& s) { s["filter"]["cov_lower"][diag] = -1e-3; }), "negative variance");
+  // The odometer's calibration states: frozen in this configuration, so exactly its
+  // constants (a file saved with them estimated is refused); a scale of no odometer.
+  expect_refused(edited([](json& s) { s["filter"]["mean"][StateLayout::kTurnScale] = 0.9; }),
+                 "robot.odometry_calibration's frozen constants");
+  expect_refused(edited([](json& s) { s["filter"]["mean"][StateLayout::kSpeedScale] = -1.0; }), "filter.mean[4]");
   expect_refused(edited([](json& s) {  // P(1,0) far beyond sqrt(P(0,0) P(1,1))
     s["filter"]["cov_lower"][1] = 10.0 * std::sqrt(s["filter"]["cov_lower"][0].get<double>() * s["filter"]["cov_lower"][2].get<double>());
   }), "not positive semi-definite");
@@ -545,14 +594,15 @@ TEST_F(RobotStateCorrupt, InconsistentSlotsAreRefused) {
   expect_refused(edited([](json& s) {  // a static landmark outside the filter: drop slot 0 of the filter
     s["robot"].erase("history");  // (whose check would find the filter edited first)
     const int dim = static_cast<int>(s["filter"]["mean"].size());
+    const int a = StateLayout::landmark_offset(0), b = a + 1;
     s["filter"]["slot_ids"].erase(0);
     json& m = s["filter"]["mean"];
-    m.erase(4), m.erase(3);
-    json lower = json::array();  // rows/cols 3 and 4 removed
+    m.erase(static_cast<std::size_t>(b)), m.erase(static_cast<std::size_t>(a));
+    json lower = json::array();  // rows/cols a and b removed
     int k = 0;
     for (int i = 0; i < dim; ++i)
       for (int j = 0; j <= i; ++j, ++k)
-        if (i != 3 && i != 4 && j != 3 && j != 4) lower.push_back(s["filter"]["cov_lower"][static_cast<std::size_t>(k)]);
+        if (i != a && i != b && j != a && j != b) lower.push_back(s["filter"]["cov_lower"][static_cast<std::size_t>(k)]);
     s["filter"]["cov_lower"] = lower;
   }), "static but neither in the filter nor archived");
   expect_refused(edited([](json& s) {  // an archived landmark still in the filter
@@ -639,9 +689,13 @@ TEST_F(RobotStateCorrupt, AnotherRobotsOrAnotherConfigurationsStateIsRefused) {
   json d = doc_;
   d["format"] = "elaslam.global_map";
   expect_refused(d.dump(), "format");
-  d = doc_;
-  d["version"] = 2;
-  expect_refused(d.dump(), "version");
+  // A file of the layout before the odometer's calibration states (version 1) or of
+  // a later one: refused, the robot starts fresh (robot_node/main.cpp).
+  for (int version : {1, 3}) {
+    d = doc_;
+    d["version"] = version;
+    expect_refused(d.dump(), "version: " + std::to_string(version) + " is not the supported 2");
+  }
   expect_refused("[1, 2, 3]", "not an object");
   expect_refused("{}", "format: missing");
 }

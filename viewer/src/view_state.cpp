@@ -142,6 +142,9 @@ bool ViewState::on_status(const node_status_t& m, double now_s) {
                   m.filter_faults < 0 || m.auth_refused < 0;
   for (std::int64_t n : m.refused) negative = negative || n < 0;
   if (negative) return bad("STATUS negative counter");
+  if (!finite_all({m.odom_turn_scale, m.odom_turn_scale_sigma, m.odom_speed_scale, m.odom_speed_scale_sigma,
+                   m.odom_turn_bias_rad_s, m.odom_turn_bias_sigma_rad_s}))
+    return bad("STATUS odometer calibration not finite");
   Robot& r = robot(m.node_id);
   r.has_status = true;
   r.status = m;
@@ -241,7 +244,13 @@ std::string ViewState::to_json(double now_s, const std::string& viewer_counters_
                      {"filter_faults", s.filter_faults},
                      {"latency_p50_us", s.processing_us_p50},
                      {"latency_p99_us", s.processing_us_p99},
-                     {"status_age_s", now_s - r.status_s}};
+                     {"status_age_s", now_s - r.status_s},
+                     {"odometry", {{"turn_scale", s.odom_turn_scale},
+                                   {"turn_scale_sigma", s.odom_turn_scale_sigma},
+                                   {"speed_scale", s.odom_speed_scale},
+                                   {"speed_scale_sigma", s.odom_speed_scale_sigma},
+                                   {"turn_bias_rad_s", s.odom_turn_bias_rad_s},
+                                   {"turn_bias_sigma_rad_s", s.odom_turn_bias_sigma_rad_s}}}};
     } else {
       o["health"] = nullptr;
     }

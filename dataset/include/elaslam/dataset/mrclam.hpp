@@ -264,4 +264,27 @@ class FrameSource {
   Stats stats_;
 };
 
+/// The odometer's systematic error against Vicon, in issue 42's convention (the
+/// filter's odometry calibration, robot_node/models.hpp): the true increment of a
+/// frame step of dt seconds is (s_v dx_r, s_v dy_r, s_w dtheta_r + b dt) for the
+/// reported one, both in the robot frame at the step start. Fitted by least squares
+/// over consecutive windows of `window` frame steps of robot index i from frame
+/// `first` to `last` (-1: the last frame) of the frames as the filter gets them (the
+/// source's odometer readings against its Vicon poses), each window's increments
+/// taken as one step (dt = window / rate): s_v = sum(t . r) / sum(|r|^2) over the
+/// translations; (s_w, b) from the headings; and s_w alone (b = 0). Windows of a
+/// few seconds: the odometer's timing against Vicon is known to about 0.02 s
+/// (odometry_delay_s), and over one 0.1 s step that misalignment is as large as the
+/// turn itself and pulls the fitted scales towards 0 (errors in the regressor);
+/// over 5 s it is a few per cent of it.
+struct OdometryFit {
+  int steps = 0;  // windows fitted
+  double speed_scale = 1.0;             // s_v: true distance / reported
+  double turn_scale = 1.0;              // s_w, fitted with the bias
+  double turn_bias_rad_s = 0.0;         // b [rad/s]
+  double turn_scale_without_bias = 1.0; // s_w, fitted alone
+  double reported_m = 0.0, reported_rad = 0.0;  // sum of |reported| translation [m] and turn [rad]
+};
+OdometryFit fit_odometry(const FrameSource& src, int i, int first = 0, int last = -1, int window = 1);
+
 }  // namespace elaslam::mrclam

@@ -1,13 +1,18 @@
 // Fixed-memory planar EKF-SLAM (DESIGN.md section 4). Paper equations held here:
-// the state X = [R; M] (eqs 1-2), prediction (eqs 3-6, with the models of
+// the state X = [R; M] (eqs 1-2, here with the odometer's calibration states), prediction (eqs 3-6, with the models of
 // models.hpp), correction (eqs 7-13), augmentation by the inverse observation
 // (eq 15) and the uncertainty mean(diag(P)) (eq 19). Not here: eq 14 (landmark
 // speed, the simulator), eq 16 (the ELA, ela_gate), eqs 17-18 (team/'s metrics).
 //
-// State X = [R; M]: R = (x, y, theta) of the robot in W, M = landmark positions in
-// W, one 2-vector per occupied slot. Mean, covariance and the id-to-slot tables are
-// allocated once, at construction, from the configured capacity; predict, update,
-// add_landmark and remove_landmark allocate nothing (tests/robot_node/test_ekf_no_alloc.cpp).
+// State X = [R; C; M]: R = (x, y, theta) of the robot in W, C = (s_w, s_v, b) the
+// odometer's calibration (turn scale, speed scale, turn-rate bias; models.hpp,
+// OdometryCalibration; issue 42), M = landmark positions in W, one 2-vector per
+// occupied slot. R and C are the vehicle block V. With the calibration frozen
+// (CalibrationOptions all zero, the default) C holds the prior's constants and its
+// rows of P stay zero: the filter is then the paper's on X = [R; M], bit for bit.
+// Mean, covariance and the id-to-slot tables are allocated once, at construction,
+// from the configured capacity; predict, update, add_landmark and remove_landmark
+// allocate nothing (tests/robot_node/test_ekf_no_alloc.cpp).
 // Only this class changes the mean and covariance. Every operation returns a
 // status; none throws or exits on bad data.
 #pragma once
@@ -25,12 +30,35 @@ namespace elaslam {
 
 /// Named state layout: no bare indices into X or P outside these.
 struct StateLayout {
-  static constexpr int kPoseDim = 3;      // x, y, theta
-  static constexpr int kLandmarkDim = 2;  // x, y
+  static constexpr int kPoseDim = 3;         // x, y, theta
+  static constexpr int kCalibrationDim = 3;  // s_w, s_v, b (OdometryCalibration)
+  static constexpr int kVehicleDim = kPoseDim + kCalibrationDim;
+  static constexpr int kLandmarkDim = 2;     // x, y
   static constexpr int kX = 0, kY = 1, kTheta = 2;
+  static constexpr int kTurnScale = 3, kSpeedScale = 4, kTurnBias = 5;
+  static constexpr int kCalibration = kTurnScale;  // first calibration state
   /// Offset in X and P of the landmark stored in `slot`.
-  static constexpr int landmark_offset(int slot) { return kPoseDim + kLandmarkDim * slot; }
-  static constexpr int dim(int num_landmarks) { return kPoseDim + kLandmarkDim * num_landmarks; }
+  static constexpr int landmark_offset(int slot) { return kVehicleDim + kLandmarkDim * slot; }
+  static constexpr int dim(int num_landmarks) { return kVehicleDim + kLandmarkDim * num_landmarks; }
+};
+
+/// The odometer's calibration states C (issue 42): their prior and random walk.
+/// All sigmas and walks zero (the default): frozen at the prior's means, which the
+/// prediction applies as known constants (1, 1, 0: the odometer as reported).
+struct CalibrationOptions {
+  OdometryCalibration prior;       // prior means
+  double turn_scale_sigma = 0.0;   // prior std dev of s_w
+  double speed_scale_sigma = 0.0;  // prior std dev of s_v
+  double turn_bias_sigma = 0.0;    // [rad/s] prior std dev of b
+  // Random walk: the std dev a state gains over one second (variance grows with
+  // the time a prediction spans, its dt).
+  double turn_scale_walk = 0.0;    // [1/sqrt(s)]
+  double speed_scale_walk = 0.0;   // [1/sqrt(s)]
+  double turn_bias_walk = 0.0;     // [rad/s/sqrt(s)]
+  bool estimated() const {
+    return turn_scale_sigma > 0.0 || speed_scale_sigma > 0.0 || turn_bias_sigma > 0.0 || turn_scale_walk > 0.0 ||
+           speed_scale_walk > 0.0 || turn_bias_walk > 0.0;
+  }
 };
 
 struct EkfOptions {
@@ -46,6 +74,7 @@ struct EkfOptions {
   /// EkfKnownAnswer, EkfBatch); docs/decisions.md. update_landmark_only, whose gain
   /// is deliberately not optimal, always uses the Joseph form.
   bool joseph = false;
+  CalibrationOptions calibration;  // the odometer's calibration states (frozen by default)
 };
 
 enum class EkfStatus : std::uint8_t {
@@ -77,12 +106,20 @@ class EkfSlam {
   /// on invalid options (start-up only; no other member throws).
   explicit EkfSlam(const EkfOptions& options);
 
-  /// Forget every landmark and set the robot prior.
+  /// Forget every landmark and set the robot prior; the calibration states start
+  /// at their prior (options.calibration), uncorrelated with the pose.
   void reset(const Pose2& pose, const Eigen::Matrix3d& pose_cov);
 
-  /// Prediction (eqs 4-5) with an odometry increment in B and its covariance U.
-  /// O(n): touches the robot block and the robot-landmark cross terms only.
-  EkfStatus predict(const Pose2& increment, const Eigen::Matrix3d& U);
+  /// Prediction (eqs 4-5) from the odometer's reported increment (in B at the step
+  /// start), the covariance U of its error, and the time the step spans, dt [s].
+  /// The robot moves by the calibrated increment u(c) (calibrated_increment, the
+  /// current estimate of C); U is the reported increment's noise, so the motion's
+  /// is F_u J_r U J_r^T F_u^T (J_r = du/du_r). With the calibration estimated the
+  /// vehicle block V = [R; C] moves with F_V = [[F_x, F_c], [0, I]], F_c = F_u du/dc,
+  /// and C gains its random walk over dt; the landmarks' cross terms become
+  /// P_LR F_x^T + P_LC F_c^T (P_LC is unchanged). O(n): touches the vehicle block
+  /// and the landmarks' cross terms with R only.
+  EkfStatus predict(const Pose2& increment, const Eigen::Matrix3d& U, double dt = 0.0);
 
   /// Innovation and its Mahalanobis distance for landmark `id` without changing
   /// the filter (eqs 8-9). status kUnknownLandmark / kBadInput / kSingular on failure.
@@ -136,6 +173,12 @@ class EkfSlam {
 
   Pose2 pose() const;
   Eigen::Matrix3d pose_cov() const;
+  /// The calibration estimate (the prior's constants while frozen) and its
+  /// covariance (columns s_w, s_v, b; zero while frozen).
+  OdometryCalibration calibration() const;
+  Eigen::Matrix3d calibration_cov() const;
+  /// Whether the calibration states are estimated (options.calibration).
+  bool calibration_estimated() const { return calibration_estimated_; }
   /// Landmark mean / covariance / cross-covariances. The id must be mapped.
   Eigen::Vector2d landmark(int id) const;
   Eigen::Matrix2d landmark_cov(int id) const;
@@ -153,7 +196,8 @@ class EkfSlam {
     if (upper_stale_) complete_upper_triangle();
     return P_.topLeftCorner(state_dim(), state_dim());
   }
-  /// mean(diag(P)) over the active state (paper eq 19).
+  /// mean(diag(P)) over the pose and the landmarks (paper eq 19): the calibration
+  /// states are not the map's uncertainty and are left out.
   double mean_diag() const;
   /// Measurement noise covariance W = diag(range_sigma^2, bearing_sigma^2).
   const Eigen::Matrix2d& measurement_cov() const { return W_; }
@@ -222,7 +266,8 @@ class EkfSlam {
   int num_landmarks_ = 0;
   Eigen::VectorXd x_;          // capacity-sized mean
   // Capacity-sized covariance. Current: the lower triangle (i >= j) of the active
-  // block, and the 3x3 robot block in full (so columns 0..2 are complete). The
+  // block, and the 3x3 robot block R in full (so columns 0..2 are complete; the
+  // calibration rows of those columns, P_CR, are in the lower triangle). The
   // strict upper triangle is a cache, refreshed by covariance() when stale.
   mutable Eigen::MatrixXd P_;
   mutable bool upper_stale_ = false;
@@ -239,6 +284,8 @@ class EkfSlam {
   Eigen::VectorXd diag_;
   mutable std::array<double, kMaxFactorCols> erow0_{}, erow1_{};  // H fb_^T, by rows
   Eigen::MatrixXd tmp_rows_;   // n x 3: the new P_LR in predict
+  bool calibration_estimated_ = false;  // options_.calibration.estimated()
+  Eigen::Vector3d calibration_walk_var_ = Eigen::Vector3d::Zero();  // per second: Q_c = diag(this) dt
   mutable Eigen::MatrixXd lm_cols_;  // n x 2: the observed landmark's two columns of P
 };
 

@@ -42,12 +42,13 @@ class FilterHistory {
     int frame = 0;
     int id = -1;
     RangeBearing z;                                   // update, landmark-only, add
-    Pose2 increment;                                  // predict
+    Pose2 increment;                                  // predict: the odometer's reported increment
     Eigen::Matrix3d U = Eigen::Matrix3d::Zero();      // predict
+    double dt = 0.0;                                  // predict: the time it spans [s]
     Eigen::Vector2d p = Eigen::Vector2d::Zero();      // position
     Eigen::Matrix2d R = Eigen::Matrix2d::Zero();      // position
   };
-  static Op predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U);
+  static Op predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt = 0.0);
   static Op update(int frame, int id, const RangeBearing& z);
   static Op update_landmark_only(int frame, int id, const RangeBearing& z);
   static Op update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);

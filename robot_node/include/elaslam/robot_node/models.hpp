@@ -24,6 +24,22 @@ struct OdometryNoise {
   double var_rot_per_m = 0.0;     // [rad^2/m]
 };
 
+/// The odometer's systematic error (issue 42): the true increment of a step of dt
+/// seconds whose odometer reports (dx_r, dy_r, dtheta_r), in B at the step start, is
+///   dx = s_v dx_r,  dy = s_v dy_r,  dtheta = s_w dtheta_r + b dt.
+/// The simulator produces the error with the same convention. Identity: 1, 1, 0.
+struct OdometryCalibration {
+  double turn_scale = 1.0;   // s_w: true turn / reported turn
+  double speed_scale = 1.0;  // s_v: true distance / reported distance
+  double turn_bias = 0.0;    // b [rad/s]: turn rate the odometer does not report
+};
+
+/// The true increment u(c) of a reported one over dt [s] (OdometryCalibration).
+/// J_c = du/dc (3x3, rows x, y, theta of u; columns s_w, s_v, b) and
+/// J_r = du/du_r = diag(s_v, s_v, s_w), when asked.
+Pose2 calibrated_increment(const Pose2& reported, const OdometryCalibration& c, double dt,
+                           Eigen::Matrix3d* J_c = nullptr, Eigen::Matrix3d* J_r = nullptr);
+
 /// d2 = r^T C^-1 r for a 2x2 symmetric C; +inf when C is not positive definite.
 double mahalanobis2(const Eigen::Vector2d& r, const Eigen::Matrix2d& C);
 

@@ -35,6 +35,9 @@ struct FrameInput {
   /// Room for `capacity` observations (RobotOptions::max_observations), allocated here.
   explicit FrameInput(int capacity = contract::kMaxObsPerFrame) : obs(static_cast<std::size_t>(capacity)) {}
   int frame = 0;
+  /// [us] when the frame was taken (sensor_frame_t::utime): the time an odometer
+  /// increment spans, for the calibration's turn bias and random walk (Robot::predict).
+  std::int64_t utime = 0;
   Pose2 odometer;        // cumulative odometer reading, odometry frame O (= W at start)
   OdometryNoise noise;   // odometry noise model of this robot
   /// The odometer's origin changed (RobotNode: a jump the following readings
@@ -188,6 +191,11 @@ class Robot {
   double map_mean_diag() const;
   int last_frame() const { return last_frame_; }
   const Pose2& last_odometer() const { return last_odometer_; }
+  /// The time a prediction from the last frame to `in` spans [s]: the frames'
+  /// utime difference, within [0, kMaxFramePeriodS per frame elapsed] (a stamp that
+  /// does not advance gives 0; one far ahead is bounded: stamps are the sender's).
+  double step_seconds(const FrameInput& in) const;
+  static constexpr double kMaxFramePeriodS = 10.0;
 
  private:
   friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
@@ -235,7 +243,7 @@ class Robot {
   /// `aided`'s (apply_team_map); the histories, the consistency window and the
   /// trouble memory start over.
   void relocalise(const GaugeTest& own, const GaugeTest& aided);
-  EkfStatus mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, FrameSummary* s);
+  EkfStatus mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt, FrameSummary* s);
   /// The operation on the aided filter (when there is one), recorded in its history
   /// when it succeeds, counted in s->filter_faults (when given) when not.
   void mirror_to_aided(const FilterHistory::Op& op, FrameSummary* s);
@@ -271,6 +279,7 @@ class Robot {
   bool initialised_ = false;
   int last_frame_ = -1;
   Pose2 last_odometer_;
+  std::int64_t last_utime_ = 0;  // [us] the last frame's FrameInput::utime
   std::vector<int> updated_;      // ids corrected this frame (reserved: one per observation)
   std::vector<MapEvent> events_;  // this frame's events (reserved at construction)
   int events_dropped_ = 0;

@@ -17,7 +17,7 @@ bool parse_mode(const std::string& s, Mode* m);
 
 struct RobotOptions {
   Mode mode = Mode::kEla;
-  EkfOptions ekf;
+  EkfOptions ekf;  // robot.filter, and robot.odometry_calibration (ekf.calibration)
   /// Observations a SENSOR frame may carry (robot.filter.max_observations; a frame
   /// with more is refused). Sizes the frame buffers at start-up.
   int max_observations = contract::kMaxObsPerFrame;

@@ -2,7 +2,7 @@
 // restart as if it had never stopped (robot_node --state PATH; docs/deployment.md,
 // docs/decisions.md "robot state file"): the filter (mean, covariance, slot layout),
 // the L-map (every LMapEntry field), the Robot's frame bookkeeping (last frame, last
-// odometer reading), and the node's last frame, event seq, counters, held notices
+// odometer reading and frame time), and the node's last frame, event seq, counters, held notices
 // and incarnation. Per-frame scratch (ElaGate, ConsensusSolver, the last frame's
 // outgoing messages) is rebuilt by every frame and not kept; neither are processing
 // times (DurationHistogram) nor the message layer's notice seq (RobotPorts).
@@ -24,7 +24,10 @@
 namespace elaslam {
 
 constexpr const char* kRobotStateFormat = "elaslam.robot_state";
-constexpr int kRobotStateVersion = 1;
+/// 2 (issue 42): the filter's state has the odometer's calibration states after the
+/// pose (StateLayout), predictions in the history carry their dt, and the robot its
+/// last frame's utime. A file of another version is refused (the robot starts fresh).
+constexpr int kRobotStateVersion = 2;
 
 /// The state file's text for `node` (start-up and between frames; allocates).
 /// `mission` (not 0: the team's keys are on) is written in the file's head.

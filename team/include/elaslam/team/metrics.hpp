@@ -70,6 +70,12 @@ struct RobotMetrics {
   std::int64_t team_lost = 0;     // team maps fused untested: the robot was lost and saw it itself
   std::int64_t relocalised = 0;   // team maps whose gauge test moved the robot's whole state
   std::int64_t own_drifted_frames = 0;  // frames its own filter had drifted from the aided one: no MOVING finding
+  // The odometer's calibration the robot's own filter estimated, at the end
+  // (robot.odometry_calibration with a sigma or walk > 0; in-process runs only).
+  bool calibration_estimated = false;
+  double turn_scale = 1.0, turn_scale_sigma = 0.0;
+  double speed_scale = 1.0, speed_scale_sigma = 0.0;
+  double turn_bias_rad_s = 0.0, turn_bias_sigma_rad_s = 0.0;
 };
 
 struct RunMetrics {
