@@ -1,5 +1,5 @@
-// simulator: the world of the paper's experiment as an LCM node (DESIGN.md sections
-// 1 and 7). Publishes SENSOR_<r> for every robot and GROUND_TRUTH at F frames/s on
+// simulator: the world of the paper's experiment as an LCM node (docs/design.md sections
+// 1 and 6). Publishes SENSOR_<r> for every robot and GROUND_TRUTH at F frames/s on
 // absolute deadlines, STATUS_SIM and RUN_INFO (what the run is: scenario, seed,
 // dynamism, speed, rate, effective config) before the first frame and about once a
 // second; with --lockstep it waits after each frame for every robot's POSE_<r> of

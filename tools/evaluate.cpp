@@ -353,6 +353,16 @@ RunInfo run_facts(const Args& a, const LogData& d, const std::string& command) {
   const double moving_percent =
       last.truly_moving.empty() ? 0.0 : 100.0 * moving / static_cast<double>(last.truly_moving.size());
   const bool sim = d.run_info && d.run_info->seed >= 0;
+  // Recorded data (RUN_INFO without a seed) has no simulator parameters, unless the
+  // command line gives them.
+  info.simulated = sim || a.dynamism >= 0.0 || a.speed >= 0.0 || a.seed >= 0;
+  if (!info.simulated) {
+    if (d.run_info)
+      info.data = "recorded by " + d.run_info->source +
+                  (d.run_info->scenario.empty() ? std::string() : " from " + d.run_info->scenario);
+    info.data += (info.data.empty() ? "" : ", ") + std::to_string(moving) + " of " +
+                 std::to_string(last.truly_moving.size()) + " landmarks moving in the ground truth";
+  }
   info.dynamism_percent = sim ? d.run_info->dynamism_percent : a.dynamism >= 0.0 ? a.dynamism : moving_percent;
   info.speed_mps = sim ? d.run_info->landmark_speed_mps : std::max(a.speed, 0.0);
   info.seed = sim ? d.run_info->seed : std::max(a.seed, 0LL);

@@ -97,7 +97,7 @@ def validate(build, dataset, config, robots, mode, barcodes, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--dataset", default=os.path.join(ROOT, "..", "shared", "data", "mrclam", "dataset6"))
+    ap.add_argument("--dataset", default=os.path.join(ROOT, "data", "mrclam", "dataset6"))
     ap.add_argument("--build-dir", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "mrclam_crossval"))
     ap.add_argument("--folds", default=DEFAULT_FOLDS)

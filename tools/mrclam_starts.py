@@ -45,7 +45,7 @@ def one_run(build, dataset, config, start, mode, barcodes, out, extra):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--dataset", default=os.path.join(ROOT, "..", "shared", "data", "mrclam", "dataset6"))
+    ap.add_argument("--dataset", default=os.path.join(ROOT, "data", "mrclam", "dataset6"))
     ap.add_argument("--config", default=os.path.join(ROOT, "config", "mrclam.yaml"))
     ap.add_argument("--build-dir", default=os.path.join(ROOT, "build"))
     ap.add_argument("--out", default=os.path.join(ROOT, "results", "mrclam_starts"))

@@ -169,7 +169,7 @@ struct Args {
 /// -1 to go on, else the exit code.
 int parse_args(int argc, char** argv, Args* a) {
   CLI::App app{"elaslam run_dataset: the team on a recorded MRCLAM dataset, against Vicon ground truth"};
-  app.add_option("--dataset", a->dataset_dir, "MRCLAM dataset directory (e.g. ../shared/data/mrclam/dataset6)")
+  app.add_option("--dataset", a->dataset_dir, "MRCLAM dataset directory (e.g. data/mrclam/dataset6)")
       ->required()->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "run_dataset");
   cli::add_config_option(app, &a->config_path, "its dataset:, robot: and main: sections", "mrclam.yaml");
@@ -274,6 +274,9 @@ std::vector<std::string> write_runs(const Args& a, const DatasetConfig& cfg, con
     mrclam::Options so = cfg.dataset;
     so.with_robot_barcodes = run.barcodes;
     RunInfo info{run.mode, 0.0, 0.0, 0, a.config_path, cfg.effective_yaml, command};
+    info.simulated = false;
+    info.data = "MRCLAM " + std::filesystem::path(a.dataset_dir).lexically_normal().filename().string() +
+                (run.barcodes ? ", robot barcodes kept" : ", robot barcodes removed");
     nlohmann::json j = metrics_json(info, run.result);
     j["dataset"] = dataset_json(run.barcodes ? *src.with : *src.without, so, a.dataset_dir, dr);
     j["robot_barcode_corrections"] = run.robot_corrections;

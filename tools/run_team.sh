@@ -203,6 +203,24 @@ interrupted() {
 }
 trap interrupted INT TERM
 
+# The build's own progress (ninja's "[N/M]" lines) while the whole output goes to LOG:
+# one line rewritten in place on a terminal, else a line at every tenth of the steps
+# (a first build takes minutes: a log or CI shows it is moving). The caller's
+# pipefail gives the build's status.
+build_progress() {
+  local log="$1"
+  awk -v tty="$([ -t 2 ] && echo 1 || echo 0)" -v logf="$log" '
+    { print > logf; fflush(logf) }
+    match($0, /^\[[0-9]+\/[0-9]+\]/) {
+      split(substr($0, 2, RLENGTH - 2), nm, "/"); n = nm[1] + 0; m = nm[2] + 0
+      if (m < 20) next                       # an incremental build: nothing to show
+      pct = int(100 * n / m)
+      if (tty == 1) { printf "\rrun_team.sh: building: %d/%d steps (%d %%)", n, m, pct > "/dev/stderr"; shown = 1 }
+      else if (pct >= next_pct) { printf "run_team.sh: building: %d/%d steps (%d %%)\n", n, m, pct > "/dev/stderr"; next_pct = pct - pct % 10 + 10 }
+    }
+    END { if (shown) printf "\n" > "/dev/stderr" }'
+}
+
 TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor log_merge record keys)
 [ -z "$VIEW_PORT" ] || TARGETS+=(viewer)
 if [ "$INSIDE" -eq 0 ]; then
@@ -215,7 +233,7 @@ if [ "$INSIDE" -eq 0 ]; then
   echo "run_team.sh: building ${TARGETS[*]} in ${BUILD_DIR#$ROOT/}$([ "$first" -eq 1 ] &&
     echo " (the first build takes a few minutes)")" >&2
   build_log="$OUT/logs/build.log"
-  if ! cmake --build "$BUILD_DIR" --target "${TARGETS[@]}" -j "$(nproc)" >"$build_log" 2>&1; then
+  if ! cmake --build "$BUILD_DIR" --target "${TARGETS[@]}" -j "$(nproc)" 2>&1 | build_progress "$build_log"; then
     tail -n 30 "$build_log" >&2
     echo "run_team.sh: the build failed (log: $build_log)" >&2
     exit 1

@@ -210,7 +210,7 @@ void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<S
   std::ofstream out = open(fs::path(dir) / "tables.md");
   out << "# Sweep results\n\nEntries: mean ± sample standard deviation over " << g.runs
       << " runs (seeds seed_base .. seed_base + runs - 1, the same for every mode and cell). "
-         "Errors in metres (DESIGN.md section 8: landmark error = eq 18, robot error = mean position error).\n\n";
+         "Errors in metres (docs/design.md section 7: landmark error = eq 18, robot error = mean position error).\n\n";
   if (g.oracle)
     out << "**Oracle runs** (`--oracle`): every observation of a truly moving landmark was removed before the "
            "robots saw it, so these figures are the bound a perfect detector would reach.\n\n";

@@ -87,13 +87,13 @@ FrameSummary Robot::process(const FrameInput& in) {
   if (options_.mode == Mode::kEkf || options_.mode == Mode::kGated) {
     process_classic(in, &s);
   } else {
-    process_ela(in, &s);       // steps 1-3 of DESIGN.md section 5: the landmarks seen
+    process_ela(in, &s);       // steps 1-3 of docs/design.md section 4: the landmarks seen
     check_missing(&s);         // step 4: those expected in view but not seen
     drop_unseen_candidates();  // candidates not seen lately start over
   }
   // UPDATEs are rate-limited per landmark: they refresh main_robot's copy, which
   // snapshots also repair, and one message per observation per frame would be most
-  // of the team's traffic (DESIGN: messages per frame bound the team's rate).
+  // of the team's traffic (docs/design.md: messages per frame bound the team's rate).
   for (int id : updated_) {
     const LMapEntry& e = lmap_[id];
     if (e.status == LandmarkStatus::kStatic && in.frame - e.reported_frame >= options_.update_period_frames)
@@ -204,7 +204,7 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
 }
 
 // Modes ela and consensus: Algorithm 1's loop over the observed landmarks
-// (DESIGN.md section 5): step 3 for the mapped ones, all judged against the same
+// (docs/design.md section 4): step 3 for the mapped ones, all judged against the same
 // prior before any of them corrects the filter, then steps 1-2 for the others.
 void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   own_drifted_ = own_filter_drifted();

@@ -219,8 +219,12 @@ nlohmann::json baseline_json(const RunInfo& base_info, const RunResult& base, co
 void print_summary(std::ostream& out, const RunInfo& info, const RunResult& r) {
   const RunMetrics& m = r.metrics;
   out << std::fixed << std::setprecision(3);
-  out << "mode " << info.mode << ", dynamism " << info.dynamism_percent << " %, speed " << info.speed_mps
-      << " m/s, seed " << info.seed << ", " << m.frames << " frames\n";
+  if (info.simulated)
+    out << "mode " << info.mode << ", dynamism " << info.dynamism_percent << " %, speed " << info.speed_mps
+        << " m/s, seed " << info.seed << ", " << m.frames << " frames\n";
+  else
+    out << "mode " << info.mode << ", " << (info.data.empty() ? std::string("recorded data") : info.data) << ", "
+        << m.robots.size() << " robots, " << m.frames << " frames\n";
   out << "  global map landmark error (eq 18): " << m.landmark_error_mean << " m mean, " << m.landmark_error_rms
       << " m rms, " << m.landmark_error_static << " m static-only; final map " << r.final_map.size() << " static, "
       << r.final_moving.size() << " moving\n";
@@ -229,9 +233,14 @@ void print_summary(std::ostream& out, const RunInfo& info, const RunResult& r) {
     out << "  " << std::setw(5) << rm.id << "  " << std::setw(10) << rm.error_mean << "  " << std::setw(9)
         << rm.error_rms << "  " << std::setw(17) << std::setprecision(6) << rm.final_uncertainty << std::setprecision(3)
         << '\n';
-  out << "  moving landmarks: precision " << m.precision << ", recall " << m.recall << " (" << m.true_positives << " of "
-      << m.detectable << " detected, " << m.flagged << " flagged), " << m.mean_frames_to_detect
-      << " frames to detect\n";
+  // Precision and recall of nothing say nothing: with no mover in the ground truth
+  // every flag is a false alarm, and that is what is printed.
+  if (m.detectable == 0)
+    out << "  moving landmarks: none in the ground truth; " << m.flagged << " flagged (false alarms)\n";
+  else
+    out << "  moving landmarks: precision " << m.precision << ", recall " << m.recall << " (" << m.true_positives
+        << " of " << m.detectable << " detected, " << m.flagged << " flagged), " << m.mean_frames_to_detect
+        << " frames to detect\n";
   out << "  frame time: p50 " << m.frame_us_p50 << " us, p99 " << m.frame_us_p99 << " us, max " << m.frame_us_max
       << " us\n";
 }

@@ -9,7 +9,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BIN="$(cd "${1:?usage: data_dictionary.sh BUILD_DIR}" && pwd)/bin"
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
-DATA="$ROOT/../shared/data/mrclam/dataset6"
+DATA="$ROOT/data/mrclam/dataset6"
 TINY="$ROOT/tests/dataset/data/tiny"
 "$BIN/run_scenario" --config "$ROOT/config/paper.yaml" --frames 40 --baseline ekf --out "$OUT/scenario" > /dev/null
 "$BIN/sweep" --config "$ROOT/config/paper.yaml" --modes ela --dynamism 50 --speed 0.5 --runs 1 --no-plots \
@@ -20,7 +20,7 @@ TINY="$ROOT/tests/dataset/data/tiny"
 "$BIN/log_info" --json "$OUT/tiny.lcmlog" > "$OUT/log_info.json"
 FILES=("$OUT/scenario/metrics.json" "$OUT/scenario/frames.csv" "$OUT/scenario/map.csv"
        "$OUT/sweep/runs.csv" "$OUT/sweep/frames.csv" "$OUT/evaluate/metrics.json" "$OUT/log_info.json")
-if [ -d "$DATA" ]; then  # the real recording (beside the project, ../shared/data)
+if [ -d "$DATA" ]; then  # the real recording (in the repository: tools/get_mrclam.sh)
   "$BIN/run_dataset" --dataset "$DATA" --config "$ROOT/config/mrclam.yaml" --duration 20 --report --modes ela \
     --no-plots --out "$OUT/dataset" > /dev/null
   "$BIN/mrclam_stats" --dataset "$DATA" --json "$OUT/mrclam_stats.json" > /dev/null

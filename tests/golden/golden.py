@@ -14,7 +14,7 @@ The reference (tests/golden/reference/, README.md there) holds:
   scenario_<name>.frames.csv     their per-frame errors
   mrclam_slice.report.json       run_dataset --report on the first 120 s of MRCLAM dataset6
                                  (ekf, ela, consensus, without and with robot barcodes);
-                                 skipped when ../shared/data is not beside the project
+                                 skipped without data/mrclam/dataset6 (tools/get_mrclam.sh)
 In-process results are deterministic: they are compared exactly (JSON numbers as
 written, 17 significant digits; CSV text as written). What varies from run to run
 is left out: processing times ("timing"), the version, the command line and paths.
@@ -37,7 +37,7 @@ HERE = os.path.dirname(os.path.realpath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 REF = os.path.join(HERE, "reference")
 CONFIG = os.path.join(ROOT, "config", "paper.yaml")
-DATASET = os.path.join(ROOT, "..", "shared", "data", "mrclam", "dataset6")
+DATASET = os.path.join(ROOT, "data", "mrclam", "dataset6")
 LIVE_TOL = 1e-6  # [m] live against in-process, per frame
 
 # name -> run_scenario arguments (also the live team's, with run_team.sh).

@@ -212,6 +212,43 @@ def shown(path, source):
     return path if rel.startswith("..") else rel
 
 
+# What a README command builds, for the order check: tools/run_team.sh its TARGETS
+# (read from the script), the test command and a `cmake --build build` without
+# --target (or the package target, which depends on all) everything.
+def run_team_targets(source):
+    with open(os.path.join(source, "tools", "run_team.sh"), encoding="utf-8") as f:
+        m = re.search(r"^TARGETS=\(([^)]*)\)", f.read(), re.M)
+    return set(m.group(1).split()) if m else set()
+
+
+# Non-program outputs of the build that a README command needs: the generated
+# Python message types (not among run_team.sh's targets).
+NEEDS_FULL_BUILD = ("tools/decode_log.py",)
+
+
+def order_problems(source, cmds):
+    """The README read in order by a new user on a fresh clone: every build/bin/<name>
+    a command uses must be built by an earlier command. Returns the problems."""
+    with open(os.path.join(source, "README.md"), encoding="utf-8") as f:
+        text = normalize(f.read())
+    pos = {c: (text.find(c) if text.find(c) >= 0 else len(text)) for c in cmds}
+    team_targets = run_team_targets(source)
+    built, everything, problems = set(), False, []
+    for c in sorted(cmds, key=lambda c: pos[c]):
+        if not everything:
+            for prog in re.findall(r"(?<![\w/.])build/bin/([\w-]+)", c):
+                if prog not in built:
+                    problems.append(f"`{c}` uses build/bin/{prog}, which no earlier README command builds")
+            if c.startswith(NEEDS_FULL_BUILD):
+                problems.append(f"`{c}` needs the whole build, which no earlier README command makes")
+        if re.match(r"tools/run_team\.sh(\s|$)", c):
+            built |= team_targets
+        if (re.match(r"(tools/run_tests\.sh|cmake --build build)(\s|$)", c) and
+                ("--target" not in c or re.search(r"--target (package|all)\b", c))):
+            everything = True
+    return problems
+
+
 def check(source, build, table):
     cmds = readme_commands(source, project_programs(source))
     entries = read_table(table)
@@ -235,6 +272,12 @@ def check(source, build, table):
     if dup:
         ok = False
         print("README commands with more than one entry: " + "; ".join(dup))
+    order = order_problems(source, cmds)
+    if order:
+        ok = False
+        print("README commands out of order (a new user running them top to bottom on a fresh clone fails):")
+        for p in order:
+            print("  " + p)
     print(f"README commands: {len(cmds)}; table entries: {len(entries)} "
           f"({sum(1 for e in entries if e.kind == 'extra')} extra)" + ("" if ok else ": MISMATCH"))
     return ok, entries
@@ -250,7 +293,7 @@ def namespaces_usable():
 def make_scratch(source, build, scratch):
     """<scratch>/repo mirrors the repository root: links to the source folders and
     build -> the test's build dir; outputs (results/, runs/, ...) are real folders
-    there. <scratch>/shared -> <source>/../shared for README paths like ../shared/."""
+    there."""
     marker = os.path.join(scratch, ".readme_scratch")
     if os.path.isdir(scratch) and os.listdir(scratch):
         if not os.path.isfile(marker):
@@ -266,9 +309,6 @@ def make_scratch(source, build, scratch):
             continue
         os.symlink(os.path.join(source, name), os.path.join(repo, name))
     os.symlink(os.path.abspath(build), os.path.join(repo, "build"))
-    shared = os.path.join(os.path.dirname(source), "shared")
-    if os.path.isdir(shared):
-        os.symlink(shared, os.path.join(scratch, "shared"))
     return repo
 
 

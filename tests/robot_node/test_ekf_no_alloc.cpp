@@ -1,5 +1,5 @@
 // Proof that the filter's frame path allocates nothing after construction
-// (DESIGN.md section 4). Two independent guards watch the region:
+// (docs/design.md section 3). Two independent guards watch the region:
 //  - Eigen's EIGEN_RUNTIME_NO_MALLOC: every Eigen heap allocation asserts (the
 //    filter's code is linked from elaslam_robot_no_malloc, the library's sources
 //    built with the guard and asserts on; this target inherits both);

@@ -1,5 +1,5 @@
 // The team on real data: two minutes of all five robots of UTIAS MRCLAM dataset6
-// (when the data is beside the project, ../shared/data/mrclam/dataset6), against
+// (when the data is in the repository, data/mrclam/dataset6: tools/get_mrclam.sh), against
 // Vicon, with config/mrclam.yaml. Bounds are stated next to the figures measured
 // with `run_dataset --report --duration 120` (docs/mrclam.md).
 #include <gtest/gtest.h>
@@ -15,7 +15,7 @@
 namespace elaslam {
 namespace {
 
-const std::string kData = std::string(ELASLAM_SOURCE_DIR) + "/../shared/data/mrclam/dataset6";
+const std::string kData = std::string(ELASLAM_SOURCE_DIR) + "/data/mrclam/dataset6";
 const std::string kConfig = std::string(ELASLAM_SOURCE_DIR) + "/config/mrclam.yaml";
 
 double mean_of_rms(const RunResult& r) {

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Test `mrclam_crossval` (ctest): tools/mrclam_crossval.py on MRCLAM dataset6 (skipped,
-exit 77, without ../shared/data). Checks that every fold ran with finite errors and
+exit 77, without data/mrclam/dataset6: tools/get_mrclam.sh). Checks that every fold ran with finite errors and
 that config/mrclam.yaml holds what the fit on all five robots gives (within the
 rounding of the committed values, 3 %): the calibration is what docs/mrclam.md says
 it was fitted from.
@@ -15,13 +15,13 @@ import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-DATASET = os.path.join(ROOT, "..", "shared", "data", "mrclam", "dataset6")
+DATASET = os.path.join(ROOT, "data", "mrclam", "dataset6")
 
 
 def main():
     build = sys.argv[1]
     if not os.path.isdir(DATASET):
-        print("mrclam_crossval: skipped (no ../shared/data/mrclam/dataset6)")
+        print("mrclam_crossval: skipped (no data/mrclam/dataset6: tools/get_mrclam.sh)")
         return 77
     with tempfile.TemporaryDirectory() as out:
         subprocess.run([sys.executable, os.path.join(ROOT, "tools", "mrclam_crossval.py"), "--build-dir", build,

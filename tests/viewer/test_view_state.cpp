@@ -203,6 +203,37 @@ TEST(ViewState, GroundTruthOverlay) {
   EXPECT_EQ(j["truth_landmarks"][1]["moving"], true);
 }
 
+TEST(ViewState, TheHeaderFollowsAReplayThatStartsOver) {
+  ViewState v;
+  ground_truth_t g{};
+  g.num_robots = 1;
+  g.robot_ids = {1};
+  g.robots.resize(1);
+  for (int f : {0, 1, 2, 148, 149}) {
+    g.frame = f;
+    ASSERT_TRUE(v.on_truth(g));
+  }
+  EXPECT_EQ(v.frame(), 149);
+  g.frame = 145;  // a late datagram is not a restart
+  ASSERT_TRUE(v.on_truth(g));
+  EXPECT_EQ(v.frame(), 149);
+  g.frame = 0;  // the replay starts over
+  ASSERT_TRUE(v.on_truth(g));
+  EXPECT_EQ(v.frame(), 0);
+  EXPECT_EQ(state(v)["robots"][0]["truth_trail"].size(), 1u);  // the old run's trail is gone
+  g.frame = 1;
+  ASSERT_TRUE(v.on_truth(g));
+  EXPECT_EQ(v.frame(), 1);
+  run_info_t ri{};
+  ri.frames = 150;
+  ri.frame = 140;
+  ASSERT_TRUE(v.on_run_info(ri));
+  EXPECT_EQ(v.frame(), 140);
+  ri.frame = -1;  // a new run announced before its first frame: the header waits for it
+  ASSERT_TRUE(v.on_run_info(ri));
+  EXPECT_EQ(v.frame(), 140);
+}
+
 candidate_list_t candidates(int robot, int frame, std::vector<int> ids) {
   candidate_list_t m{};
   m.robot_id = static_cast<std::int16_t>(robot);

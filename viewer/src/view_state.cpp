@@ -47,6 +47,18 @@ void ViewState::see_frame(int frame) {
   if (frame > frame_) frame_ = frame;
 }
 
+// A datagram a few frames late is not a restart; a source 10 frames (1 s at 10 Hz)
+// or more behind the header is: a replay looped or a new run began.
+void ViewState::see_source_frame(int frame) {
+  constexpr int kRestartFrames = 10;
+  if (frame >= 0 && frame <= frame_ - kRestartFrames) {
+    frame_ = frame;
+    for (auto& [id, r] : robots_) r.truth_trail.clear();
+    return;
+  }
+  see_frame(frame);
+}
+
 void ViewState::push_trail(std::deque<std::array<double, 2>>* t, double x, double y) const {
   t->push_back({x, y});
   while (static_cast<int>(t->size()) > limits_.trail_points) t->pop_front();
@@ -56,6 +68,7 @@ bool ViewState::on_run_info(const run_info_t& m) {
   ++messages_;
   if (m.frames < 0 || m.frame < -1) return bad("RUN_INFO frames out of range");
   frames_total_ = m.frames;
+  see_source_frame(m.frame);
   return true;
 }
 
@@ -168,6 +181,7 @@ bool ViewState::on_truth(const ground_truth_t& m) {
     const landmark_truth_t& l = m.landmarks[k];
     if (!finite(l.x) || !finite(l.y) || std::fabs(l.x) > b || std::fabs(l.y) > b) return bad("GROUND_TRUTH landmark");
   }
+  see_source_frame(m.frame);  // first: a replay that started over clears the old trails
   for (int k = 0; k < m.num_robots; ++k) {
     Robot& r = robot(m.robot_ids[k]);
     r.has_truth = true;
@@ -179,7 +193,6 @@ bool ViewState::on_truth(const ground_truth_t& m) {
     const landmark_truth_t& l = m.landmarks[k];
     truth_landmarks_.push_back({l.id, l.x, l.y, l.moving != 0});
   }
-  see_frame(m.frame);
   return true;
 }
 

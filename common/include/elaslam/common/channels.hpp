@@ -1,4 +1,4 @@
-// Every LCM channel name of the system, built in one place (DESIGN.md section 3).
+// Every LCM channel name of the system, built in one place (docs/design.md section 2).
 // An optional suffix (e.g. "_SIM2") lets two teams share one LCM network.
 #pragma once
 
@@ -87,7 +87,7 @@ inline bool strip_suffix(std::string_view channel, std::string_view suffix, std:
   return true;
 }
 
-/// Is `channel` one of the team's channels with `suffix` (DESIGN.md section 3)?
+/// Is `channel` one of the team's channels with `suffix` (docs/design.md section 2)?
 inline bool is_team_channel(std::string_view channel, std::string_view suffix = "") {
   for (std::string_view p : kRobotPrefixes)
     if (robot_of(channel, p, suffix) > 0) return true;

@@ -1,5 +1,5 @@
 // Importer for the UTIAS Multi-Robot Cooperative Localization and Mapping dataset
-// (Leung et al., IJRR 2011; /work/shared/data/mrclam/README.md): the text files of
+// (Leung et al., IJRR 2011; data/mrclam/dataset6/README.md, tools/get_mrclam.sh): the text files of
 // one recording become, frame by frame, the messages the simulator would publish
 // (sensor_frame_t per robot, ground_truth_t), so the robots and main run unchanged.
 //

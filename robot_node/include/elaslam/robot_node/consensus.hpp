@@ -1,4 +1,4 @@
-// `consensus` mode (ours, DESIGN.md section 5): pairwise consistency of co-observed
+// `consensus` mode (ours, docs/design.md section 4): pairwise consistency of co-observed
 // landmarks' relative vectors and the largest mutually consistent set, found
 // exactly (every maximal clique is enumerated; the sets are small).
 //

@@ -1,4 +1,4 @@
-// Fixed-memory planar EKF-SLAM (DESIGN.md section 4). Paper equations held here:
+// Fixed-memory planar EKF-SLAM (docs/design.md section 3). Paper equations held here:
 // the state X = [R; M] (eqs 1-2, here with the odometer's calibration states), prediction (eqs 3-6, with the models of
 // models.hpp), correction (eqs 7-13), augmentation by the inverse observation
 // (eq 15) and the uncertainty mean(diag(P)) (eq 19). Not here: eq 14 (landmark

@@ -1,5 +1,5 @@
-// The expected landmark area (ELA) gate (paper section 3.3, eq 16; DESIGN.md
-// section 5) and the pairwise relative-vector test that `consensus` mode builds on.
+// The expected landmark area (ELA) gate (paper section 3.3, eq 16; docs/design.md
+// section 4) and the pairwise relative-vector test that `consensus` mode builds on.
 // ElaGate decides, per frame, one verdict for every mapped landmark in view and for
 // every candidate sighting, and keeps one record of the test that decided it.
 //
@@ -85,7 +85,7 @@ Eigen::Matrix2d neighbour_weight(const EkfSlam& ekf, const InView& j);
 /// The reference for ElaGate's O(n^2)-per-view computation: O(n^2) per landmark.
 double ela_multi_d2(const EkfSlam& ekf, const InView* view, int n, int i, const std::uint8_t* active = nullptr);
 
-/// Steps 2-3 of DESIGN.md section 5 for one frame: which observations are inside
+/// Steps 2-3 of docs/design.md section 4 for one frame: which observations are inside
 /// their ELA. Every mapped landmark in view is judged against the same prior (the
 /// filter before this frame's corrections) by eq 16 (modes ela), the consensus
 /// clique (mode consensus) or, with no other landmark to compare with, the

@@ -1,4 +1,4 @@
-// The robot's local map, L-map (paper section 3.3, Algorithm 1; DESIGN.md section 5):
+// The robot's local map, L-map (paper section 3.3, Algorithm 1; docs/design.md section 4):
 // everything the robot keeps per landmark id (status, last world position and
 // covariance from the inverse observation g(R, y), sightings, streaks, the drift
 // sums), and each landmark's lifecycle as named transitions, the only code that
@@ -67,7 +67,7 @@ struct LMapEntry {
   Eigen::Vector2d drift = Eigen::Vector2d::Zero();
 };
 
-/// The lifecycle's thresholds (RobotOptions, DESIGN.md section 5).
+/// The lifecycle's thresholds (RobotOptions, docs/design.md section 4).
 struct LifecycleRules {
   int confirm_frames = 3;       // consistent sightings before a new candidate becomes STATIC
   int confirm_frames_few = 0;   // the same while the robot has few static landmarks (set_few_static), 0: off

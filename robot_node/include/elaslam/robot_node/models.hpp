@@ -16,7 +16,7 @@ struct RangeBearing {
   double bearing = 0.0;  // [rad], robot frame, in [-pi, pi)
 };
 
-/// Odometry noise model (DESIGN.md section 3, sensor_frame_t): variances grow with
+/// Odometry noise model (docs/design.md section 2, sensor_frame_t): variances grow with
 /// the distance travelled and the angle turned.
 struct OdometryNoise {
   double var_trans_per_m = 0.0;   // [m^2/m]   along and across the motion

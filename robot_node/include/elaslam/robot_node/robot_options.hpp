@@ -24,7 +24,7 @@ struct RobotOptions {
   double initial_sigma_xy = 0.001;     // [m]   prior std dev of the known initial position
   double initial_sigma_theta = 0.001;  // [rad] prior std dev of the known initial heading
 
-  // ELA gate and L-map rules (DESIGN.md section 5).
+  // ELA gate and L-map rules (docs/design.md section 4).
   double ela_gate_probability = 0.99;   // chi-square probability of the ELA / consensus tests
   int confirm_frames = 3;               // consistent sightings before a candidate becomes STATIC
   /// When fewer than 3 STATIC landmarks corrected the robot in this frame, a new

@@ -1,4 +1,4 @@
-// The simulator's waits on the team (DESIGN.md section 1):
+// The simulator's waits on the team (docs/design.md section 1):
 // - lockstep (--lockstep): after frame k the simulator waits until every robot's
 //   POSE_<r> of frame k has come, bounded by a timeout, so the team runs as fast as
 //   it answers and never faster;

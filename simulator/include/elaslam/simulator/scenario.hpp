@@ -1,4 +1,4 @@
-// The simulated experiment of the paper (section 4, DESIGN.md section 7): world,
+// The simulated experiment of the paper (section 4, docs/design.md section 6): world,
 // landmark layout, moving landmarks, robots on semicircular paths, sensor and
 // odometry noise. SI units inside; angles in radians unless the name says _deg.
 // config/paper.yaml documents every key and the reasoning behind the values.

@@ -1,4 +1,4 @@
-// The simulator's clock (DESIGN.md section 7): frame k is due at t0 + k / F, every
+// The simulator's clock (docs/design.md section 6): frame k is due at t0 + k / F, every
 // deadline from the same origin so that no drift accumulates. The world's work for a
 // frame is done ahead of its deadline (the frame's processing time) and its messages
 // go out at the deadline. ScheduleStats keeps what the schedule achieved.

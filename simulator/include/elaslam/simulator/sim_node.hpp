@@ -1,4 +1,4 @@
-// The simulator on the message layer (DESIGN.md sections 1 and 7): publishes RUN_INFO
+// The simulator on the message layer (docs/design.md sections 1 and 6): publishes RUN_INFO
 // (what the run is: scenario, seed, dynamism, speed, rate, effective config) and
 // STATUS_SIM before the first frame and about once a second, then SENSOR_<r> for
 // every robot and GROUND_TRUTH of each frame at its deadline (scheduler.hpp); in

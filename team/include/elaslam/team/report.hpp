@@ -20,6 +20,10 @@ struct RunInfo {
   std::string source;              // config file or log
   std::string effective_config;    // YAML text, echoed as a parsed object ("" -> null)
   std::string command_line;        // the command that made the file (provenance)
+  // Real (recorded) data has no dynamism, speed or seed: the summary then says what
+  // the data is (`data`, e.g. "MRCLAM dataset6, robot barcodes kept") instead.
+  bool simulated = true;
+  std::string data;
 };
 
 /// Version of metrics.json's layout; docs/data_dictionary.md describes every key.

@@ -1,4 +1,4 @@
-// The whole team in one process, in lockstep (DESIGN.md section 1, way 2):
+// The whole team in one process, in lockstep (docs/design.md section 1, way 2):
 // simulator + every robot node + main_robot, frame by frame, over the in-process
 // transport (transport/inprocess_transport.hpp), each node on the node shell with the
 // ports its process uses (RobotPorts, MainPorts): the live and in-process paths share

@@ -1,5 +1,5 @@
 // The in-process transport: every node of a team in one process and one thread,
-// wired through one FIFO queue (DESIGN.md section 1, way 2). It behaves as LCM's
+// wired through one FIFO queue (docs/design.md section 1, way 2). It behaves as LCM's
 // memq:// does (LCM.md): messages are dispatched in the order they were published, a
 // message goes to its subscribers in the order they subscribed, a publish from inside
 // a handler is queued behind what is already queued (no recursion), and a message

@@ -1,4 +1,4 @@
-// A transport moves encoded messages between named channels (DESIGN.md section 2,
+// A transport moves encoded messages between named channels (docs/architecture.md,
 // transport/). Two implementations: LCM (lcm_transport.hpp: udpm:// in the
 // deployment, memq:// and file:// too) and in-process (inprocess_transport.hpp: one
 // FIFO queue in one thread, deterministic: the in-process team run and the tests).

@@ -94,6 +94,9 @@ class ViewState {
 
   bool bad(const char* why);
   void see_frame(int frame);
+  /// A frame from the frame source (GROUND_TRUTH, RUN_INFO): a replay started over
+  /// (the source's frame far behind the header) takes the header back with it.
+  void see_source_frame(int frame);
   Robot& robot(int id) { return robots_[id]; }
   void push_trail(std::deque<std::array<double, 2>>* t, double x, double y) const;
 
