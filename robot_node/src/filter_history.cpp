@@ -49,6 +49,11 @@ FilterHistory::Op FilterHistory::update_position(int frame, int id, const Eigen:
   op.R = R;
   return op;
 }
+FilterHistory::Op FilterHistory::held_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) {
+  Op op = update_position(frame, id, z, R);
+  op.kind = Kind::kHeldPosition;
+  return op;
+}
 FilterHistory::Op FilterHistory::add(int frame, int id, const RangeBearing& z) { return sighting(Kind::kAdd, frame, id, z); }
 FilterHistory::Op FilterHistory::remove(int frame, int id) { return op_of(Kind::kRemove, frame, id); }
 
@@ -72,7 +77,7 @@ void FilterHistory::restart(const EkfSlam& current) {
   dirty_ = false;
 }
 
-int FilterHistory::upgrade(int id) {
+int FilterHistory::upgrade(int id, Op* position) {
   int n = 0;
   for (int k = 0; k < count_; ++k) {
     Op& op = at(k);
@@ -80,6 +85,17 @@ int FilterHistory::upgrade(int id) {
       op.kind = Kind::kUpdate;
       ++n;
     }
+  }
+  // The newest held team increment since the candidate's last add.
+  for (int k = count_ - 1; k >= 0; --k) {
+    Op& op = at(k);
+    if (op.id != id) continue;
+    if (op.kind == Kind::kAdd) break;
+    if (op.kind != Kind::kHeldPosition) continue;
+    op.kind = Kind::kPosition;
+    if (position != nullptr) *position = op;
+    ++n;
+    break;
   }
   if (n > 0) dirty_ = true;
   upgraded_ += n;
@@ -94,6 +110,7 @@ const char* FilterHistory::to_string(Kind k) {
     case Kind::kPosition: return "position";
     case Kind::kAdd: return "add";
     case Kind::kRemove: return "remove";
+    case Kind::kHeldPosition: return "held_position";
   }
   return "?";
 }
@@ -122,6 +139,7 @@ bool FilterHistory::apply(const Op& op, EkfSlam* f) {
     case Kind::kPosition: return f->update_position(op.id, op.p, op.R).status == EkfStatus::kOk;
     case Kind::kAdd: return f->add_landmark(op.id, op.z) == EkfStatus::kOk;
     case Kind::kRemove: return f->remove_landmark(op.id) == EkfStatus::kOk;
+    case Kind::kHeldPosition: return true;  // nothing until the candidate is confirmed (upgrade)
   }
   return false;
 }

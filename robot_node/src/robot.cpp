@@ -315,7 +315,21 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
 void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   const bool returned = lmap_.confirm(id, last_frame_);
   history_.upgrade(id);
-  aided_history_.upgrade(id);
+  FilterHistory::Op held;
+  held.kind = FilterHistory::Kind::kHeldPosition;
+  aided_history_.upgrade(id, &held);
+  if (held.kind == FilterHistory::Kind::kPosition) {
+    // The team estimate held for the candidate (hold_team_estimate) corrects the
+    // aided filter as of its team map (the rebuild at the end of this frame): the
+    // channel counts it fused.
+    TeamIncrement inc;
+    inc.epoch = lmap_[id].times_moving;
+    inc.z = held.p;
+    inc.R = held.R;
+    inc.Y = held.R.inverse();
+    team_.commit(id, inc);
+    ++team_counters_.fused;
+  }
   if (mirror_update(id, z, false, s).status == EkfStatus::kOk) {
     ++s->num_accepted;
   } else {
@@ -609,6 +623,10 @@ TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
     if (aided_->check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) ++disagree;
   }
   team_counters_.offered += tested;
+  // Candidates' estimates are held, never fused now: whatever the verdict, and also
+  // when the robot holds nothing STATIC yet.
+  if (options_.team_map_hold_candidates && aided_history_.enabled())
+    for (int k = 0; k < n; ++k) hold_team_estimate(estimates[k]);
   if (tested == 0 && !own.fires) return TeamVerdict::kNone;
   TeamVerdict verdict = own.fires ? TeamVerdict::kRelocalised : TeamVerdict::kHeld;
   const bool trouble = trouble_frame_ >= 0 && last_frame_ - trouble_frame_ <= kTroubleMemoryFrames;
@@ -672,6 +690,31 @@ bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
   team_.commit(e.landmark_id, inc);
   ++team_counters_.fused;
   team_counters_.nis_sum += r.d2;
+  return true;
+}
+
+// A candidate's team estimate (team_map_hold_candidates): the robot does not trust
+// the landmark yet, so the team's estimate of it must not move the pose yet either;
+// but the filter history makes a confirmed candidate's sightings count from its
+// first one (confirm), and the team estimate that came meanwhile is one more of
+// them. Tested like a STATIC landmark's (the aided filter's candidate estimate
+// against the team's), it is kept in the aided history as an operation that does
+// nothing; confirmed within the window, it becomes the position update it would
+// have been (FilterHistory::upgrade) and the channel commits it; a candidate that
+// starts over or leaves drops it. The increment is taken against the channel as it
+// is: the newest held one carries everything the channel has not counted.
+bool Robot::hold_team_estimate(const TeamEstimate& e) {
+  const int id = e.landmark_id;
+  if (!lmap_.valid_id(id) || lmap_[id].status != LandmarkStatus::kCandidate || !aided_->has_landmark(id)) return false;
+  if (aided_->check_position(id, e.position, e.cov).d2 > team_gate_threshold_) {
+    ++team_counters_.gated;
+    return false;
+  }
+  TeamIncrement inc;
+  if (!team_.offer(id, lmap_[id].times_moving, e.position, e.cov, aided_->landmark(id), aided_->landmark_cov(id), &inc))
+    return false;
+  aided_history_.record(FilterHistory::held_position(last_frame_, id, inc.z, inc.R));
+  ++team_counters_.held;
   return true;
 }
 

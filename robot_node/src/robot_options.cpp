@@ -127,6 +127,7 @@ void parse(config::Reader& r, RobotOptions* o) {
         t.read_optional("gate_probability", &o->team_map_gate_probability, 0.5, 1.0);
         t.read_optional("gauge_test", &o->team_map_gauge_test);
         t.read_optional("drift_check", &o->team_map_drift_check);
+        t.read_optional("hold_candidates", &o->team_map_hold_candidates);
       },
       /*optional=*/true);
   parse(r, &o->limits);

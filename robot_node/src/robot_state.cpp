@@ -263,6 +263,7 @@ json RobotStateAccess::save_history(const FilterHistory& h) {
       case FilterHistory::Kind::kLandmarkOnly:
       case FilterHistory::Kind::kAdd: j.push_back(json::array({op.z.range, op.z.bearing})); break;
       case FilterHistory::Kind::kPosition:
+      case FilterHistory::Kind::kHeldPosition:
         j.push_back(to_json(op.p));
         j.push_back(to_json(op.R));
         break;
@@ -577,7 +578,8 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
     const json& kind = j[0];
     bool known = false;
     for (const auto kd : {FilterHistory::Kind::kPredict, FilterHistory::Kind::kUpdate, FilterHistory::Kind::kLandmarkOnly,
-                          FilterHistory::Kind::kPosition, FilterHistory::Kind::kAdd, FilterHistory::Kind::kRemove})
+                          FilterHistory::Kind::kPosition, FilterHistory::Kind::kAdd, FilterHistory::Kind::kRemove,
+                          FilterHistory::Kind::kHeldPosition})
       if (kind.is_string() && kind.get<std::string>() == FilterHistory::to_string(kd)) op.kind = kd, known = true;
     if (!known) fail(w + "[0] (kind)", kind.dump() + " is not an operation");
     op.frame = static_cast<int>(whole(j[1], w + "[1] (frame)", previous, r.last_frame_));
@@ -585,7 +587,7 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
     const bool predict = op.kind == FilterHistory::Kind::kPredict;
     op.id = static_cast<int>(whole(j[2], w + "[2] (id)", predict ? -1 : 0, predict ? -1 : max_id));
     const std::size_t values = predict                                       ? 3
-                               : op.kind == FilterHistory::Kind::kPosition ? 2
+                               : op.kind == FilterHistory::Kind::kPosition || op.kind == FilterHistory::Kind::kHeldPosition ? 2
                                : op.kind == FilterHistory::Kind::kRemove   ? 0
                                                                            : 1;
     if (j.size() != 3 + values) fail(w, "has " + std::to_string(j.size()) + " entries, a " + FilterHistory::to_string(op.kind) + " has " + std::to_string(3 + values));
@@ -610,7 +612,8 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
         op.z = {real(z[0], w + "[3][0] (range)", 1e-9, bound), real(z[1], w + "[3][1] (bearing)", -kPi - kAngleSlack, kPi + kAngleSlack)};
         break;
       }
-      case FilterHistory::Kind::kPosition: {
+      case FilterHistory::Kind::kPosition:
+      case FilterHistory::Kind::kHeldPosition: {
         op.p = vec2(j[3], w + "[3] (position)", bound);
         const json& R = array(j[4], w + "[4] (R)", 4, 4);
         for (int e = 0; e < 4; ++e)

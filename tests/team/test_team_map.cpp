@@ -4,8 +4,10 @@
 // and better poses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -254,6 +256,91 @@ TEST(TeamMap, ALandmarkEvictedAndBackIsNotFusedTwice) {
   EXPECT_EQ(robot.team_counters().fused, fused) << "fused a second time";
   EXPECT_EQ(robot.estimate().landmark_cov(kLeft).trace(), own);
   EXPECT_EQ(robot.lmap()[kLeft].times_moving, 0);
+}
+
+// team_map.hold_candidates: a team map that comes while the robot's landmarks are
+// candidates is held in the aided filter's history and fused, as of its team map,
+// when they are confirmed. After the confirming frame the aided filter of `ela` is
+// that of `ekf` (which maps at first sighting and so fused the team map at once) to
+// rounding, and the channel counts the held increments once: the same team map
+// again fuses nothing. Without the rule the candidates missed the team map.
+TEST(TeamMap, ACandidatesTeamEstimateIsFusedAsOfItsTeamMapOnceConfirmed) {
+  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  std::vector<TeamEstimate> team;
+  for (int id = 0; id < 6; ++id)
+    team.push_back({id, lms[static_cast<std::size_t>(id)] + Eigen::Vector2d(0.004 * id, -0.003),
+                    Eigen::Vector2d(1e-4, 2e-4).asDiagonal()});
+  for (const bool hold : {true, false}) {
+    SCOPED_TRACE(hold ? "hold_candidates" : "without");
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.candidate_history_frames = 2;
+    o.team_map_fuse = true;
+    o.team_map_hold_candidates = hold;
+    RobotOptions oe = test::robot_options(Mode::kEkf);
+    oe.team_map_fuse = true;
+    Robot ela(o, 1), ekf(oe, 1);
+    std::mt19937_64 rng_a(11), rng_b(11);
+    Pose2 truth{0.0, 0.0, 0.0}, odometer{0.0, 0.0, 0.0};
+    for (int k = 0; k < 3; ++k) {
+      ela.process(test::frame_from(k, truth, odometer, lms, test::all_ids(6), &rng_a));
+      ekf.process(test::frame_from(k, truth, odometer, lms, test::all_ids(6), &rng_b));
+      if (k == 1) {  // the landmarks are candidates in ela, STATIC in ekf
+        ASSERT_EQ(ela.lmap()[0].status, LandmarkStatus::kCandidate);
+        ela.apply_team_map(team.data(), 6);
+        ekf.apply_team_map(team.data(), 6);
+        EXPECT_EQ(ela.team_counters().held, hold ? 6 : 0);
+        EXPECT_EQ(ela.team_counters().fused, 0);
+        EXPECT_EQ(ekf.team_counters().fused, 6);
+      }
+      truth = compose(truth, Pose2{0.1, 0.0, 0.05});
+      odometer = compose(odometer, Pose2{0.1, 0.002, 0.048});  // the odometer errs
+    }
+    for (int i = 0; i < 6; ++i) ASSERT_EQ(ela.lmap()[i].status, LandmarkStatus::kStatic) << "landmark " << i;
+    const EkfSlam& a = ela.estimate();
+    const EkfSlam& b = ekf.estimate();
+    double d = std::max({std::fabs(a.pose().x - b.pose().x), std::fabs(a.pose().y - b.pose().y),
+                         std::fabs(a.pose().theta - b.pose().theta), (a.pose_cov() - b.pose_cov()).cwiseAbs().maxCoeff()});
+    for (int i = 0; i < 6; ++i) {
+      d = std::max({d, (a.landmark(i) - b.landmark(i)).cwiseAbs().maxCoeff(),
+                    (a.pose_landmark_cov(i) - b.pose_landmark_cov(i)).cwiseAbs().maxCoeff()});
+      for (int j = 0; j < 6; ++j) d = std::max(d, (a.landmark_cross_cov(i, j) - b.landmark_cross_cov(i, j)).cwiseAbs().maxCoeff());
+    }
+    if (hold) {
+      EXPECT_LT(d, 1e-12);
+      EXPECT_EQ(ela.team_counters().fused, 6);
+      // Counted once: the same team map again is nothing new, as for ekf.
+      ela.apply_team_map(team.data(), 6);
+      ekf.apply_team_map(team.data(), 6);
+      EXPECT_EQ(ela.team_counters().fused, 6);
+      EXPECT_EQ(ekf.team_counters().fused, 6);
+    } else {
+      EXPECT_GT(d, 1e-4);
+      EXPECT_EQ(ela.team_counters().fused, 0);
+    }
+  }
+}
+
+// A candidate that starts over before it is confirmed drops its held team estimate:
+// the landmark jumps after the team map, is re-anchored, and its confirmation later
+// fuses nothing held (the channel has counted nothing for it).
+TEST(TeamMap, ACandidateThatStartsOverDropsItsHeldTeamEstimate) {
+  std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  std::vector<TeamEstimate> team;
+  for (int id = 0; id < 6; ++id) team.push_back({id, lms[static_cast<std::size_t>(id)], 1e-4 * Eigen::Matrix2d::Identity()});
+  RobotOptions o = test::robot_options(Mode::kEla);
+  o.candidate_history_frames = 2;
+  o.team_map_fuse = true;
+  o.team_map_hold_candidates = true;
+  Robot r(o, 1);
+  const Pose2 p{0.0, 0.0, 0.0};
+  r.process(test::frame_from(0, p, p, lms, test::all_ids(6)));
+  r.apply_team_map(team.data(), 6);
+  EXPECT_EQ(r.team_counters().held, 6);
+  lms[0] += Eigen::Vector2d(1.0, 0.0);  // jumps: re-anchored at frame 1
+  for (int k = 1; k <= 3; ++k) r.process(test::frame_from(k, p, p, lms, test::all_ids(6)));
+  EXPECT_EQ(r.lmap()[0].status, LandmarkStatus::kStatic);  // confirmed at frame 3, from its new anchor
+  EXPECT_EQ(r.team_counters().fused, 5);                    // the other five's held estimates
+  EXPECT_NEAR(r.estimate().landmark(0).x(), lms[0].x(), 1e-6);  // the old team estimate never pulled it
 }
 
 // A landmark the robot learns has moved (a notice) comes back as a new epoch: main

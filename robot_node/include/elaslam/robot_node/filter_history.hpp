@@ -34,7 +34,9 @@ class FilterHistory {
   bool enabled() const { return window_ > 0; }
   int window() const { return window_; }
 
-  enum class Kind : std::uint8_t { kPredict, kUpdate, kLandmarkOnly, kPosition, kAdd, kRemove };
+  /// kHeldPosition: a team increment for a candidate (Robot::hold_team_estimate),
+  /// applied as nothing until the candidate is confirmed; then it is a kPosition.
+  enum class Kind : std::uint8_t { kPredict, kUpdate, kLandmarkOnly, kPosition, kAdd, kRemove, kHeldPosition };
   static const char* to_string(Kind k);
   /// One operation on a filter: the fields its kind uses.
   struct Op {
@@ -52,6 +54,7 @@ class FilterHistory {
   static Op update(int frame, int id, const RangeBearing& z);
   static Op update_landmark_only(int frame, int id, const RangeBearing& z);
   static Op update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
+  static Op held_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
   static Op add(int frame, int id, const RangeBearing& z);
   static Op remove(int frame, int id);
 
@@ -67,8 +70,11 @@ class FilterHistory {
   void restart(const EkfSlam& current);
 
   /// Candidate `id` is confirmed: its landmark-only corrections in the window become
-  /// full ones. Returns how many.
-  int upgrade(int id);
+  /// full ones, and the newest held team increment of the candidate as it is now
+  /// (after its last add) becomes a kPosition, copied to *position when given (the
+  /// team channel commits it); older held ones stay nothing (the newest carries all
+  /// the team's information, TeamChannel::offer). Returns how many ops changed.
+  int upgrade(int id, Op* position = nullptr);
 
   /// End of `frame`'s corrections: operations of frames <= frame - window go into
   /// the lagged filter; when anything was upgraded, `current` is rebuilt from the

@@ -89,7 +89,8 @@ struct TeamEstimate {
 /// The team map's effect on this robot (RobotNode reports them).
 struct TeamCounters {
   std::int64_t offered = 0;  // team estimates received for landmarks the aided filter holds as STATIC
-  std::int64_t fused = 0;    // increments fused
+  std::int64_t fused = 0;    // increments fused (a held one when its candidate is confirmed)
+  std::int64_t held = 0;     // increments held for a candidate (team_map_hold_candidates)
   std::int64_t gated = 0;    // team estimates that failed the consistency test (team_map_gate_probability)
   std::int64_t refused = 0;  // increments the aided filter refused (its health checks)
   double nis_sum = 0.0;      // sum of the fused increments' d2 (2 dof each: about 2 per increment when consistent)
@@ -232,6 +233,7 @@ class Robot {
   bool team_eligible(int id) const;
   /// Fuse what the team estimate adds (TeamChannel); `test`: only when it agrees.
   bool fuse_team_estimate(const TeamEstimate& e, bool test);
+  bool hold_team_estimate(const TeamEstimate& e);
   /// The gauge test of one filter against a team map (apply_team_map).
   struct GaugeTest {
     int tested = 0, disagreed = 0, agreed_after = 0;

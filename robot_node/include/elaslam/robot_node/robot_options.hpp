@@ -84,6 +84,12 @@ struct RobotOptions {
   /// its covariance from the aided filter's (pose_drifted, 3 dof at
   /// team_map_gate_probability) finds no mover (ELA or missing).
   bool team_map_drift_check = true;
+  /// A candidate's team estimate (Robot::hold_team_estimate): tested and held in the
+  /// aided filter's history as nothing; fused as of its team map if the candidate is
+  /// confirmed within the history's window (candidate_history_frames > 0), dropped
+  /// otherwise: the aided filter becomes the one that had trusted the landmark from
+  /// its first sighting, team map included.
+  bool team_map_hold_candidates = false;
   int moving_after = 2;                 // consecutive out-of-ELA sightings before MOVING
   /// Whether a mapped landmark that fails its test while it is the only one in view
   /// (the innovation fallback) counts towards MOVING. Off: it is skipped only.
