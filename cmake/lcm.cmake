@@ -1,8 +1,4 @@
-# LCM 1.3.1 from Debian ships no CMake config (see shared/LCM.md): find it by hand.
-find_path(LCM_INCLUDE_DIR lcm/lcm-cpp.hpp REQUIRED)
-find_library(LCM_LIBRARY lcm REQUIRED)
+# LCM: the library (cmake/lcm_library.cmake, shared with the installed config) and
+# lcm-gen, which generates the message types at build time (lcmtypes/).
+include(${CMAKE_CURRENT_LIST_DIR}/lcm_library.cmake)
 find_program(LCM_GEN lcm-gen REQUIRED)
-add_library(lcm::lcm UNKNOWN IMPORTED)
-set_target_properties(lcm::lcm PROPERTIES
-  IMPORTED_LOCATION "${LCM_LIBRARY}"
-  INTERFACE_INCLUDE_DIRECTORIES "${LCM_INCLUDE_DIR}")

@@ -97,3 +97,40 @@ function(elaslam_install_etc base header yaml env)
        FILES "${work}/etc/elaslam.yaml" "${env}")
   file(REMOVE_RECURSE "${work}")
 endfunction()
+
+# elaslam_install_pc(<work dir> <elaslam.pc.in>): the pkg-config file of the
+# libraries (component dev) for CMAKE_INSTALL_PREFIX, into <prefix>/<libdir>/pkgconfig.
+# Absolute paths, not ${pcfiledir}: the prefix /usr must be recognised (below).
+function(elaslam_install_pc base template)
+  string(REGEX REPLACE "(.)/+$" "\\1" prefix "${CMAKE_INSTALL_PREFIX}")
+  foreach(d LIBDIR INCLUDEDIR)
+    if(IS_ABSOLUTE "${ELASLAM_REL_${d}}")
+      set(ELASLAM_PC_${d} "${ELASLAM_REL_${d}}")
+    else()
+      set(ELASLAM_PC_${d} "\${prefix}/${ELASLAM_REL_${d}}")
+    endif()
+  endforeach()
+  set(ELASLAM_PC_PREFIX "${prefix}")
+  # -isystem: the generated message headers do not pass -Wpedantic (lcm-gen's hash
+  # code), as the build's own SYSTEM include of them and CMake's imported targets say.
+  # None for /usr/include, where the compiler looks anyway (and where -isystem would
+  # break GCC's #include_next).
+  set(incdir "${ELASLAM_REL_INCLUDEDIR}")
+  if(NOT IS_ABSOLUTE "${incdir}")
+    set(incdir "${prefix}/${incdir}")
+  endif()
+  if(incdir STREQUAL "/usr/include")
+    set(ELASLAM_PC_CFLAGS "")
+  else()
+    set(ELASLAM_PC_CFLAGS "-isystem \${includedir}")
+  endif()
+  _elaslam_work_dir(work "${base}")
+  configure_file("${template}" "${work}/elaslam.pc" @ONLY)
+  set(libdir "${ELASLAM_REL_LIBDIR}")
+  if(NOT IS_ABSOLUTE "${libdir}")
+    set(libdir "${prefix}/${libdir}")
+  endif()
+  file(INSTALL DESTINATION "${libdir}/pkgconfig" TYPE FILE
+       PERMISSIONS OWNER_READ OWNER_WRITE GROUP_READ WORLD_READ FILES "${work}/elaslam.pc")
+  file(REMOVE_RECURSE "${work}")
+endfunction()

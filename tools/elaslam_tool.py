@@ -68,8 +68,14 @@ def need(module, debian=None):
         return importlib.import_module(module)
     except ImportError as e:
         top = module.split(".")[0]
-        how = (f"Debian: apt-get install {debian}" if debian else
-               f"it is on PyPI only (Debian has no package): {sys.executable} -m pip install {top}")
+        if debian:
+            how = f"Debian: apt-get install {debian}"
+        elif sys.prefix != sys.base_prefix:  # already a venv: install into it
+            how = f"it is on PyPI only (Debian has no package): {sys.executable} -m pip install {top}"
+        else:  # never into the system's Python (Debian refuses it: PEP 668); a venv that sees Debian's modules
+            how = (f"it is on PyPI only (Debian has no package); install it into a virtual environment "
+                   f"and run this program with its python: python3 -m venv --system-site-packages ~/.venvs/elaslam"
+                   f" && ~/.venvs/elaslam/bin/pip install {top}; ~/.venvs/elaslam/bin/python {sys.argv[0]} ...")
         sys.stderr.write(f"{prog()}: the Python module '{top}' is missing for {sys.executable} ({e}).\n"
                          f"  {how}; in a source tree, tools/setup.sh makes .venv with every module the tools need.\n")
         sys.exit(2)

@@ -4,7 +4,7 @@
 #       the exact layout, the config lookup without --config (the installed default),
 #       the same metrics as the build tree, --version of every program
 #   package_check.sh deb BUILD_DIR VERSION       cpack -G DEB into a scratch folder: the
-#       five packages and their contents, Depends (computed) and conffiles, dpkg -x
+#       six packages and their contents, Depends (computed) and conffiles, dpkg -x
 #       into a scratch root and run from there (as root with ip netns: a live team),
 #       dpkg --root install, upgrade (conffile edits kept) and purge
 #   package_check.sh units BUILD_DIR VERSION     systemd-analyze verify and security of
@@ -71,9 +71,23 @@ expected_files() {
       done
       [ -f "$BUILD/elaslam_types.jar" ] && echo "$p/share/elaslam/java/elaslam_types.jar"
       return 0 ;;
+    elaslam-dev)  # packaging/dev.cmake; tests/packaging/embed_check.sh builds against it
+      local libdir incdir build_type d
+      libdir="$(cache CMAKE_INSTALL_LIBDIR)"; incdir="$(cache CMAKE_INSTALL_INCLUDEDIR)"
+      build_type="$(cache CMAKE_BUILD_TYPE | tr '[:upper:]' '[:lower:]')"
+      for t in common transport robot main; do echo "$p/$libdir/libelaslam_$t.a"; done
+      for d in common transport robot_node main_robot; do
+        (cd "$SRC/$d/include" && find . -name '*.hpp' | sed "s#^\./#$p/$incdir/#")
+      done
+      for f in "$SRC"/lcmtypes/elaslam_*.lcm; do f="$(basename "$f" .lcm)"; echo "$p/$incdir/elaslam/${f#elaslam_}.hpp"; done
+      for f in elaslamConfig elaslamConfigVersion elaslamTargets "elaslamTargets-${build_type:-noconfig}" lcm_library; do
+        echo "$p/$libdir/cmake/elaslam/$f.cmake"
+      done
+      echo "$p/$libdir/pkgconfig/elaslam.pc" ;;
   esac
 }
-PACKAGES=(elaslam-common elaslam-robot elaslam-main-robot elaslam-simulator elaslam-tools)
+cache() { sed -n "s/^$1:[A-Z]*=//p" "$BUILD/CMakeCache.txt"; }
+PACKAGES=(elaslam-common elaslam-robot elaslam-main-robot elaslam-simulator elaslam-tools elaslam-dev)
 # The ELF programs of a tree and the build target each one comes from.
 elf_programs() { # ROOT_BIN
   local f
@@ -252,7 +266,15 @@ mode_deb() {
     same_list "$pkg" "$TMP/expected" "$TMP/actual"
     note "$pkg: $(wc -l < "$TMP/actual") files, $(stat -c %s "$deb") bytes"
   done
-  [ "$(ls "$D"/*.deb | wc -l)" -eq 5 ] || fail "more than five packages: $(ls "$D")"
+  [ "$(ls "$D"/*.deb | wc -l)" -eq "${#PACKAGES[@]}" ] || fail "more than ${#PACKAGES[@]} packages: $(ls "$D")"
+  # elaslam-dev: the -dev packages of what its static libraries and headers use, typed
+  # (nothing for shlibdeps), and no other package of the team.
+  local ddep; ddep="$(dpkg-deb -f "${DEB[elaslam-dev]}" Depends)"
+  note "elaslam-dev Depends: $ddep"
+  for want in libeigen3-dev liblcm-dev libyaml-cpp-dev libsodium-dev; do
+    case ", $ddep," in *", $want"*) ;; *) fail "elaslam-dev Depends lacks $want: $ddep" ;; esac
+  done
+  case "$ddep" in *elaslam-*) fail "elaslam-dev depends on another package of the team: $ddep" ;; esac
   # Depends: computed from the binaries, plus elaslam-common of this version.
   for pkg in elaslam-robot elaslam-main-robot elaslam-simulator elaslam-tools; do
     local dep; dep="$(dpkg-deb -f "${DEB[$pkg]}" Depends)"
@@ -357,7 +379,7 @@ mode_deb() {
   [ ! -L "$I/etc/systemd/system/multi-user.target.wants/elaslam-robot@3.service" ] || fail "purge left the enablement link"
   [ -d "$I/var/lib/private/elaslam/main-robot" ] || fail "purging elaslam-robot removed main-robot's state"
   # Purge everything: elaslam-common's purge removes the keys and roster it made.
-  "${DP[@]}" --purge elaslam-main-robot elaslam-simulator elaslam-tools > "$TMP/dpkg4.log" 2>&1 \
+  "${DP[@]}" --purge elaslam-main-robot elaslam-simulator elaslam-tools elaslam-dev > "$TMP/dpkg4.log" 2>&1 \
     && "${DP[@]}" --purge elaslam-common >> "$TMP/dpkg4.log" 2>&1 || { cat "$TMP/dpkg4.log"; fail "dpkg --purge (all)"; }
   [ ! -e "$K" ] && [ ! -e "$ROSTER" ] || fail "purge left the keys or the roster"
   note "dpkg: installed (a one-computer team's keys made, 0600, and roster), upgraded (site edit and keys kept), purged (keys removed)"

@@ -1,0 +1,108 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The PEP 517 build backend of elaslam-msgs (python/pyproject.toml): a pure-Python
+wheel of the package `elaslam` beside this file (lcm-gen's output, copied here by the
+build: lcmtypes/CMakeLists.txt). Standard library only, so that `pip install
+./build/python` needs neither setuptools nor wheel nor a network. Metadata from
+pyproject.toml's [project] table; the version from the file VERSION beside it."""
+import base64
+import hashlib
+import os
+import zipfile
+
+try:
+    import tomllib  # Python >= 3.11
+except ImportError:  # pragma: no cover - older Pythons
+    try:
+        import tomli as tomllib
+    except ImportError:
+        tomllib = None
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+PACKAGE = "elaslam"
+# A fixed time stamp: the same inputs give the same wheel, byte for byte.
+ZIP_TIME = (2020, 1, 1, 0, 0, 0)
+
+
+def _project():
+    path = os.path.join(HERE, "pyproject.toml")
+    if tomllib is None:
+        raise RuntimeError("elaslam-msgs: building needs Python >= 3.11 (tomllib) or the tomli module")
+    with open(path, "rb") as f:
+        project = dict(tomllib.load(f)["project"])
+    if "version" in project.get("dynamic", []):
+        with open(os.path.join(HERE, "VERSION"), encoding="utf-8") as f:
+            project["version"] = f.read().strip()
+    return project
+
+
+def _dist_name(project):
+    return project["name"].replace("-", "_")
+
+
+def _metadata(project):
+    lines = ["Metadata-Version: 2.1", f"Name: {project['name']}", f"Version: {project['version']}",
+             f"Summary: {project.get('description', '')}"]
+    if "requires-python" in project:
+        lines.append(f"Requires-Python: {project['requires-python']}")
+    license_ = project.get("license", {})
+    if isinstance(license_, dict) and "text" in license_:
+        lines.append(f"License: {license_['text']}")
+    lines += [f"Requires-Dist: {d}" for d in project.get("dependencies", [])]
+    return "\n".join(lines) + "\n"
+
+
+def _wheel_text():
+    return "Wheel-Version: 1.0\nGenerator: elaslam_msgs_build\nRoot-Is-Purelib: true\nTag: py3-none-any\n"
+
+
+def _package_files():
+    root = os.path.join(HERE, PACKAGE)
+    if not os.path.isfile(os.path.join(root, "__init__.py")):
+        raise RuntimeError(f"elaslam-msgs: no {root}/__init__.py: build the project first "
+                           f"(cmake --build build), then install ./build/python, not ./python")
+    return sorted(f"{PACKAGE}/{n}" for n in os.listdir(root) if n.endswith(".py"))
+
+
+def _digest(data):
+    return "sha256=" + base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=").decode()
+
+
+def _write_dist_info(directory, project):
+    info = os.path.join(directory, f"{_dist_name(project)}-{project['version']}.dist-info")
+    os.makedirs(info, exist_ok=True)
+    for name, text in (("METADATA", _metadata(project)), ("WHEEL", _wheel_text()), ("top_level.txt", PACKAGE + "\n")):
+        with open(os.path.join(info, name), "w", encoding="utf-8") as f:
+            f.write(text)
+    return os.path.basename(info)
+
+
+# ---- PEP 517 hooks ---------------------------------------------------------------
+def get_requires_for_build_wheel(config_settings=None):
+    return []
+
+
+def prepare_metadata_for_build_wheel(metadata_directory, config_settings=None):
+    return _write_dist_info(metadata_directory, _project())
+
+
+def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
+    project = _project()
+    dist = _dist_name(project)
+    info = f"{dist}-{project['version']}.dist-info"
+    name = f"{dist}-{project['version']}-py3-none-any.whl"
+    entries = []
+    for rel in _package_files():
+        with open(os.path.join(HERE, rel), "rb") as f:
+            entries.append((rel, f.read()))
+    entries += [(f"{info}/METADATA", _metadata(project).encode()), (f"{info}/WHEEL", _wheel_text().encode()),
+                (f"{info}/top_level.txt", (PACKAGE + "\n").encode())]
+    record = "".join(f"{rel},{_digest(data)},{len(data)}\n" for rel, data in entries) + f"{info}/RECORD,,\n"
+    entries.append((f"{info}/RECORD", record.encode()))
+    os.makedirs(wheel_directory, exist_ok=True)
+    with zipfile.ZipFile(os.path.join(wheel_directory, name), "w", zipfile.ZIP_DEFLATED) as z:
+        for rel, data in entries:
+            zi = zipfile.ZipInfo(rel, ZIP_TIME)
+            zi.external_attr = 0o644 << 16
+            zi.compress_type = zipfile.ZIP_DEFLATED
+            z.writestr(zi, data)
+    return name
