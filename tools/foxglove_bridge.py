@@ -393,8 +393,7 @@ class Bridge:
         ch = self.status_ch.get(name)
         if ch is None:
             ch = self.status_ch[name] = self.fg.Channel(f"/status/{name}", message_encoding="json", schema=json_schema(
-                "elaslam.NodeStatus", {k: "integer" for k in self.T.node_status_t.__slots__
-                                       if k not in ("refused",) and not k.startswith(("odom_", "relocalised_r"))}))
+                "elaslam.NodeStatus", {k: "array" if k == "refused" else NUM for k in self.T.node_status_t.__slots__}))
         ch.log({k: clean(getattr(m, k)) if not isinstance(getattr(m, k), (list, tuple)) else list(getattr(m, k))
                 for k in self.T.node_status_t.__slots__}, log_time=time.time_ns())
         return None
