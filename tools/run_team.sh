@@ -8,7 +8,8 @@
 #                     [--build-dir DIR] [--realtime] [--no-progress] [--no-baseline]
 #                     [--loss P [--loss-scope radio|all]]
 #                     [--kill-robot R --kill-at-frame F [--restart-after S]]
-#                     [--robot-state] [--keys DIR | --auth] [--view [PORT]] [--channel-groups]
+#                     [--robot-state] [--keys DIR | --auth] [--view [PORT]] [--foxglove [PORT]]
+#                     [--channel-groups]
 #
 # - Works as the very first command on a fresh clone: does the set-up when needed
 #   (tools/setup.sh: Debian packages, the Python venv, build/) and builds the programs.
@@ -79,6 +80,12 @@
 #   URL, http://127.0.0.1:PORT/, is printed at the start. It listens on the host's
 #   loopback even when the team runs in a private namespace (viewer --http-netns).
 #   On a terminal the viewer stays up after the summary until Enter is pressed.
+# - --foxglove [PORT] (default 8765; 0: any free port): the Foxglove bridge
+#   (tools/foxglove_bridge.py, docs/tools.md "Foxglove") with the team: open the
+#   ws://127.0.0.1:PORT it prints in Foxglove (app.foxglove.dev or Foxglove Studio,
+#   "Open connection"). It listens on the host's loopback only, also when the team runs
+#   in a private namespace, and stops with the team; the summary says what it served.
+#   Needs foxglove-sdk in the Python venv (tools/setup.sh installs it).
 # Exit status: 0 done, 1 the run failed, 2 bad arguments, 130 interrupted.
 set -euo pipefail
 # The real source tree, also when started through a symbolic link (a scratch copy).
@@ -104,6 +111,8 @@ KEYS=""          # --keys: a team's key directory, or DIR/keys with --auth
 AUTH=0
 VIEW_PORT=""     # --view [PORT]
 VIEW_NS=""       # internal: the network namespace the viewer's HTTP socket goes in
+FOX_PORT=""      # --foxglove [PORT]
+FOX_NS=""        # internal: the network namespace the Foxglove bridge serves in
 GROUPED=0        # --channel-groups, or the config's team.channel_groups
 FRAMES_ARG=""    # --frames, when given (to check --kill-at-frame against)
 SIM_ARGS=()      # overrides for the simulator (and run_scenario)
@@ -153,6 +162,9 @@ while [ $# -gt 0 ]; do
     --view) VIEW_PORT=8765; shift
             if [ $# -gt 0 ] && [[ "$1" =~ ^[0-9]+$ ]]; then number --view "$1" 0 65535 int; VIEW_PORT="$1"; shift; fi ;;
     --view-ns) [ $# -ge 2 ] || die "$1 needs a value"; VIEW_NS="$2"; shift 2 ;;  # internal (nested run)
+    --foxglove) FOX_PORT=8765; shift
+                if [ $# -gt 0 ] && [[ "$1" =~ ^[0-9]+$ ]]; then number --foxglove "$1" 0 65535 int; FOX_PORT="$1"; shift; fi ;;
+    --foxglove-ns) [ $# -ge 2 ] || die "$1 needs a value"; FOX_NS="$2"; shift 2 ;;  # internal (nested run)
     --inside) INSIDE=1; shift ;;  # internal: already inside the namespace, set-up done
     -h|--help) usage 0 ;;
     *) echo "run_team.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
@@ -171,6 +183,9 @@ CONFIG="$(cd "$(dirname "$CONFIG")" && pwd)/$(basename "$CONFIG")"
   die "--kill-at-frame must be below --frames ($FRAMES_ARG), got $KILL_FRAME"
 [ -n "$KILL_ROBOT" ] || [ "$RESTART_AFTER" = 1.0 ] || die "--restart-after needs --kill-robot"
 [ -z "$VIEW_PORT" ] || [ "$IN_PROCESS" -eq 0 ] || die "--view needs the live team (not --in-process: nothing is on the bus)"
+[ -z "$FOX_PORT" ] || [ "$IN_PROCESS" -eq 0 ] || die "--foxglove needs the live team (not --in-process: nothing is on the bus)"
+[ -z "$FOX_PORT" ] || [ -z "$VIEW_PORT" ] || [ "$FOX_PORT" != "$VIEW_PORT" ] || [ "$FOX_PORT" = 0 ] ||
+  die "--view and --foxglove need different ports (both $FOX_PORT): e.g. --view 8765 --foxglove 8766"
 if [ "$IN_PROCESS" -eq 1 ] && { [ -n "$KILL_ROBOT" ] || [ "$ROBOT_STATE" -eq 1 ]; }; then
   die "--in-process has no processes to kill, no network to lose packets on and no robot state files"
 fi
@@ -223,6 +238,7 @@ build_progress() {
 
 TARGETS=(simulator robot_node main_robot run_scenario evaluate monitor log_merge record keys)
 [ -z "$VIEW_PORT" ] || TARGETS+=(viewer)
+[ -z "$FOX_PORT" ] || TARGETS+=(elaslam_lcmtypes_py)
 if [ "$INSIDE" -eq 0 ]; then
   first=0
   if [ ! -f "$BUILD_DIR/build.ninja" ] || [ ! -x "$ROOT/.venv/bin/python" ]; then
@@ -292,24 +308,32 @@ if [ -n "$KILL_ROBOT" ]; then
     die "--kill-robot needs the Python venv (tools/setup.sh) and the Python message types (build target elaslam_lcmtypes_py)"
   fi
 fi
+if [ -n "$FOX_PORT" ]; then
+  "$PY" -c 'import foxglove' 2>/dev/null ||
+    die "--foxglove needs foxglove-sdk in the Python venv $ROOT/.venv (tools/setup.sh installs tools/requirements.txt)"
+  [ -f "$BUILD_DIR/lcmgen/python/elaslam/__init__.py" ] ||
+    die "--foxglove needs the Python message types (build target elaslam_lcmtypes_py)"
+fi
 PIDS=()
 NAMES=()
 NETNS=()
 MONITOR_PID=""
 VIEWER_PID=""    # --view
+FOX_PID=""       # --foxglove
+FOX_URL=""
 WATCH_PID=""     # --kill-robot: waits for robot R's pose of frame F
 declare -A HOST_NS HOST_IP CMDS
 
 cleanup() {
   local pid
   trap '' INT TERM  # a second Ctrl-C (or TERM) must not leave namespaces behind
-  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID $VIEWER_PID; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID $VIEWER_PID; do wait "$pid" 2>/dev/null || true; done
+  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID $VIEWER_PID $FOX_PID; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${PIDS[@]}" $MONITOR_PID $WATCH_PID $VIEWER_PID $FOX_PID; do wait "$pid" 2>/dev/null || true; done
   for ns in "${NETNS[@]}"; do
     [ -z "$LOSS" ] || ip netns exec "$ns" nft delete table inet elaslam_loss 2>/dev/null || true
     ip netns del "$ns" 2>/dev/null || true
   done
-  PIDS=(); NETNS=(); MONITOR_PID=""; WATCH_PID=""; VIEWER_PID=""
+  PIDS=(); NETNS=(); MONITOR_PID=""; WATCH_PID=""; VIEWER_PID=""; FOX_PID=""
 }
 trap cleanup EXIT
 
@@ -437,12 +461,45 @@ launch() {  # $1: how to run each role (a function printing the prefix)
       VIEWER_PID=""
     fi
   fi
+  if [ -n "$FOX_PORT" ]; then  # from the logger's host: it hears every channel; not supervised
+    $($where log) "$PY" "$ROOT/tools/foxglove_bridge.py" --port "$FOX_PORT" --build-dir "$BUILD_DIR" \
+      --robots "$(IFS=,; echo "${ROBOTS[*]}")" ${FOX_NS:+--ws-netns "$FOX_NS"} $([ "$GROUPED" -eq 1 ] && echo --channel-groups) \
+      >"$OUT/logs/foxglove.log" 2>&1 &
+    FOX_PID=$!
+    local i
+    for ((i = 0; i < 150; i++)); do  # the venv's Python and the SDK start in about a second
+      FOX_URL=$(sed -n 's/^foxglove_bridge: \(ws:[^ ]*\)$/\1/p' "$OUT/logs/foxglove.log" 2>/dev/null || true)
+      [ -z "$FOX_URL" ] && kill -0 "$FOX_PID" 2>/dev/null || break
+      sleep 0.1
+    done
+    if [ -n "$FOX_URL" ]; then
+      echo "run_team.sh: Foxglove: $FOX_URL (in Foxglove: Open connection, Foxglove WebSocket; docs/tools.md)" >&2
+    else
+      echo "run_team.sh: the Foxglove bridge did not start (log: $OUT/logs/foxglove.log): $(tail -n 1 "$OUT/logs/foxglove.log")" >&2
+      kill -TERM "$FOX_PID" 2>/dev/null || true
+      FOX_PID=""
+    fi
+  fi
   if [ "$PROGRESS" -eq 1 ]; then  # to the terminal; not supervised (a failure costs only the line)
     $($where main) "$BIN/monitor" --config "$CONFIG" "${KEY_ARGS[@]}" &
     MONITOR_PID=$!
   fi
   start simulator $($where sim) $(rt 60) -- "$BIN/simulator" --config "$CONFIG" --wait-for-nodes $((${#ROBOTS[@]} + 1)) \
     ${MODE_NAME:+--team-mode "$MODE_NAME"} "${SIM_ARGS[@]}" "${KEY_ARGS[@]}" $(key_of simulator)
+}
+
+# --foxglove: the bridge stops with the team (SIGINT, bounded) and says what it served.
+stop_foxglove() {
+  [ -n "$FOX_PID" ] || return 0
+  local waited=0
+  kill -INT "$FOX_PID" 2>/dev/null || true
+  while kill -0 "$FOX_PID" 2>/dev/null && [ $waited -lt 50 ]; do sleep 0.1; waited=$((waited + 1)); done
+  kill -KILL "$FOX_PID" 2>/dev/null || true
+  wait "$FOX_PID" 2>/dev/null || true
+  FOX_PID=""
+  local served
+  served=$(sed -n 's/^foxglove_bridge: stopped: ws:[^ ]* //p' "$OUT/logs/foxglove.log" | tail -n 1)
+  echo "run_team.sh: Foxglove $FOX_URL stopped with the team; it ${served:-gave no final report (log: $OUT/logs/foxglove.log)}"
 }
 
 # fault NOTE: a line in DIR/faults.log (Unix time, what happened) and on stderr.
@@ -549,7 +606,8 @@ if [ "$INSIDE" -eq 0 ] && [ "$HOSTS" -eq 0 ] && [ "$(id -u)" -eq 0 ] && ip netns
     $([ "$PROGRESS" -eq 0 ] && echo --no-progress) $([ "$BASELINE" -eq 0 ] && echo --no-baseline) "${SIM_ARGS[@]}" \
     ${KILL_ROBOT:+--kill-robot "$KILL_ROBOT" --kill-at-frame "$KILL_FRAME" --restart-after "$RESTART_AFTER"} \
     $([ "$ROBOT_STATE" -eq 1 ] && echo --robot-state) ${KEYS:+--keys "$KEYS"} \
-    $([ "$GROUPED" -eq 1 ] && echo --channel-groups) ${VIEW_PORT:+--view "$VIEW_PORT" --view-ns "/proc/$$/ns/net"} &
+    $([ "$GROUPED" -eq 1 ] && echo --channel-groups) ${VIEW_PORT:+--view "$VIEW_PORT" --view-ns "/proc/$$/ns/net"} \
+    ${FOX_PORT:+--foxglove "$FOX_PORT" --foxglove-ns "/proc/$$/ns/net"} &
   NESTED_PID=$!
   wait "$NESTED_PID" || rc=$?
   NESTED_PID=""
@@ -559,6 +617,7 @@ fi
 
 if [ "$HOSTS" -eq 1 ]; then
   [ -z "$VIEW_PORT" ] || VIEW_NS="/proc/$$/ns/net"  # the viewer's page on this (the host's) side
+  [ -z "$FOX_PORT" ] || FOX_NS="/proc/$$/ns/net"    # the Foxglove bridge's WebSocket too
   HUB="elaslam_${$}_hub"
   ip netns add "$HUB"; NETNS+=("$HUB")
   ip -n "$HUB" link add br0 type bridge
@@ -601,6 +660,7 @@ fi
 status=0
 supervise || status=1
 stop_all || status=1
+stop_foxglove
 [ -z "$LOSS" ] || loss_report
 [ "$status" -eq 0 ] || { echo "run_team.sh: the run failed; logs in $OUT/logs" >&2; exit 1; }
 if [ "$GROUPED" -eq 1 ]; then  # the groups' recordings into one log, in receive order

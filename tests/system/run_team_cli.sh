@@ -39,7 +39,10 @@ refuse --mode --mode fast
 refuse "no such config" --config /nonexistent.yaml
 refuse "unknown argument" --no-such-option
 refuse "--config needs a value" --config
-echo "run_team_cli: 11 bad command lines refused before anything started"
+refuse --foxglove --foxglove 70000
+refuse "--foxglove needs the live team" --foxglove --in-process
+refuse "need different ports" --view 9000 --foxglove 9000
+echo "run_team_cli: 14 bad command lines refused before anything started"
 
 [ "$(id -u)" -eq 0 ] && ip netns list >/dev/null 2>&1 || { echo "run_team_cli: skipped the live parts (needs root)"; exit 77; }
 rc=0
