@@ -19,7 +19,7 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import add_version, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+from elaslam_tool import add_version, load_lcm_types, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
 PROG = "decode_log"
 
@@ -29,35 +29,6 @@ if __name__ == "__main__":
 import argparse  # noqa: E402
 import collections  # noqa: E402
 import re  # noqa: E402
-
-
-def types_dirs(build_dir):
-    """Where the generated Python package `elaslam` may be, best first."""
-    if build_dir:
-        return [os.path.join(build_dir, "lcmgen", "python")]
-    dirs = []
-    if os.environ.get("ELASLAM_BUILD_DIR"):
-        dirs.append(os.path.join(os.environ["ELASLAM_BUILD_DIR"], "lcmgen", "python"))
-    for here in dict.fromkeys([os.path.dirname(os.path.abspath(__file__)), os.path.dirname(os.path.realpath(__file__))]):
-        if here.endswith(os.path.join("share", "elaslam", "tools")):
-            dirs += [os.path.join(here, "..", "python"),                    # installed: <prefix>/share/elaslam/python
-                     os.path.join(here, "..", "..", "..", "lcmgen", "python")]  # the build tree's mirror of it
-        elif os.path.basename(here) == "bin":
-            dirs.append(os.path.join(here, "..", "share", "elaslam", "python"))  # installed as <prefix>/bin/...
-    dirs.append(os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(__file__))), "build", "lcmgen", "python"))
-    return [os.path.normpath(d) for d in dirs]
-
-
-def load_types(build_dir):
-    dirs = types_dirs(build_dir)
-    found = next((d for d in dirs if os.path.isfile(os.path.join(d, "elaslam", "__init__.py"))), None)
-    if found is None:
-        sys.stderr.write(f"{PROG}: no generated Python message types (elaslam/__init__.py) in "
-                         f"{', '.join(dict.fromkeys(dirs))}: build first (cmake --build BUILD) or give --build-dir\n")
-        sys.exit(2)
-    sys.path.insert(0, found)
-    import elaslam
-    return elaslam
 
 
 def fmt_known(value, unit="", none=-1):
@@ -85,7 +56,7 @@ def main() -> int:
         print(f"{PROG}: no such log: {args.log}", file=sys.stderr)
         return 2
     lcm = _need("lcm")
-    T = load_types(args.build_dir)
+    T = load_lcm_types(args.build_dir, __file__)
 
     types = [(r"SENSOR_\d+", T.sensor_frame_t), (r"POSE_\d+", T.pose_estimate_t), (r"GROUND_TRUTH", T.ground_truth_t),
              (r"LMAP_EVENT", T.landmark_event_t), (r"LMAP_EVENTS", T.lmap_events_t), (r"LMAP_SNAPSHOT", T.lmap_snapshot_t), (r"GLOBAL_MAP", T.global_map_t),

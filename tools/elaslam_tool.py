@@ -14,6 +14,9 @@ bin/elaslam-<tool>, in ../share/elaslam/tools:
     _here = os.path.dirname(os.path.realpath(__file__))
     sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
     from elaslam_tool import need, parse_args, run_in_venv, add_version
+
+Tools that read recordings load the generated message types with
+load_lcm_types(build_dir, __file__).
 """
 import importlib
 import os
@@ -94,3 +97,35 @@ def parse_args(ap):
             if not any(k.startswith(tok.split("=", 1)[0]) for k in known):
                 ap.error(f"unrecognized argument: {tok}")
     return ap.parse_args()
+
+
+def types_dirs(build_dir, script):
+    """Where the generated Python package `elaslam` (the LCM message types) may be for
+    `script` (the calling tool's __file__), best first: DIR/lcmgen/python with
+    --build-dir DIR; else $ELASLAM_BUILD_DIR/lcmgen/python, the installed
+    <prefix>/share/elaslam/python, or the source tree's build/lcmgen/python."""
+    if build_dir:
+        return [os.path.join(build_dir, "lcmgen", "python")]
+    dirs = []
+    if os.environ.get("ELASLAM_BUILD_DIR"):
+        dirs.append(os.path.join(os.environ["ELASLAM_BUILD_DIR"], "lcmgen", "python"))
+    for here in dict.fromkeys([os.path.dirname(os.path.abspath(script)), os.path.dirname(os.path.realpath(script))]):
+        if here.endswith(os.path.join("share", "elaslam", "tools")):
+            dirs += [os.path.join(here, "..", "python"),                    # installed: <prefix>/share/elaslam/python
+                     os.path.join(here, "..", "..", "..", "lcmgen", "python")]  # the build tree's mirror of it
+        elif os.path.basename(here) == "bin":
+            dirs.append(os.path.join(here, "..", "share", "elaslam", "python"))  # installed as <prefix>/bin/...
+    dirs.append(os.path.join(os.path.dirname(os.path.dirname(os.path.realpath(script))), "build", "lcmgen", "python"))
+    return [os.path.normpath(d) for d in dirs]
+
+
+def load_lcm_types(build_dir, script):
+    """The generated package `elaslam` (see types_dirs), or exit 2 saying where it was looked for."""
+    dirs = types_dirs(build_dir, script)
+    found = next((d for d in dirs if os.path.isfile(os.path.join(d, "elaslam", "__init__.py"))), None)
+    if found is None:
+        sys.stderr.write(f"{prog()}: no generated Python message types (elaslam/__init__.py) in "
+                         f"{', '.join(dict.fromkeys(dirs))}: build first (cmake --build BUILD) or give --build-dir\n")
+        sys.exit(2)
+    sys.path.insert(0, found)
+    return importlib.import_module("elaslam")

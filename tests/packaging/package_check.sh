@@ -60,10 +60,10 @@ expected_files() {
       echo "$p/lib/systemd/system/elaslam-simulator.service" ;;
     elaslam-tools)
       for t in $(tool_programs); do echo "$p/bin/elaslam-${t//_/-}"; done
-      for t in plot_sweep plot_dataset plot_scenario decode_log; do
+      for t in plot_sweep plot_dataset plot_scenario decode_log export; do
         echo "$p/share/elaslam/tools/$t.py"; echo "$p/bin/elaslam-${t//_/-}"
       done
-      echo "$p/share/elaslam/tools/elaslam_tool.py"
+      echo "$p/share/elaslam/tools/elaslam_tool.py"; echo "$p/share/elaslam/tools/export_markers.py"
       [ -f "$SRC/tools/spy.sh" ] && echo "$p/bin/elaslam-spy"
       echo "$p/share/elaslam/python/elaslam/__init__.py"
       for f in "$SRC"/lcmtypes/elaslam_*.lcm; do
@@ -143,7 +143,7 @@ PY
 # Every ELF program answers --version with exit 0 and this version.
 version_check() { # BIN_DIR: every program and script answers --version with this version
   local f out n=0
-  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-spy"; do
+  for f in $(elf_programs "$1") "$1"/elaslam-plot-* "$1/elaslam-decode-log" "$1/elaslam-export" "$1/elaslam-spy"; do
     out="$("$f" --version 2>&1)" || fail "$f --version: exit $?: $out"
     case "$out" in
       *"(elaslam $VERSION"*) ;;
@@ -209,7 +209,7 @@ mode_install() {
   for f in $(elf_programs "$P/bin"); do
     cmp -s "$f" "$BUILD/bin/$(target_of "$f")" || fail "$f is not $BUILD/bin/$(target_of "$f")"
   done
-  for t in plot_sweep plot_dataset plot_scenario decode_log; do
+  for t in plot_sweep plot_dataset plot_scenario decode_log export; do
     for f in "$P/share/elaslam/tools/$t.py" "$P/bin/elaslam-${t//_/-}"; do
       [ -x "$f" ] || fail "$f not executable"
       # The source's text but for the first line: the system's Python 3.
