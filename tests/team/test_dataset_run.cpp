@@ -124,7 +124,11 @@ TEST_F(RealSlice, ALandmarkWhereARobotIsIsTakenAsMoving) {
 // that map: robot 1 ends the two minutes at 0.67 m RMS, robot 3 at 0.52 m (measured).
 // With it, main leaves robot 5 out of their team maps (64 of the 120 rounds) and they
 // stay at 0.35 and 0.20 m; robot 5 itself is no worse (0.24 m either way).
+// Measured with the odometer as it reports (robot.odometry_calibration at 1, 1, 0):
+// with config/mrclam.yaml's calibration robot 5 is steered differently on this
+// slice and the scene of the test is another.
 TEST_F(RealSlice, OneRobotsWrongMapDoesNotPullTheOthers) {
+  cfg_.robot.ekf.calibration.prior = OdometryCalibration{};
   const RunResult with_check = run(Mode::kEla, true, -1.0, 550.0);
   const RunResult without = run(Mode::kEla, true, -1.0, 550.0, 0.0);
   ASSERT_EQ(with_check.metrics.robots.size(), 5u);
@@ -165,7 +169,11 @@ TEST_F(RealSlice, TheGaugeTestNeverMovesARobotOnDataset6) {
 // the frames, and those frames find no mover. Over the whole recording that flags
 // fewer static landmarks as moving (precision up), finds every moving robot as
 // before, as fast, and leaves the robots' mean error no worse.
+// Measured with the odometer as it reports (robot.odometry_calibration at 1, 1, 0):
+// with config/mrclam.yaml's calibration the own filters drift less and no static
+// landmark is flagged either way (precision 0.625 with and without the check).
 TEST_F(RealSlice, ADriftedOwnFilterFlagsNoStaticLandmark) {
+  cfg_.robot.ekf.calibration.prior = OdometryCalibration{};
   cfg_.dataset.duration_s = 0.0;
   const RunResult with = run(Mode::kEla, true);
   cfg_.robot.team_map_drift_check = false;
