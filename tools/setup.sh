@@ -33,7 +33,7 @@ done
 PKGS=(g++ cmake ninja-build pkg-config git
       liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
       libeigen3-dev libyaml-cpp-dev libgtest-dev googletest libbenchmark-dev
-      libcli11-dev nlohmann-json3-dev libsodium-dev libcpp-httplib-dev
+      libcli11-dev nlohmann-json3-dev libsodium-dev libcpp-httplib-dev libsystemd-dev
       python3 python3-venv iproute2 procps)
 # lcm-spy (tools/spy.sh): a JDK to build the message jar, a JRE with AWT, jchart2d.
 SPY_PKGS=(openjdk-17-jdk-headless openjdk-17-jre libjchart2d-java)
