@@ -39,8 +39,9 @@ PKGS=(g++ cmake ninja-build pkg-config git
 SPY_PKGS=(openjdk-17-jdk-headless openjdk-17-jre libjchart2d-java)
 # Tests beyond the build: Debian packages (cpack's dpkg-shlibdeps needs dpkg-dev and
 # file), systemd-analyze for the units, Xvfb and X tools for the lcm-spy test,
-# nftables for loss in a namespace, chromium and curl for the viewer test.
-TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables chromium curl)
+# nftables for loss in a namespace, chromium and curl for the viewer test, lintian
+# for the packages.
+TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables chromium curl lintian)
 [ "$SPY" -eq 1 ] && PKGS+=("${SPY_PKGS[@]}")
 [ "$TEST_TOOLS" -eq 1 ] && PKGS+=("${TEST_PKGS[@]}")
 # libFuzzer (tools/fuzz.sh): clang 14 and its runtime (-fsanitize=fuzzer).
