@@ -6,9 +6,9 @@
 #
 #   tools/logplayer.sh [--build-dir DIR] [--version] [-h|--help] [LOGPLAYER ARGS...] [LOG]
 #
-# Installed as elaslam-logplayer-gui (package elaslam-spy). Everything after this
-# script's own options goes to the player as it is (quoted): --lcm-url=URL, --paused,
-# --filter=REGEX, --invert-filter, the log file.
+# Installed as elaslam-logplayer-gui (package elaslam-spy). The player's options go to
+# it as they are (quoted): --lcm-url=URL, --paused, --filter=REGEX, --invert-filter,
+# and the log file; any other option is refused (exit 2).
 #
 # Why not Debian's /usr/bin/lcm-logplayer-gui: it runs `java -server -Xincgc ...`, and
 # Java 9 and later (here 17) refuse -Xincgc (the incremental CMS mode was removed,
@@ -58,7 +58,9 @@ while [ $# -gt 0 ]; do
     --build-dir) [ $# -ge 2 ] && [ -n "$2" ] || { echo "$PROG: option '--build-dir' needs a value" >&2; exit 2; }
       BUILD_DIR="$2"; shift 2 ;;
     --build-dir=*) BUILD_DIR="${1#--build-dir=}"; shift ;;
-    *) ARGS+=("$1"); shift ;;
+    --lcm-url=*|--filter=*|--paused|--invert-filter) ARGS+=("$1"); shift ;;  # the player's own
+    -*) echo "$PROG: unknown option '$1' (see --help)" >&2; exit 2 ;;
+    *) ARGS+=("$1"); shift ;;  # the log file
   esac
 done
 
