@@ -52,14 +52,15 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
     return false;
   }
   if (!a.mode.empty() && !parse_mode(a.mode, &o->mode)) {
-    log::print(stderr, log::Priority::kErr, "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
+    log::print(stderr, log::Priority::kErr,
+               "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
     return false;
   }
   if (const std::string advice = config_advice(*o); !advice.empty())
     log::print(stderr, log::Priority::kWarning, "robot_node %d: warning: %s\n", a.robot, advice.c_str());
   if (!o->limits.in_team(a.robot)) {  // its own team would refuse every message it sends
     log::print(stderr, log::Priority::kErr, "robot_node: --robot %d is not in robot.limits.team (%s) of %s\n", a.robot,
-                 team_text(o->limits.team_mask).c_str(), cfg->path.c_str());
+               team_text(o->limits.team_mask).c_str(), cfg->path.c_str());
     return false;
   }
   return true;
@@ -83,7 +84,9 @@ bool resume(const std::string& path, std::int64_t incarnation, std::uint64_t mis
   std::string text, why;
   bool missing = false;
   if (!files::read_all(path, &text, &why, &missing)) {
-    if (!missing) log::print(stderr, log::Priority::kWarning, "robot_node %d: cannot read state %s: %s; starting fresh\n", node->robot_id(), path.c_str(), why.c_str());
+    if (!missing)
+      log::print(stderr, log::Priority::kWarning, "robot_node %d: cannot read state %s: %s; starting fresh\n",
+                 node->robot_id(), path.c_str(), why.c_str());
     return false;
   }
   if (load_robot_state(text, node, &why, mission)) {
@@ -103,8 +106,9 @@ bool resume(const std::string& path, std::int64_t incarnation, std::uint64_t mis
   }
   const std::string aside = path + ".corrupt";
   const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
-  log::print(stderr, log::Priority::kWarning, "robot_node %d: state file %s is corrupt: %s; %s, starting fresh\n", node->robot_id(), path.c_str(),
-               why.c_str(), moved ? ("moved aside to " + aside).c_str() : "could not move it aside");
+  log::print(stderr, log::Priority::kWarning,
+             "robot_node %d: state file %s is corrupt: %s; %s, starting fresh\n", node->robot_id(), path.c_str(),
+             why.c_str(), moved ? ("moved aside to " + aside).c_str() : "could not move it aside");
   return false;
 }
 
@@ -114,7 +118,8 @@ void save(const std::string& path, RobotNode& node, std::uint64_t mission) {
   std::string why;
   const bool ok = files::write_atomic(path, save_robot_state(node, mission), &why);
   node.note_save(ok, path + ": " + why);
-  if (const std::string alert = node.take_alert(); !alert.empty()) log::print(stderr, log::Priority::kWarning, "robot_node %d: %s\n", node.robot_id(), alert.c_str());
+  if (const std::string alert = node.take_alert(); !alert.empty())
+    log::print(stderr, log::Priority::kWarning, "robot_node %d: %s\n", node.robot_id(), alert.c_str());
 }
 
 /// --state while running, called every turn of the shell (after a frame's messages
@@ -159,9 +164,10 @@ class StateKeeper {
       return;
     }
     if (refused() - refused_at_start_ < kMisfitFrames) return;
-    log::print(stderr, log::Priority::kWarning, "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
-                 "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
-                 (long long)kMisfitFrames);
+    log::print(stderr, log::Priority::kWarning,
+               "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
+               "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
+               (long long)kMisfitFrames);
     start_fresh();
   }
   // A fresh node with a new incarnation, larger than this start's and any resumed one
@@ -181,9 +187,10 @@ class StateKeeper {
   // recording does the same (the team key refuses one, docs/security.md).
   void check_source() {
     if (node_->frames_behind() < kMisfitFrames) return;
-    log::print(stderr, log::Priority::kWarning, "robot_node %d: the sensor frames started over (%d in a row older than frame %d, none "
-                 "processed): a new run, starting fresh\n", node_->robot_id(), node_->frames_behind(),
-                 node_->robot().last_frame());
+    log::print(stderr, log::Priority::kWarning,
+               "robot_node %d: the sensor frames started over (%d in a row older than frame %d, none "
+               "processed): a new run, starting fresh\n", node_->robot_id(), node_->frames_behind(),
+               node_->robot().last_frame());
     start_fresh();
   }
 

@@ -353,16 +353,18 @@ void AuthenticatedTransport::refused_warning(const std::string& channel, Verdict
   char name[4 * contract::kMaxChannelBytes + 8];
   if ((++warnings_ <= 20 || warnings_ % 1000 == 0) && log_ != nullptr) {
     if (v == Verdict::kUnauthenticated || v == Verdict::kMalformed)
-      log::print(log_, log::Priority::kWarning, "%s: refused a message on %s (%zu bytes): %s (%lld refused so far)\n", who_.c_str(),
-                   printable_channel(channel, name), size, to_string(v),
-                   static_cast<long long>(auth_.counters().refused()));
+      log::print(log_, log::Priority::kWarning,
+                 "%s: refused a message on %s (%zu bytes): %s (%lld refused so far)\n", who_.c_str(),
+                 printable_channel(channel, name), size, to_string(v),
+                 static_cast<long long>(auth_.counters().refused()));
     else  // the trailer's claims (unverified for kUnknownKey and kForged)
-      log::print(log_, log::Priority::kWarning, "%s: refused a message on %s (%zu bytes, sender %d, mission %016llx, incarnation %lld, "
-                   "counter %llu): %s (%lld refused so far)\n",
-                   who_.c_str(), printable_channel(channel, name), size, s.id,
-                   static_cast<unsigned long long>(s.mission), static_cast<long long>(s.incarnation),
-                   static_cast<unsigned long long>(s.counter), to_string(v),
-                   static_cast<long long>(auth_.counters().refused()));
+      log::print(log_, log::Priority::kWarning,
+                 "%s: refused a message on %s (%zu bytes, sender %d, mission %016llx, incarnation %lld, "
+                 "counter %llu): %s (%lld refused so far)\n",
+                 who_.c_str(), printable_channel(channel, name), size, s.id,
+                 static_cast<unsigned long long>(s.mission), static_cast<long long>(s.incarnation),
+                 static_cast<unsigned long long>(s.counter), to_string(v),
+                 static_cast<long long>(auth_.counters().refused()));
   }
 }
 

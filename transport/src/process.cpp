@@ -218,21 +218,23 @@ bool configured_auth(const TransportArgs& args, const std::string& config_path, 
   }
   if (!read_roster(args, t, setup, &why)) {
     log::print(stderr, log::Priority::kErr, "%s: %s (%s%s)\n", who.c_str(), why.c_str(), config_path.c_str(),
-                 t.roster_file.empty() ? "" : (", roster " + t.roster_file).c_str());
+               t.roster_file.empty() ? "" : (", roster " + t.roster_file).c_str());
     return false;
   }
   if (setup->roster.empty()) {
     if (!key_path.empty() && sends)  // a key without a roster would be a node nobody can verify
-      log::print(stderr, log::Priority::kWarning, "%s: warning: a key file is given (%s) but no team.public_keys: authentication off\n",
-                   who.c_str(), origin.c_str());
+      log::print(stderr, log::Priority::kWarning,
+                 "%s: warning: a key file is given (%s) but no team.public_keys: authentication off\n",
+                 who.c_str(), origin.c_str());
     if (description != nullptr) *description = "authentication off (no team.public_keys)";
     return true;
   }
   setup->sender_id = sender_id;
   if (sends) {
     if (key_path.empty()) {
-      log::print(stderr, log::Priority::kErr, "%s: team.public_keys is set: this node signs what it sends and needs its secret key "
-                   "(team.key_file, --key-file; elaslam-keys new FILE makes one)\n", who.c_str());
+      log::print(stderr, log::Priority::kErr,
+                 "%s: team.public_keys is set: this node signs what it sends and needs its secret key "
+                 "(team.key_file, --key-file; elaslam-keys new FILE makes one)\n", who.c_str());
       return false;
     }
     if (!SigningKey::load(key_path, &setup->key, &why)) {
@@ -241,14 +243,16 @@ bool configured_auth(const TransportArgs& args, const std::string& config_path, 
     }
     const PublicKey& pk = setup->key.public_key();
     if (setup->roster.revoked(pk)) {
-      log::print(stderr, log::Priority::kErr, "%s: the key %s is revoked (team.revoked): make a new one and list it\n", who.c_str(),
-                   key_path.c_str());
+      log::print(stderr, log::Priority::kErr,
+                 "%s: the key %s is revoked (team.revoked): make a new one and list it\n", who.c_str(),
+                 key_path.c_str());
       return false;
     }
     if (!setup->roster.holds(sender_id, pk)) {
-      log::print(stderr, log::Priority::kErr, "%s: the public key of %s (%s) is not %s's in team.public_keys of %s\n", who.c_str(),
-                   key_path.c_str(), to_hex(pk.data(), pk.size()).c_str(), sender_name(sender_id).c_str(),
-                   config_path.c_str());
+      log::print(stderr, log::Priority::kErr,
+                 "%s: the public key of %s (%s) is not %s's in team.public_keys of %s\n", who.c_str(),
+                 key_path.c_str(), to_hex(pk.data(), pk.size()).c_str(), sender_name(sender_id).c_str(),
+                 config_path.c_str());
       return false;
     }
   }
@@ -289,16 +293,17 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
                    group_url(effective_url(url), channels::kChannelGroups - 1, &why).c_str());
       return g;
     }
-    log::print(stderr, log::Priority::kErr, "%s: cannot open LCM in channel groups: %s (see tools/netns_run.sh)\n", who.c_str(),
-                 g->error().c_str());
+    log::print(stderr, log::Priority::kErr,
+               "%s: cannot open LCM in channel groups: %s (see tools/netns_run.sh)\n", who.c_str(),
+               g->error().c_str());
     return nullptr;
   }
   auto t = std::make_unique<LcmTransport>(effective_url(url), who, stderr);
   if (t->good()) return t;
   log::print(stderr, log::Priority::kErr,
-               "%s: cannot open LCM (%s). Multicast on loopback needs a route: ip route add 224.0.0.0/4 dev lo "
-               "(see tools/netns_run.sh)\n",
-               who.c_str(), describe_url(url).c_str());
+             "%s: cannot open LCM (%s). Multicast on loopback needs a route: ip route add 224.0.0.0/4 dev lo "
+             "(see tools/netns_run.sh)\n",
+             who.c_str(), describe_url(url).c_str());
   return nullptr;
 }
 
