@@ -27,6 +27,10 @@ set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)  # lcm-gen, java, pkg-config: the b
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
+# No RUNPATH into the sysroot in the programs: the packages install them as built
+# (lintian: custom-library-search-path). Under qemu-user, tools/cross_arm64.sh gives
+# the sysroot's libraries with LD_LIBRARY_PATH.
+set(CMAKE_SKIP_BUILD_RPATH ON)
 if(ELASLAM_CROSS_SYSROOT)
   # The unpacked libraries' DT_NEEDED of each other, at link time.
   set(CMAKE_EXE_LINKER_FLAGS_INIT "-Wl,-rpath-link,${ELASLAM_CROSS_SYSROOT}/usr/lib/${ELASLAM_CROSS_TRIPLET}")

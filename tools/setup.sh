@@ -40,8 +40,10 @@ SPY_PKGS=(openjdk-17-jdk-headless openjdk-17-jre libjchart2d-java)
 # Tests beyond the build: Debian packages (cpack's dpkg-shlibdeps needs dpkg-dev and
 # file), systemd-analyze for the units, Xvfb and X tools for the lcm-spy test,
 # nftables for loss in a namespace, chromium and curl for the viewer test, lintian
-# for the packages.
-TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables chromium curl lintian)
+# for the packages, the arm64 cross toolchain and qemu-user for package_cross_arm64
+# (tools/cross_arm64.sh adds the arm64 architecture and its :arm64 libraries itself).
+TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables chromium curl lintian
+           crossbuild-essential-arm64 qemu-user-static)
 [ "$SPY" -eq 1 ] && PKGS+=("${SPY_PKGS[@]}")
 [ "$TEST_TOOLS" -eq 1 ] && PKGS+=("${TEST_PKGS[@]}")
 # libFuzzer (tools/fuzz.sh): clang 14 and its runtime (-fsanitize=fuzzer).
