@@ -303,7 +303,7 @@ mode_deb() {
   case "$(dpkg-deb -f "${DEB[elaslam-common]}" Maintainer)" in
     *elaslam.example*|"") fail "Maintainer is a placeholder: $(dpkg-deb -f "${DEB[elaslam-common]}" Maintainer)" ;;
   esac
-  head -1 "$SRC/packaging/debian/copyright" | grep -qx 'Format: https://www.debian.org/doc/packaging-manuals/copyright-format/1.0/' \
+  grep -v "^#" "$SRC/packaging/debian/copyright" | head -1 | grep -qx 'Format: https://www.debian.org/doc/packaging-manuals/copyright-format/1.0/' \
     || fail "packaging/debian/copyright is not DEP-5"
   grep -qx 'License: Apache-2.0' "$SRC/packaging/debian/copyright" || fail "copyright: no License: Apache-2.0"
   lintian_check "$D"
