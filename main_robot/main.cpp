@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/main_robot/map_state.hpp"
 #include "elaslam/transport/auth_transport.hpp"
@@ -64,7 +65,7 @@ int run(const Args& a) {
     cfg = cli::find_config(a.config);
     o = load_options(cfg.path);
   } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "main_robot: %s\n", e.what());
+    log::print(stderr, log::Priority::kErr, "main_robot: %s\n", e.what());
     return 2;
   }
   if (a.check) {  // e.g. after editing /etc/elaslam/elaslam.yaml, before restarting the service
@@ -80,7 +81,10 @@ int run(const Args& a) {
   const auto lcm = transport::open_lcm(a.transport, cfg.path, transport::kSenderMain, true, incarnation, "main_robot",
                                        &open_rc, stderr, &auth);
   if (!lcm) return open_rc;
-  transport::NodeShell shell(*lcm, transport::ShellOptions("main_robot", a.transport.channel_suffix));
+  transport::ServiceNotifier service;  // systemd's Type=notify and watchdog (service_notify.hpp)
+  transport::ShellOptions shell_options("main_robot", a.transport.channel_suffix);
+  shell_options.service = &service;
+  transport::NodeShell shell(*lcm, shell_options);
   MainNode node(o);
   node.set_incarnation(incarnation);
   MainPorts<transport::NodeShell> ports(shell, node);
@@ -89,16 +93,18 @@ int run(const Args& a) {
   const StateKey* state_key = auth.signs ? &auth.file_key : nullptr;
   if (!a.state.empty()) {
     const MapStateLoad loaded = load_map_state(a.state, state_key, &node.map());
-    std::fprintf(stderr, "main_robot: %s\n", loaded.line.c_str());
+    log::print(stderr, loaded.outcome == MapStateOutcome::kFreshAfterDamage ? log::Priority::kWarning : log::Priority::kInfo,
+               "main_robot: %s\n", loaded.line.c_str());
     if (loaded.outcome == MapStateOutcome::kFreshAfterDamage) node.count_state_damaged();
   }
   const auto save_state = [&] {  // a failure: FAULT_SAVE_FAILED in STATUS, said at the first of a series
     std::string why;
     node.note_save(save_map_state(a.state, node.map(), state_key, &why), a.state + ": " + why);
-    if (const std::string alert = node.take_alert(); !alert.empty()) std::fprintf(stderr, "main_robot: %s\n", alert.c_str());
+    if (const std::string alert = node.take_alert(); !alert.empty())
+      log::print(stderr, log::Priority::kWarning, "main_robot: %s\n", alert.c_str());
   };
   if (!ports.open(a.queues)) {
-    shell.say("cannot subscribe");
+    shell.say("cannot subscribe", log::Priority::kErr);
     return 1;
   }
   std::fprintf(stderr, "main_robot: %s, config %s (%s), lcm=%s\n", cli::version_line("main_robot").c_str(),

@@ -19,11 +19,13 @@
 #include "elaslam/common/atomic_file.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
 #include "elaslam/transport/incarnation.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
+#include "elaslam/transport/service_notify.hpp"
 
 namespace elaslam {
 namespace {
@@ -46,18 +48,19 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
     *cfg = cli::find_config(a.config);
     *o = load_robot_options(cfg->path, effective);
   } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "robot_node: %s\n", e.what());
+    log::print(stderr, log::Priority::kErr, "robot_node: %s\n", e.what());
     return false;
   }
   if (!a.mode.empty() && !parse_mode(a.mode, &o->mode)) {
-    std::fprintf(stderr, "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
+    log::print(stderr, log::Priority::kErr,
+               "robot_node: --mode '%s' is not one of ekf, gated, ela, consensus\n", a.mode.c_str());
     return false;
   }
   if (const std::string advice = config_advice(*o); !advice.empty())
-    std::fprintf(stderr, "robot_node %d: warning: %s\n", a.robot, advice.c_str());
+    log::print(stderr, log::Priority::kWarning, "robot_node %d: warning: %s\n", a.robot, advice.c_str());
   if (!o->limits.in_team(a.robot)) {  // its own team would refuse every message it sends
-    std::fprintf(stderr, "robot_node: --robot %d is not in robot.limits.team (%s) of %s\n", a.robot,
-                 team_text(o->limits.team_mask).c_str(), cfg->path.c_str());
+    log::print(stderr, log::Priority::kErr, "robot_node: --robot %d is not in robot.limits.team (%s) of %s\n", a.robot,
+               team_text(o->limits.team_mask).c_str(), cfg->path.c_str());
     return false;
   }
   return true;
@@ -81,7 +84,9 @@ bool resume(const std::string& path, std::int64_t incarnation, std::uint64_t mis
   std::string text, why;
   bool missing = false;
   if (!files::read_all(path, &text, &why, &missing)) {
-    if (!missing) std::fprintf(stderr, "robot_node %d: cannot read state %s: %s; starting fresh\n", node->robot_id(), path.c_str(), why.c_str());
+    if (!missing)
+      log::print(stderr, log::Priority::kWarning, "robot_node %d: cannot read state %s: %s; starting fresh\n",
+                 node->robot_id(), path.c_str(), why.c_str());
     return false;
   }
   if (load_robot_state(text, node, &why, mission)) {
@@ -101,8 +106,9 @@ bool resume(const std::string& path, std::int64_t incarnation, std::uint64_t mis
   }
   const std::string aside = path + ".corrupt";
   const bool moved = std::rename(path.c_str(), aside.c_str()) == 0;
-  std::fprintf(stderr, "robot_node %d: state file %s is corrupt: %s; %s, starting fresh\n", node->robot_id(), path.c_str(),
-               why.c_str(), moved ? ("moved aside to " + aside).c_str() : "could not move it aside");
+  log::print(stderr, log::Priority::kWarning,
+             "robot_node %d: state file %s is corrupt: %s; %s, starting fresh\n", node->robot_id(), path.c_str(),
+             why.c_str(), moved ? ("moved aside to " + aside).c_str() : "could not move it aside");
   return false;
 }
 
@@ -112,7 +118,8 @@ void save(const std::string& path, RobotNode& node, std::uint64_t mission) {
   std::string why;
   const bool ok = files::write_atomic(path, save_robot_state(node, mission), &why);
   node.note_save(ok, path + ": " + why);
-  if (const std::string alert = node.take_alert(); !alert.empty()) std::fprintf(stderr, "robot_node %d: %s\n", node.robot_id(), alert.c_str());
+  if (const std::string alert = node.take_alert(); !alert.empty())
+    log::print(stderr, log::Priority::kWarning, "robot_node %d: %s\n", node.robot_id(), alert.c_str());
 }
 
 /// --state while running, called every turn of the shell (after a frame's messages
@@ -157,9 +164,10 @@ class StateKeeper {
       return;
     }
     if (refused() - refused_at_start_ < kMisfitFrames) return;
-    std::fprintf(stderr, "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
-                 "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
-                 (long long)kMisfitFrames);
+    log::print(stderr, log::Priority::kWarning,
+               "robot_node %d: the state of %s (frame %d) does not fit the frames arriving (%lld refused, "
+               "none processed): starting fresh\n", node_->robot_id(), path_.c_str(), node_->robot().last_frame(),
+               (long long)kMisfitFrames);
     start_fresh();
   }
   // A fresh node with a new incarnation, larger than this start's and any resumed one
@@ -179,9 +187,10 @@ class StateKeeper {
   // recording does the same (the team key refuses one, docs/security.md).
   void check_source() {
     if (node_->frames_behind() < kMisfitFrames) return;
-    std::fprintf(stderr, "robot_node %d: the sensor frames started over (%d in a row older than frame %d, none "
-                 "processed): a new run, starting fresh\n", node_->robot_id(), node_->frames_behind(),
-                 node_->robot().last_frame());
+    log::print(stderr, log::Priority::kWarning,
+               "robot_node %d: the sensor frames started over (%d in a row older than frame %d, none "
+               "processed): a new run, starting fresh\n", node_->robot_id(), node_->frames_behind(),
+               node_->robot().last_frame());
     start_fresh();
   }
 
@@ -251,13 +260,16 @@ int run(const Args& a) {
   const auto lcm = transport::open_lcm(a.transport, cfg.path, static_cast<std::int16_t>(a.robot), true, incarnation,
                                        name, &open_rc, stderr, &auth);
   if (!lcm) return open_rc;
-  transport::NodeShell shell(*lcm, transport::ShellOptions(name, a.transport.channel_suffix));
+  transport::ServiceNotifier service;  // systemd's Type=notify and watchdog (service_notify.hpp)
+  transport::ShellOptions shell_options(name, a.transport.channel_suffix);
+  shell_options.service = &service;
+  transport::NodeShell shell(*lcm, shell_options);
   RobotNode node(o, a.robot);
   const bool resumed = resume(a.state, incarnation, auth.mission, &node);
   StateKeeper keeper(a.state, o, &node, resumed, incarnation, auth.mission);
   RobotPorts<transport::NodeShell> ports(shell, node);
   if (!ports.open(a.queues)) {
-    shell.say("cannot subscribe");
+    shell.say("cannot subscribe", log::Priority::kErr);
     return 1;
   }
   std::fprintf(stderr, "%s: %s, config %s (%s), mode=%s lcm=%s, incarnation %lld (%s)\n", name.c_str(),

@@ -110,7 +110,10 @@ int run(const Args& a, const ScenarioOptions& o) {
             << (a.run.lockstep ? ", lockstep (timeout " + std::to_string(a.run.lockstep_timeout_ms) + " ms)"
                                : ", free running")
             << ", start delay " << a.run.start_delay_ms << " ms\n";
-  transport::NodeShell shell(*lcm, transport::ShellOptions("simulator", suffix));
+  transport::ServiceNotifier service;  // systemd's Type=notify and watchdog (service_notify.hpp)
+  transport::ShellOptions shell_options("simulator", suffix);
+  shell_options.service = &service;
+  transport::NodeShell shell(*lcm, shell_options);
   return elaslam::sim::run_simulator(shell, o, a.run);
 }
 

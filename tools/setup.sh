@@ -33,14 +33,18 @@ done
 PKGS=(g++ cmake ninja-build pkg-config git
       liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
       libeigen3-dev libyaml-cpp-dev libgtest-dev googletest libbenchmark-dev
-      libcli11-dev nlohmann-json3-dev libsodium-dev libcpp-httplib-dev
+      libcli11-dev nlohmann-json3-dev libsodium-dev libcpp-httplib-dev libsystemd-dev
       python3 python3-venv iproute2 procps)
 # lcm-spy (tools/spy.sh): a JDK to build the message jar, a JRE with AWT, jchart2d.
 SPY_PKGS=(openjdk-17-jdk-headless openjdk-17-jre libjchart2d-java)
 # Tests beyond the build: Debian packages (cpack's dpkg-shlibdeps needs dpkg-dev and
 # file), systemd-analyze for the units, Xvfb and X tools for the lcm-spy test,
-# nftables for loss in a namespace, chromium and curl for the viewer test; curl and unzip for tools/get_mrclam.sh.
-TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables chromium curl unzip)
+# nftables for loss in a namespace, chromium and curl for the viewer test, curl and
+# unzip for tools/get_mrclam.sh, lintian for the packages, the arm64 cross toolchain
+# and qemu-user for package_cross_arm64 (tools/cross_arm64.sh adds the arm64
+# architecture and its :arm64 libraries itself).
+TEST_PKGS=(dpkg-dev file systemd xvfb x11-utils imagemagick nftables chromium curl unzip lintian
+           crossbuild-essential-arm64 qemu-user-static)
 [ "$SPY" -eq 1 ] && PKGS+=("${SPY_PKGS[@]}")
 [ "$TEST_TOOLS" -eq 1 ] && PKGS+=("${TEST_PKGS[@]}")
 # libFuzzer (tools/fuzz.sh): clang 14 and its runtime (-fsanitize=fuzzer).

@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "elaslam/common/config.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/common/version.hpp"
 
 namespace elaslam::cli {
@@ -71,7 +72,9 @@ CLI::Validator number_range(double lo, double hi, const char* type_name) {
 }  // namespace
 
 int guarded_main(const std::string& program, const std::function<int()>& body) {
-  const auto say = [&](const std::string& what) { std::fprintf(stderr, "%s: %s\n", program.c_str(), what.c_str()); };
+  const auto say = [&](const std::string& what) {  // the program ends: err in the journal
+    log::print(stderr, log::Priority::kErr, "%s: %s\n", program.c_str(), what.c_str());
+  };
   try {
     return body();
   } catch (const config::ConfigError& e) {

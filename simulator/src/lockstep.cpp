@@ -31,6 +31,7 @@ bool LockstepWaiter::wait(int k, int timeout_ms) {
   while (!std::all_of(newest_.begin(), newest_.end(), [k](int f) { return f >= k; })) {
     const std::int64_t left_ns = end - mono_ns();
     if (left_ns <= 0 || shell_.stop_requested()) return false;
+    shell_.alive();  // waiting is the loop too: a watchdog ping when due
     const int ms = static_cast<int>(std::min<std::int64_t>((left_ns + kNsPerMs - 1) / kNsPerMs, 50));
     if (shell_.transport().handle_timeout(ms) < 0) {
       if (!shell_.stop_requested()) ++transport_errors_;
@@ -58,15 +59,17 @@ bool wait_for_nodes(transport::NodeShell& shell, int n, int timeout_ms) {
       "STATUS_(ROBOT_[0-9]+|MAIN)" + shell.suffix(), [&seen](const node_status_t&, const std::string& ch) { seen.insert(ch); },
       transport::kTransportDefaultQueue);
   const std::int64_t end = mono_ns() + static_cast<std::int64_t>(timeout_ms) * kNsPerMs;
-  while (static_cast<int>(seen.size()) < n && mono_ns() < end && !shell.stop_requested())
+  while (static_cast<int>(seen.size()) < n && mono_ns() < end && !shell.stop_requested()) {
+    shell.alive();
     shell.transport().handle_timeout(20);
+  }
   shell.unsubscribe(input);
   if (static_cast<int>(seen.size()) >= n) {
     shell.say(std::to_string(n) + " nodes ready");
     return true;
   }
   shell.say("only " + std::to_string(seen.size()) + " of " + std::to_string(n) + " nodes announced themselves within " +
-            std::to_string(timeout_ms) + " ms");
+            std::to_string(timeout_ms) + " ms", log::Priority::kErr);
   return false;
 }
 

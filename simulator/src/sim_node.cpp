@@ -45,6 +45,7 @@ class SimNode {
   void publish_status(int frame);
   void prepare_frame(int k);
   bool publish_frame(int k, const FrameSchedule& schedule);
+  bool sleep_alive(std::int64_t deadline_ns);
   void say_summary() const;
   void note_truncation(int k);
   static constexpr int kAlertFrames = 100;  // at most one truncation line per this many frames
@@ -66,6 +67,7 @@ class SimNode {
 };
 
 int SimNode::run() {
+  shell_.ready();    // a service (Type=notify): LCM is open, the world built
   publish_info(-1);  // a recorder that is already listening knows the run before the team starts
   if (r_.wait_for_nodes > 0 && !wait_for_nodes(shell_, r_.wait_for_nodes, r_.wait_timeout_ms)) return 1;
   publish_info(-1);
@@ -82,16 +84,18 @@ int SimNode::run() {
   // robots are done with it, not on a core they wait for.
   if (o_.frames > 0) prepare_frame(0);
   for (int k = 0; k < o_.frames && !shell_.stop_requested(); ++k) {
+    shell_.alive();  // the frame loop turns: a watchdog ping when due (service_notify.hpp)
     if (!publish_frame(k, schedule)) break;
     if (k + 1 < o_.frames) {
-      if (!waiter_ && !sleep_until(schedule.deadline_ns(k) + schedule.period_ns() / 2, shell_.stop())) break;
+      if (!waiter_ && !sleep_alive(schedule.deadline_ns(k) + schedule.period_ns() / 2)) break;
       prepare_frame(k + 1);
     }
     if (waiter_ && !waiter_->wait(k, r_.lockstep_timeout_ms) && !shell_.stop_requested()) {
       if (++lockstep_timeouts_ <= kTimeoutsReported)  // the first few; the summary has the total
         shell_.say("lockstep: not every robot's POSE for frame " + std::to_string(k) + " within " +
                    std::to_string(r_.lockstep_timeout_ms) + " ms, going on" +
-                   (lockstep_timeouts_ == kTimeoutsReported ? " (no more reported)" : ""));
+                   (lockstep_timeouts_ == kTimeoutsReported ? " (no more reported)" : ""),
+                   log::Priority::kWarning);
     }
     if (mono_ns() >= next_status) {
       publish_status(k);
@@ -100,6 +104,7 @@ int SimNode::run() {
       if (next_status <= mono_ns()) next_status = mono_ns() + 1000 * kNsPerMs;
     }
   }
+  shell_.stopping();  // a service: the frames are done or a signal came
   publish_status(stats_.last_frame);
   if (shell_.stop_requested()) shell_.say("stopped by signal");
   say_summary();
@@ -137,10 +142,22 @@ void SimNode::prepare_frame(int k) {
   stats_.processing.add((mono_ns() - t_work) / 1000);
 }
 
+/// sleep_until in steps of at most 1 s, alive between them: a long --start-delay-ms or
+/// a slow rate keeps the watchdog fed. False on a stop.
+bool SimNode::sleep_alive(std::int64_t deadline_ns) {
+  constexpr std::int64_t kStepNs = 1000 * kNsPerMs;
+  for (;;) {
+    shell_.alive();
+    const std::int64_t step = std::min(deadline_ns, mono_ns() + kStepNs);
+    if (!sleep_until(step, shell_.stop())) return false;
+    if (step == deadline_ns) return true;
+  }
+}
+
 /// Publish frame k's messages (prepare_frame) at its deadline. False on a stop.
 bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
   const std::int64_t deadline = schedule.deadline_ns(k);
-  if (!sleep_until(deadline, shell_.stop())) return false;
+  if (!sleep_alive(deadline)) return false;
 
   const std::int64_t t_pub = mono_ns();
   const std::int64_t utime = shell_.now_utime();  // one stamp for the whole frame
@@ -155,7 +172,7 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "frame %d published %.3f ms after its deadline%s", k, late_ns * 1e-6,
                   stats_.late == kLateReported ? " (no more reported)" : "");
-    shell_.say(buf);
+    shell_.say(buf, log::Priority::kWarning);
   }
   return true;
 }
@@ -174,7 +191,8 @@ void SimNode::note_truncation(int k) {
   shell_.say("FAULT: frame " + std::to_string(k) + ": " + std::to_string(now) + " observation(s) beyond the " +
              std::to_string(o_.sensor.max_observations) + " a sensor frame carries (scenario.sensor.max_observations) left out (" +
              std::to_string(n) +
-             " so far; the nearest are kept)");
+             " so far; the nearest are kept)",
+             log::Priority::kWarning);
 }
 
 void SimNode::say_summary() const {

@@ -8,6 +8,7 @@
 #include <sodium.h>
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/common/contract.hpp"
 
 namespace elaslam::transport::auth {
@@ -352,16 +353,18 @@ void AuthenticatedTransport::refused_warning(const std::string& channel, Verdict
   char name[4 * contract::kMaxChannelBytes + 8];
   if ((++warnings_ <= 20 || warnings_ % 1000 == 0) && log_ != nullptr) {
     if (v == Verdict::kUnauthenticated || v == Verdict::kMalformed)
-      std::fprintf(log_, "%s: refused a message on %s (%zu bytes): %s (%lld refused so far)\n", who_.c_str(),
-                   printable_channel(channel, name), size, to_string(v),
-                   static_cast<long long>(auth_.counters().refused()));
+      log::print(log_, log::Priority::kWarning,
+                 "%s: refused a message on %s (%zu bytes): %s (%lld refused so far)\n", who_.c_str(),
+                 printable_channel(channel, name), size, to_string(v),
+                 static_cast<long long>(auth_.counters().refused()));
     else  // the trailer's claims (unverified for kUnknownKey and kForged)
-      std::fprintf(log_, "%s: refused a message on %s (%zu bytes, sender %d, mission %016llx, incarnation %lld, "
-                   "counter %llu): %s (%lld refused so far)\n",
-                   who_.c_str(), printable_channel(channel, name), size, s.id,
-                   static_cast<unsigned long long>(s.mission), static_cast<long long>(s.incarnation),
-                   static_cast<unsigned long long>(s.counter), to_string(v),
-                   static_cast<long long>(auth_.counters().refused()));
+      log::print(log_, log::Priority::kWarning,
+                 "%s: refused a message on %s (%zu bytes, sender %d, mission %016llx, incarnation %lld, "
+                 "counter %llu): %s (%lld refused so far)\n",
+                 who_.c_str(), printable_channel(channel, name), size, s.id,
+                 static_cast<unsigned long long>(s.mission), static_cast<long long>(s.incarnation),
+                 static_cast<unsigned long long>(s.counter), to_string(v),
+                 static_cast<long long>(auth_.counters().refused()));
   }
 }
 

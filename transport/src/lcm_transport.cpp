@@ -8,6 +8,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "elaslam/common/log.hpp"
 #include "elaslam/transport/udpm_receiver.hpp"
 
 namespace elaslam::transport {
@@ -54,14 +55,16 @@ struct LcmTransport::Impl {
     ++malformed;
     if (log == nullptr || (malformed > 20 && malformed % 1000 != 0)) return;
     char name[4 * contract::kMaxChannelBytes + 8];
-    std::fprintf(log, "%s: refused a datagram on '%s' (size %zu): %s (%lld so far)\n", who.c_str(),
-                 printable_channel(channel, name), size, why, static_cast<long long>(malformed));
+    log::print(log, log::Priority::kWarning,
+               "%s: refused a datagram on '%s' (size %zu): %s (%lld so far)\n", who.c_str(),
+               printable_channel(channel, name), size, why, static_cast<long long>(malformed));
   }
 
   bool open_receiver() {
     if (rx || !error.empty()) return static_cast<bool>(rx);
     rx = UdpmReceiver::open(address, &error);
-    if (!rx && log != nullptr) std::fprintf(log, "%s: cannot receive on %s: %s\n", who.c_str(), url.c_str(), error.c_str());
+    if (!rx && log != nullptr) log::print(log, log::Priority::kErr,
+                                          "%s: cannot receive on %s: %s\n", who.c_str(), url.c_str(), error.c_str());
     return static_cast<bool>(rx);
   }
 

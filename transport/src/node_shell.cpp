@@ -67,12 +67,12 @@ void NodeShell::refuse(const std::string& why) {
 
 void NodeShell::warn(const std::string& what) {
   if ((++warnings_ <= 20 || warnings_ % 1000 == 0) && options_.log != nullptr)
-    std::fprintf(options_.log, "%s: %s (warning %lld)\n", options_.name.c_str(), what.c_str(),
-                 static_cast<long long>(warnings_));
+    log::print(options_.log, log::Priority::kWarning, "%s: %s (warning %lld)\n", options_.name.c_str(), what.c_str(),
+               static_cast<long long>(warnings_));
 }
 
-void NodeShell::say(const std::string& what) const {
-  if (options_.log != nullptr) std::fprintf(options_.log, "%s: %s\n", options_.name.c_str(), what.c_str());
+void NodeShell::say(const std::string& what, log::Priority priority) const {
+  if (options_.log != nullptr) log::print(options_.log, priority, "%s: %s\n", options_.name.c_str(), what.c_str());
 }
 
 void NodeShell::every(Clock::duration period, std::function<void()> fn, Clock::duration first_after) {
@@ -80,12 +80,14 @@ void NodeShell::every(Clock::duration period, std::function<void()> fn, Clock::d
 }
 
 NodeShell::Exit NodeShell::spin(int slice_ms) {
+  ready();
   while (!stop_requested()) {
     if (transport_.handle_timeout(slice_ms) < 0 && !stop_requested()) {  // < 0 also on EINTR from a signal
-      say(std::string(transport_.kind()) + " handle error");
+      say(std::string(transport_.kind()) + " handle error", log::Priority::kErr);
       return Exit::kTransportError;
     }
     const Clock::time_point now = Clock::now();
+    if (options_.service != nullptr) options_.service->alive(now);  // the loop turns: the node is alive
     for (Timer& t : timers_) {
       if (now < t.next) continue;
       t.fn();
@@ -93,6 +95,7 @@ NodeShell::Exit NodeShell::spin(int slice_ms) {
       if (t.next <= now) t.next = now + t.period;  // after a stall: once, not once per missed period
     }
   }
+  stopping();
   return Exit::kStopped;
 }
 

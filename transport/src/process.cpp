@@ -11,6 +11,7 @@
 
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/config.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/grouped_lcm_transport.hpp"
 #include "elaslam/transport/lcm_transport.hpp"
@@ -212,42 +213,46 @@ bool configured_auth(const TransportArgs& args, const std::string& config_path, 
     if (!args.roster.empty()) read_roster_file(args.roster, &t);  // --roster over the config's
     key_path = node_key_file(args, config_path, sender_name(sender_id), &origin);
   } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
+    log::print(stderr, log::Priority::kErr, "%s: %s\n", who.c_str(), e.what());
     return false;
   }
   if (!read_roster(args, t, setup, &why)) {
-    std::fprintf(stderr, "%s: %s (%s%s)\n", who.c_str(), why.c_str(), config_path.c_str(),
-                 t.roster_file.empty() ? "" : (", roster " + t.roster_file).c_str());
+    log::print(stderr, log::Priority::kErr, "%s: %s (%s%s)\n", who.c_str(), why.c_str(), config_path.c_str(),
+               t.roster_file.empty() ? "" : (", roster " + t.roster_file).c_str());
     return false;
   }
   if (setup->roster.empty()) {
     if (!key_path.empty() && sends)  // a key without a roster would be a node nobody can verify
-      std::fprintf(stderr, "%s: warning: a key file is given (%s) but no team.public_keys: authentication off\n",
-                   who.c_str(), origin.c_str());
+      log::print(stderr, log::Priority::kWarning,
+                 "%s: warning: a key file is given (%s) but no team.public_keys: authentication off\n",
+                 who.c_str(), origin.c_str());
     if (description != nullptr) *description = "authentication off (no team.public_keys)";
     return true;
   }
   setup->sender_id = sender_id;
   if (sends) {
     if (key_path.empty()) {
-      std::fprintf(stderr, "%s: team.public_keys is set: this node signs what it sends and needs its secret key "
-                   "(team.key_file, --key-file; elaslam-keys new FILE makes one)\n", who.c_str());
+      log::print(stderr, log::Priority::kErr,
+                 "%s: team.public_keys is set: this node signs what it sends and needs its secret key "
+                 "(team.key_file, --key-file; elaslam-keys new FILE makes one)\n", who.c_str());
       return false;
     }
     if (!SigningKey::load(key_path, &setup->key, &why)) {
-      std::fprintf(stderr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin.c_str());
+      log::print(stderr, log::Priority::kErr, "%s: %s (%s)\n", who.c_str(), why.c_str(), origin.c_str());
       return false;
     }
     const PublicKey& pk = setup->key.public_key();
     if (setup->roster.revoked(pk)) {
-      std::fprintf(stderr, "%s: the key %s is revoked (team.revoked): make a new one and list it\n", who.c_str(),
-                   key_path.c_str());
+      log::print(stderr, log::Priority::kErr,
+                 "%s: the key %s is revoked (team.revoked): make a new one and list it\n", who.c_str(),
+                 key_path.c_str());
       return false;
     }
     if (!setup->roster.holds(sender_id, pk)) {
-      std::fprintf(stderr, "%s: the public key of %s (%s) is not %s's in team.public_keys of %s\n", who.c_str(),
-                   key_path.c_str(), to_hex(pk.data(), pk.size()).c_str(), sender_name(sender_id).c_str(),
-                   config_path.c_str());
+      log::print(stderr, log::Priority::kErr,
+                 "%s: the public key of %s (%s) is not %s's in team.public_keys of %s\n", who.c_str(),
+                 key_path.c_str(), to_hex(pk.data(), pk.size()).c_str(), sender_name(sender_id).c_str(),
+                 config_path.c_str());
       return false;
     }
   }
@@ -288,16 +293,17 @@ std::unique_ptr<Transport> open_lcm(const std::string& url, const std::string& w
                    group_url(effective_url(url), channels::kChannelGroups - 1, &why).c_str());
       return g;
     }
-    std::fprintf(stderr, "%s: cannot open LCM in channel groups: %s (see tools/netns_run.sh)\n", who.c_str(),
-                 g->error().c_str());
+    log::print(stderr, log::Priority::kErr,
+               "%s: cannot open LCM in channel groups: %s (see tools/netns_run.sh)\n", who.c_str(),
+               g->error().c_str());
     return nullptr;
   }
   auto t = std::make_unique<LcmTransport>(effective_url(url), who, stderr);
   if (t->good()) return t;
-  std::fprintf(stderr,
-               "%s: cannot open LCM (%s). Multicast on loopback needs a route: ip route add 224.0.0.0/4 dev lo "
-               "(see tools/netns_run.sh)\n",
-               who.c_str(), describe_url(url).c_str());
+  log::print(stderr, log::Priority::kErr,
+             "%s: cannot open LCM (%s). Multicast on loopback needs a route: ip route add 224.0.0.0/4 dev lo "
+             "(see tools/netns_run.sh)\n",
+             who.c_str(), describe_url(url).c_str());
   return nullptr;
 }
 
@@ -306,12 +312,12 @@ bool channel_groups_on(const TransportArgs& args, const std::string& config_path
     const bool configured = read_team_section(config_path, false).channel_groups;  // checked also under the flag
     *on = args.channel_groups || configured;
   } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "%s: %s\n", who.c_str(), e.what());
+    log::print(stderr, log::Priority::kErr, "%s: %s\n", who.c_str(), e.what());
     return false;
   }
   std::string why;
   if (*on && group_url(effective_url(args.lcm_url), 0, &why).empty()) {  // restarting will not help
-    std::fprintf(stderr, "%s: %s\n", who.c_str(), why.c_str());
+    log::print(stderr, log::Priority::kErr, "%s: %s\n", who.c_str(), why.c_str());
     return false;
   }
   return true;

@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/log.hpp"
 
 namespace elaslam::transport {
 namespace {
@@ -345,11 +346,13 @@ void DatagramDispatcher::refuse(const char* why, const std::string* channel, std
   if (log_ == nullptr || (malformed_ > 20 && malformed_ % 1000 != 0)) return;
   char name[4 * contract::kMaxChannelBytes + 8];
   if (channel != nullptr)
-    std::fprintf(log_, "%s: refused a datagram on '%s' (size %zu): %s (%lld so far)\n", who_.c_str(),
-                 printable_channel(*channel, name), size, why, static_cast<long long>(malformed_));
+    log::print(log_, log::Priority::kWarning,
+               "%s: refused a datagram on '%s' (size %zu): %s (%lld so far)\n", who_.c_str(),
+               printable_channel(*channel, name), size, why, static_cast<long long>(malformed_));
   else
-    std::fprintf(log_, "%s: refused a datagram of %zu bytes: %s (%lld so far)\n", who_.c_str(), size, why,
-                 static_cast<long long>(malformed_));
+    log::print(log_, log::Priority::kWarning,
+               "%s: refused a datagram of %zu bytes: %s (%lld so far)\n", who_.c_str(), size, why,
+               static_cast<long long>(malformed_));
 }
 
 void DatagramDispatcher::deliver(const std::string& channel, const std::uint8_t* data, std::size_t size,

@@ -12,6 +12,7 @@
 
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/chunks.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
@@ -327,7 +328,7 @@ class MainPorts {
     for (const auto& n : node_.take_notices(shell_.now_utime())) shell_.publish(notice_, n);
     for (const auto& r : node_.take_resyncs(shell_.now_utime())) shell_.publish(resync_, r);
     const std::string alert = node_.take_alert();
-    if (!alert.empty()) shell_.say(alert);
+    if (!alert.empty()) shell_.say(alert, log::Priority::kWarning);
   }
 
   static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::min();

@@ -14,6 +14,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/chunks.hpp"
 #include "elaslam/common/histogram.hpp"
+#include "elaslam/common/log.hpp"
 #include "elaslam/candidate_list_t.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
@@ -423,7 +424,7 @@ class RobotPorts {
   }
 
   void say_alert() {
-    if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert);
+    if (const std::string alert = node_.take_alert(); !alert.empty()) shell_.say(alert, log::Priority::kWarning);
   }
 
   void on_map(const global_map_t& msg) {
@@ -446,7 +447,8 @@ class RobotPorts {
   void on_own(const std::string& channel, std::int64_t incarnation, int frame) {
     if (node_.on_own_channel(incarnation, frame))  // loudly, not rate-limited: an operator must see it
       shell_.say("FAULT: another process publishes " + channel + " (incarnation " + std::to_string(incarnation) +
-                 ", this one " + std::to_string(node_.incarnation()) + "): two robots with one id");
+                 ", this one " + std::to_string(node_.incarnation()) + "): two robots with one id",
+                 log::Priority::kWarning);
   }
 
   void on_notice(const dynamic_notice_t& msg) {

@@ -26,8 +26,10 @@
 #include <utility>
 #include <vector>
 
+#include "elaslam/common/log.hpp"
 #include "elaslam/transport/message_arrays.hpp"
 #include "elaslam/transport/sequence.hpp"
+#include "elaslam/transport/service_notify.hpp"
 #include "elaslam/transport/transport.hpp"
 
 namespace elaslam::transport {
@@ -60,6 +62,9 @@ struct ShellOptions {
   std::function<std::int64_t()> clock;
   /// Ends spin(); nullptr: the process's SIGINT / SIGTERM flag (process.hpp, stop_flag).
   const std::atomic<bool>* stop = nullptr;
+  /// The service manager (service_notify.hpp): spin() says READY=1 at its start and
+  /// pings the watchdog from its turns. nullptr: none (tests, the in-process team run).
+  ServiceNotifier* service = nullptr;
 };
 
 class NodeShell {
@@ -109,10 +114,11 @@ class NodeShell {
   /// input and logged like warn().
   void refuse(const std::string& why);
   /// A log line at a bounded rate: the first 20, then every 1000th (a flood of bad
-  /// messages must not flood the log). Counted even without a log.
+  /// messages must not flood the log). Counted even without a log. Priority warning
+  /// in the journal (common/log.hpp).
   void warn(const std::string& what);
-  /// A log line, always (failures, shutdown).
-  void say(const std::string& what) const;
+  /// A log line, always (failures, shutdown); info in the journal unless told.
+  void say(const std::string& what, log::Priority priority = log::Priority::kInfo) const;
   /// Also called on every decode error (e.g. a node's own counter, reported in its STATUS).
   void on_decode_error(std::function<void()> fn) { on_decode_error_ = std::move(fn); }
 
@@ -121,10 +127,25 @@ class NodeShell {
   /// every turn. Callbacks run in the order they were added.
   void every(Clock::duration period, std::function<void()> fn, Clock::duration first_after = Clock::duration::zero());
   /// Handle messages (waiting at most `slice_ms` at a time) and run the due callbacks
-  /// until the stop flag is set. A transport failure ends it (logged), unless a stop
+  /// until the stop flag is set. With a service (ShellOptions::service): READY=1 first,
+  /// then a watchdog ping whenever one is due, between messages and callbacks, so a
+  /// handler or callback that hangs stops the pings. A transport failure ends it (logged), unless a stop
   /// was requested meanwhile (a signal interrupts the wait).
   Exit spin(int slice_ms);
   bool stop_requested() const { return stop_->load(); }
+  /// A loop of its own (the simulator's frames, its waits) says it is alive: a
+  /// watchdog ping when one is due (ServiceNotifier::alive). Nothing without a service.
+  void alive() {
+    if (options_.service != nullptr) options_.service->alive();
+  }
+  /// READY=1 to the service manager, once (nothing without a service).
+  void ready(const std::string& status = {}) {
+    if (options_.service != nullptr) options_.service->ready(status);
+  }
+  /// STOPPING=1: the orderly exit has begun (spin() says it itself).
+  void stopping() {
+    if (options_.service != nullptr) options_.service->stopping();
+  }
   const std::atomic<bool>& stop() const { return *stop_; }
 
   std::int64_t now_utime() const;
@@ -146,8 +167,9 @@ class NodeShell {
       status->fault_flags |= Status::FAULT_INPUT_REFUSED;
       if (quiet_statuses_ >= kQuietStatuses)
         say("FAULT: " + std::to_string(c.auth_refused - stamped_refused_) +
-            " messages refused by the transport since the last status (" + std::to_string(c.auth_refused) +
-            " in all): someone without the team's keys sends on its network, or a member is misconfigured");
+                " messages refused by the transport since the last status (" + std::to_string(c.auth_refused) +
+                " in all): someone without the team's keys sends on its network, or a member is misconfigured",
+            log::Priority::kWarning);
       quiet_statuses_ = 0;
     } else if (quiet_statuses_ < kQuietStatuses) {
       ++quiet_statuses_;
