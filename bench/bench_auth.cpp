@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Message authentication's cost per message (docs/security.md "Cost"): seal (the
 // trailer, SHA-512 over channel name, payload and header, an Ed25519 signature) and
 // open (the key looked up by sender and key id, the signature verified, the sender

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EKF frame time: one frame = one predict + 15 updates, as the robot node does per
 // sensor frame, with 16 to 512 landmarks in the map. EkfSlam (sparse H, the
 // frame's covariance steps in one pass of rank 2 (symmetric) or 4 (Joseph) per

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ELA gate's cost per frame against the number of mapped landmarks in view
 // (issues 16 and 18): ElaGate::judge_view, modes ela (eq 16 for every landmark, the
 // worst set aside and the rest re-tested) and consensus (pair tests, the cliques

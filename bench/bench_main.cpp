@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main_robot's cost per team frame against the team's size and the world's
 // (issue 18): every robot's frame brings its LMAP_EVENTs (UPDATEs of landmarks in
 // its view) and its POSE; when all R poses of a frame are in, main_robot fills the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's work per pushed state (docs/benchmarks.md): ViewState::to_json for a
 // team of R robots with full trails (500 poses each, and as many ground-truth poses)
 // and L landmarks, the JSON the page gets 20 times a second. Run: build/bin/bench_viewer

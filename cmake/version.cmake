@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Build-time script: writes OUT, a C++ source holding the project version and the
 # git commit of the source tree, and touches it only when the text changed (so an
 # unchanged tree relinks nothing).

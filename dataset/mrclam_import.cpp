@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // mrclam_import: one UTIAS MRCLAM recording as an LCM log of the system's messages
 // (GROUND_TRUTH, then SENSOR_<id> per robot, every frame; event time = frame utime).
 //   mrclam_import --dataset DIR [--config FILE] [--rate F] [--robots 1,2,3,4,5]

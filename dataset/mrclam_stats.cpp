@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // mrclam_stats: sensor and odometry noise of a UTIAS MRCLAM recording, measured
 // against its Vicon ground truth, to choose the noise values of config/mrclam.yaml.
 //   mrclam_stats --dataset DIR [--robots 1,2,3,4,5] [--rate F] [--json FILE]

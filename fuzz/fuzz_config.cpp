@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the one config loader (common/config.hpp) and every component's
 // parse function on it: the scenario (simulator), robot (robot_node), main
 // (main_robot) and dataset (the MRCLAM importer) sections, as the programs read

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the receive path of robot_node and main_robot from the wire up. An
 // input is a burst of raw udpm:// datagrams, as anyone on the team's network can send
 // them, and each goes the way it goes in the processes (docs/security.md "Bytes from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared by the libFuzzer targets (fuzz/): the fuzzer's bytes as a sequence of
 // messages, each for one of a target's channels:
 //   [channel selector: 1 byte][length: 2 bytes, little-endian][payload: length bytes]

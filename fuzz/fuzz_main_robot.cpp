@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: every message handler of main_robot, as the process runs them
 // (MainPorts on a NodeShell: decode, validate, apply, publish notices, resync
 // requests and the global map), with config/paper.yaml. An input is a burst of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the MRCLAM parser and importer (dataset/mrclam.hpp), as
 // mrclam_import runs them: Dataset::load of a directory's five files for robot 1,
 // then FrameSource (frame times, odometry integration, observation binning) and

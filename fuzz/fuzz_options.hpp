@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The nodes' options for the libFuzzer targets: config/paper.yaml's robot and main
 // sections, read once.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: every message handler of robot_node, as the process runs them
 // (RobotPorts on a NodeShell: decode into the preallocated message, validate, apply,
 // publish what the node answers), on robot 1 with config/paper.yaml (a smaller filter: options()). An input is a

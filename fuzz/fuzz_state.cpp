@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: the state loaders, robot_node's (--state: load_robot_state) and
 // main_robot's (--state: open_map_state, map_state.hpp). The first byte picks the
 // loader and whether the robot state is sealed again (mod 4: 0 raw, 1 sealed, 2

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: every input of the viewer, as the process runs them (ViewPorts on
 // a NodeShell: decode, check, apply), with config/paper.yaml's limits. An input is a
 // burst of RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_1,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Seed corpora of the libFuzzer targets (fuzz/) from a real recording and the
 project's files: windows of a recording's messages in the targets' record format
 (fuzz/fuzz_input.hpp: [channel index][length, 2 bytes LE][payload]), the configs,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Seed corpus of fuzz_datagrams (fuzz/fuzz_datagrams.cpp): real signed traffic and the
 malformed family, as raw udpm:// datagrams behind the target's selector byte.
 

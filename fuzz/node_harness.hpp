@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The node targets' harness (fuzz_robot_node, fuzz_main_robot, fuzz_viewer): a node
 // on its ports, on a NodeShell over the in-process transport, as the process runs
 // it. The shell, the transport and the ports live across inputs (their decode

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main_robot: the team's global map, as its own process on LCM.
 //   main_robot [--config FILE] [--state PATH] [--lcm-url URL] [--channel-suffix S]
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The installed paths of elaslam for an install prefix, as GNUInstallDirs derives
 # them, and the install steps whose output depends on them (systemd units, the
 # files in /etc). Used twice:

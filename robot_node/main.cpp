@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // robot_node: one robot's EKF-SLAM with the ELA gate, as its own process on LCM.
 //   robot_node [--config FILE] --robot R [--mode M] [--state PATH] [--lcm-url URL] [--channel-suffix S]
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // simulator: the world of the paper's experiment as an LCM node (docs/design.md sections
 // 1 and 6). Publishes SENSOR_<r> for every robot and GROUND_TRUTH at F frames/s on
 // absolute deadlines, STATUS_SIM and RUN_INFO (what the run is: scenario, seed,

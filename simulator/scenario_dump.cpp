@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // scenario_dump: the ground truth of a whole run as CSV, for plots
 // (tools/plot_scenario.py) and for eyeballing a scenario without LCM.
 //

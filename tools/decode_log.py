@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Decode an elaslam LCM log with the Python bindings (PyPI `lcm`) and the
 generated message types: per-channel counts, the run (RUN_INFO) and the last POSE
 and GLOBAL_MAP in brief. Exit 1 if any event on one of our channels fails to

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Start-up shared by the Python tools (standard library only: it runs before any
 third-party import).
 

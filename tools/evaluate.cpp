@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // evaluate: the metrics of a recorded run (an LCM log of the live team, made by
 // lcm-logger) against its ground truth, with the same definitions and output files
 // as run_scenario, plus latency and frame accounting.

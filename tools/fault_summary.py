@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The table of tools/fault_test.sh: fault runs against the lossless run of their seed.
 
     fault_summary.py --out DIR --build-dir BUILD [--kill-robot R] NAME...

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fault injection against the lossless run: the live team (tools/run_team.sh --hosts,
 # one network namespace per process) with packet loss and with a robot killed and
 # restarted, each beside the lossless run of the same seed, and a table of what the
@@ -55,7 +56,7 @@ PORT=7711
 BUILD_DIR=""
 CONFIG=""
 
-usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+usage() { sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 die() { echo "fault_test.sh: $*" >&2; exit 2; }
 ints() {  # ints NAME LIST: a list of non-negative integers (spaces or commas)
   local v; for v in ${2//,/ }; do [[ "$v" =~ ^[0-9]+$ ]] || die "$1 takes integers, got '$v'"; done

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fuzz the inputs from outside with libFuzzer (clang), under AddressSanitizer and
 # UndefinedBehaviorSanitizer: every message handler of robot_node and main_robot
 # (decode + validate + apply, through the node shell as in the processes), the receive
@@ -43,7 +44,7 @@ while [ $# -gt 0 ]; do
     --jobs) [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "--jobs must be a positive integer, got '$2'"; JOBS="$2"; shift 2 ;;
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --keep-corpus) KEEP=1; shift ;;
-    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # A long fuzzing campaign, in resumable chunks: runs tools/fuzz.sh on one target at
 # a time for CHUNK seconds with the corpus kept (--keep-corpus), and records every
 # chunk in a ledger, until each target has run EXECUTIONS executions in total.
@@ -47,7 +48,7 @@ while [ $# -gt 0 ]; do
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --ledger) LEDGER="$2"; shift 2 ;;
     --status) STATUS=1; shift ;;
-    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // keys: the team's keys and missions (installed as elaslam-keys; docs/security.md
 // "Keys and missions").
 //   keys new FILE                         a node's new secret key; prints its public key

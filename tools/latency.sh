@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Latency of the live team at several frame rates: runs tools/run_team.sh (separate
 # processes over LCM, recorded by lcm-logger) at each rate and prints, from the
 # evaluated log, sensor-to-pose latency (p50/p99/max over every robot) and
@@ -38,7 +39,7 @@ while [ $# -gt 0 ]; do
     --channel-groups) GROUPED=(--channel-groups); shift ;;
     --out) OUT="$2"; shift 2 ;;
     --build-dir) BUILD_ARGS=(--build-dir "$2"); BUILD_DIR="$2"; shift 2 ;;
-    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) usage_error "unknown argument '$1'" ;;
   esac
 done

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // lcm_floor: LCM's own one-way latency on this machine at a given message rate, the
 // floor under the team's sensor-to-pose latency (issue 18; docs/benchmarks.md
 // "Latency and LCM's floor"). Two processes (this one forks): a receiver subscribes,

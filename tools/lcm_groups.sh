@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sourced by tools/run_team.sh and tools/replay_team.sh: channel groups in shell
 # (team.channel_groups; grouped_lcm_transport.hpp, channels.hpp). Each group of
 # channels has its own port, the team's base port + the group's number:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // log_info: what a recorded LCM log holds, like `ros2 bag info`: size, events, time
 // span, per channel count / bytes / rate / type / undecodable events, the run it
 // recorded (RUN_INFO), the frames it covers and, per robot, what happened to every

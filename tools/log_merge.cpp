@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // log_merge: several LCM logs into one, in receive-time order: the recordings of a
 // team in channel groups (one lcm-logger per group's port, tools/run_team.sh
 // --channel-groups) become the one log that evaluate, log_info and lcm-logplayer read.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Check the packet-loss rule of run_team.sh --loss against its model: two network
 # namespaces on a bridge (10.78.0.0/24, nothing leaves them), the receiver with the
 # same nftables rule as every receiving host of run_team.sh --hosts --loss P; the
@@ -35,7 +36,7 @@ while [ $# -gt 0 ]; do
               die "--size must be in [1500, 65000] bytes"
             fi
             SIZE="$2"; shift 2 ;;
-    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "loss_check.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sourced by tools/run_team.sh (--hosts --loss P) and tools/loss_check.sh: the one
 # packet-loss rule, so that the check measures the rule the team runs under.
 #

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Memory of the live team over a long run: does any node grow?
 #
 #   tools/memory_check.sh [--duration S] [--interval S] [--config FILE] [--out DIR]
@@ -33,7 +34,7 @@ LOG=0
 INSIDE=0
 SIM_ARGS=()
 ORIG_ARGS=("$@")
-usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+usage() { sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 usage_error() { echo "memory_check: $1 (see --help)" >&2; exit 2; }
 number() { [[ "$2" =~ ^[0-9]+([.][0-9]+)?$ ]] && [[ ! "$2" =~ ^0+([.]0*)?$ ]] || usage_error "$1 must be a positive number, got '$2'"; }
 while [ $# -gt 0 ]; do

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // monitor: one line that follows a live team (frame k/N, poses received, moving
 // landmarks found so far, nodes' health), for a terminal or a log.
 //   monitor [--config FILE] [--key-file FILE] [--lcm-url URL] [--channel-suffix S] [--interval S]

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Cross-validation of the MRCLAM calibration (issue 16: calibration that generalises).
 
 config/mrclam.yaml's real-data parameters were fitted with mrclam_stats on all five

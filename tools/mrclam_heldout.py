@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """An MRCLAM recording without the robots' Vicon files, as a held-out check (issue 16).
 
 Public copies of other MRCLAM recordings often lack RobotN_Groundtruth.dat (the largest

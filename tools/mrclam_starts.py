@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """A recording from many start times (issue 42): the same MRCLAM recording started
 later is a different run for the filters (other robots stand or drive when the maps
 begin, other landmarks come first), so the mean over several starts says more than

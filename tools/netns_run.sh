@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Run a command in a private, throw-away network namespace with LCM multicast on
 # its loopback, so that LCM traffic never touches the host's real interfaces and
 # parallel tests cannot hear each other.
@@ -17,7 +18,7 @@ set -u
 
 PORT=7667
 # --help: the comment block above; a usage error: one line naming the problem, exit 2.
-help() { sed -n '2,/^set -u/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0; }
+help() { sed -n '3,/^set -u/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0; }
 usage_error() {
   echo "netns_run: $1" >&2
   echo "usage: tools/netns_run.sh [--port P] -- CMD [ARGS...]   (--help: details)" >&2

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Which of a sweep's cell-metrics does one mode win against another, and which of
 the wins and losses are more than noise?
 

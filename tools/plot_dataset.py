@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Plot a run on real data (run_dataset's output folder): one panel per robot with
 its true (Vicon) and estimated paths, the true landmark positions and the team's
 global map (estimates with 3-sigma ellipses; landmarks flagged as moving marked).

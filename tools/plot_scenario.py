@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Plot a scenario like the paper's Fig. 4: landmarks (moving ones with their
 paths over the run), the robots' paths, each robot's field of view at its start
 pose, on a 2 m grid.

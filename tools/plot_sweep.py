@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Plot the results of build/bin/sweep like the paper's Figs 4-8.
 
     tools/plot_sweep.py DIR [--out DIR2]

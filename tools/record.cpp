@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // record: an LCM recorder that does not die on malformed datagrams (installed as
 // elaslam-record). Writes every message of one udpm:// URL (or the channels a
 // regular expression matches) to an LCM log file, as lcm-logger does, each event

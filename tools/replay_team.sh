@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Replay a recorded log into a fresh team, live over LCM, optionally with the viewer:
 # a run's run.lcmlog (tools/run_team.sh) or a real recording made by mrclam_import.
 #
@@ -31,7 +32,7 @@ BUILD_DIR="${ELASLAM_BUILD_DIR:-$ROOT/build}"
 CONFIG="$ROOT/config/paper.yaml"
 LOG="" MODE="" SPEED=1 VIEW_PORT="" VIEW_NS="" OUT="" PORT=7667 ROBOTS="" INSIDE=0 GROUPED=0
 die() { echo "replay_team.sh: $*" >&2; exit 2; }
-usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+usage() { sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 while [ $# -gt 0 ]; do
   case "$1" in
     --config|--mode|--speed|--out|--port|--build-dir|--robots|--view-ns)

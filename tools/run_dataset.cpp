@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // run_dataset: the team on a recorded UTIAS MRCLAM dataset instead of the
 // simulator (in-process, like run_scenario), its metrics against Vicon ground
 // truth and its output files.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // run_scenario: one in-process run of the whole team (simulator + robots + main),
 // its metrics against ground truth, and its output files.
 //   run_scenario [--config FILE] [--mode M] [--dynamism P] [--speed V] [--seed S]

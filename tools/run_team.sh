@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Run the team live, one process per role over LCM, record every channel, evaluate
 # the recording against ground truth and print the summary, beside what plain
 # EKF-SLAM gives on the same scenario and seed.
@@ -118,7 +119,7 @@ FRAMES_ARG=""    # --frames, when given (to check --kill-at-frame against)
 SIM_ARGS=()      # overrides for the simulator (and run_scenario)
 EVAL_ARGS=()     # the same facts, for the record when a log lacks RUN_INFO
 
-usage() { sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
+usage() { sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit "${1:-0}"; }
 die() { echo "run_team.sh: $*" >&2; exit 2; }
 # number NAME VALUE LO HI [int]: VALUE is a number (an integer with "int") in [LO, HI].
 number() {

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The test command: set-up (installs what is missing, the test tools included:
 # tools/setup.sh --with-test-tools), build, run every test (ctest).
 #   tools/run_tests.sh [--sanitize] [CTEST ARGS...]     e.g. -L unit, -LE system, -R Ekf
@@ -8,7 +9,7 @@
 # Exit status: ctest's (0 when every test passed); 2 on a bad argument.
 set -euo pipefail
 case "${1:-}" in
-  -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+  -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
 esac
 # The real source tree, also when started through a symbolic link (a scratch copy).
 ROOT="$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)"

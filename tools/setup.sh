@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Set-up for elaslam on Debian (bookworm): installs what is missing, makes the
 # Python virtual environment, configures the build in build/.
 # Idempotent and fast when everything is there.
@@ -24,7 +25,7 @@ while [ $# -gt 0 ]; do
     --with-test-tools) TEST_TOOLS=1; SPY=1; shift ;;
     --with-spy) SPY=1; shift ;;
     --with-fuzz) FUZZ=1; shift ;;
-    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "setup.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done

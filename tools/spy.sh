@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Start lcm-spy with the elaslam message types, so that every channel of the team
 # (SENSOR_<r>, POSE_<r>, GLOBAL_MAP, ...) is decoded field by field.
 #

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sweep: the paper's experiment grid (section 4, Tables 1-4, Figs 5-8) through the
 // in-process team run, in parallel, with our modes beside the paper's.
 //   sweep --config FILE [--modes ekf,gated,ela,consensus] [--dynamism 5,20,35,50,65,80]

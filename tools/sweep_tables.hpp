@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sweep's grid, its per-run results and the files it writes (runs.csv,
 // frames.csv, tables.md in the layout of the paper's Tables 1-4).
 #pragma once

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Throughput of the live team (separate processes over LCM, in a private network
 # namespace; needs root):
 #   1. lockstep: the simulator publishes frame k+1 as soon as every robot's POSE for
@@ -37,7 +38,7 @@ while [ $# -gt 0 ]; do
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --channel-groups) GROUPED=(--channel-groups); shift ;;
     --inside) INSIDE=1; PHASE="$2"; shift 2 ;;  # internal: one run, inside the namespace
-    -h|--help) sed -n '2,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '3,/^set -e/p' "$0" | sed '$d' | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) usage_error "unknown argument '$1'" ;;
   esac
 done

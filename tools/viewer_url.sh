@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Sourced by tools/run_team.sh, tools/replay_team.sh and tests/system/viewer.sh: the
 # one wait for a viewer started in the background to say where it serves.
 #

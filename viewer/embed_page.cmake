@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # cmake -DIN=page.html -DOUT=page.cpp -P embed_page.cmake: the page as a C++ string.
 file(READ ${IN} PAGE)
 string(FIND "${PAGE}" ")elaslam_page\"" CLASH)

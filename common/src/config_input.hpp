@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The configuration loader's input checks (config.cpp's Document::from_file and
 // from_string), before any component reads a key: the file (config::kMaxFileBytes,
 // regular files only), the bytes (UTF-8 text) and the document's shape (plain

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The O(n) and O(n^2) loops of EkfSlam's correction, on raw column pointers
 // (private to robot_node/src/ekf_slam.cpp). Written as plain loops with restrict
 // parameters so that the compiler vectorises them; nothing here allocates.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fixed-memory planar EKF-SLAM (docs/design.md section 3): prediction (paper eqs 3-6),
 // correction (eqs 7-13), augmentation (eq 15) and mean(diag(P)) (eq 19) on the
 // state of eqs 1-2 with the odometer's calibration states (issue 42: updates need

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // FilterHistory: a lagged copy of the filter and the operations since (filter_history.hpp).
 #include "elaslam/robot_node/filter_history.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "elaslam/robot_node/lmap.hpp"
 
 #include "elaslam/common/geometry.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 

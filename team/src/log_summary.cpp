@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // log_summary.hpp: the summary of a recorded LCM log.
 #include "elaslam/team/log_summary.hpp"
 

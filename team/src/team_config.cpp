@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "elaslam/team/team_config.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // files::read_all's size limit (checked before any read) and its refusal of what is
 // not a regular file, without blocking on a FIFO.
 #include <gtest/gtest.h>

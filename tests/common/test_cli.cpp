@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The command-line rules every program shares (common/cli.hpp): the config lookup
 // order and its errors, --version's text, the command line as provenance.
 #include <gtest/gtest.h>

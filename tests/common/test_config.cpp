@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Config loading: every bad-config case is reported with its key path, all at once.
 #include <gtest/gtest.h>
 

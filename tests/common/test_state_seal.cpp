@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The state files' seal (common/state_seal.hpp): the exact layout (a known answer
 // any BLAKE2b can reproduce, e.g. Python's hashlib), keyed and unkeyed, and a strict
 // header: every other form is refused before the body is looked at.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The MRCLAM importer: a hand-written tiny dataset (tests/dataset/data/tiny, every
 // expected value computed by hand in the comments), malformed files, and the real
 // dataset6 when it is present.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // mrclam_import end to end: the LCM log it writes for the tiny dataset holds one
 // GROUND_TRUTH and one SENSOR_<r> per robot per frame, in order, and each decodes to
 // exactly what mrclam::FrameSource gives for that frame; a RUN_INFO before frame 0

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Test `data_dictionary`: every output file the programs write (metrics.json of
 # run_scenario with a baseline, of evaluate on a recording, of run_dataset; frames.csv,
 # map.csv; the sweep's runs.csv and frames.csv; log_info --json; mrclam_stats --json)

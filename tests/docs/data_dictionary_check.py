@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Every JSON key and CSV column of the given output files is in docs/data_dictionary.md.
 
   data_dictionary_check.py DICTIONARY FILE...   (*.json: every key path; *.csv: the header)

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Golden regression: today's results against a committed, seeded reference.
 
   golden.py check  --build DIR            the in-process outputs, exactly (test golden_inprocess)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Every message type round-trips through encode/decode; truncated or corrupted
 // buffers fail to decode cleanly (a negative return, no crash, no partial success).
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A counting operator new for test_map_state: the largest single allocation since
 // the last reset (a file read whole costs one allocation of at least its size).
 // Apart from the test's source, so that no new-expression is inlined against it.

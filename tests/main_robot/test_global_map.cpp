@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The global map: fusion, MOVING / RETURN, event ordering, snapshot repair,
 // persistence, and message validation.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main_robot's state file (map_state.hpp): sealed, bounded, checked; a refused file
 // is moved aside to PATH.corrupt and main starts fresh. Each case of the review
 // (docs/security.md, "main_robot's state file") against the file functions the process calls.

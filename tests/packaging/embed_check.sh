@@ -79,6 +79,8 @@ mode_embed() {
       echo "$P/$libdir/cmake/elaslam/$f.cmake"
     done
     echo "$P/$libdir/pkgconfig/elaslam.pc"
+    # Every package's licence and changelog (packaging/debian/copyright).
+    echo "$P/share/doc/elaslam-dev/copyright"; echo "$P/share/doc/elaslam-dev/changelog.Debian.gz"
   } | sort > "$TMP/expected"
   find "$P" \( -type f -o -type l \) | sort > "$TMP/actual"
   diff "$TMP/expected" "$TMP/actual" > "$TMP/list.diff" \

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Packaging tests (ctest label `package`; packaging/, docs/deployment.md).
 #   package_check.sh install BUILD_DIR VERSION   cmake --install into a scratch prefix:
 #       the exact layout, the config lookup without --config (the installed default),

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # A short live team from an unpacked package root (`dpkg -x` of the five .debs):
 # elaslam-main-robot, one elaslam-robot-node per robot of the scenario and
 # elaslam-simulator --frames 30, as separate processes over LCM. Run it inside a

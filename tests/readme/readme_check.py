@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Every command of README.md works: the README tests (tests/readme/README.md).
 
   readme_check.py extract [--source DIR] [--build DIR]

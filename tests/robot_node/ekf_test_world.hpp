@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test support for the EKF tests: a dense textbook EKF (the known answer), a small
 // random world, and random filter operations on both.
 #pragma once

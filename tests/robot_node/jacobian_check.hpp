@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Central-difference Jacobian checker for the models' analytic Jacobians
 // (GTSAM's EXPECT_CORRECT_FACTOR_JACOBIANS in spirit). Header-only, test use.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Constructed scenes for the robot-node tests: a filter holding a known map, and
 // frames observed from known true poses.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ConsensusSolver (mode consensus): the largest mutually consistent set of the
 // landmarks in view, exactly, and the prior that breaks ties against co-moving groups.
 #include "elaslam/robot_node/consensus.hpp"

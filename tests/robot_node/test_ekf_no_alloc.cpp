@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Proof that the filter's frame path allocates nothing after construction
 // (docs/design.md section 3). Two independent guards watch the region:
 //  - Eigen's EIGEN_RUNTIME_NO_MALLOC: every Eigen heap allocation asserts (the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // EkfSlam: known answers from a dense textbook EKF, statistical consistency on a
 // simulated loop, exact marginalisation, and refusal of bad inputs and faults.
 #include "elaslam/robot_node/ekf_slam.hpp"

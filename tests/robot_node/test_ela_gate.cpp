@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ELA gate: eq 16 and the pairwise relative test on constructed scenes, and
 // ElaGate's verdicts and records (one per landmark, naming the test that decided).
 #include "elaslam/robot_node/ela_gate.hpp"

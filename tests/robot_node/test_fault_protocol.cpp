@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rules that make the team's messages survive loss, restarts and duplicates
 // (issue 14): chunking, chunk loss and reordering at main_robot, incarnations,
 // a second sender with one robot id, resync requests, and notices repaired from

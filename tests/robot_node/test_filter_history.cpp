@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // FilterHistory: a candidate's landmark-only corrections made full ones after the
 // fact give the filter that trusted it from the start (to rounding); without an
 // upgrade the filter is left alone; a full ring commits early and stays exact.

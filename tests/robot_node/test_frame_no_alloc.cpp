@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The whole frame path of a robot node (every mode) and of main_robot allocates
 // nothing after start-up. Frames come from the simulator at 50 % dynamism so that
 // every branch of Algorithm 1 runs: candidates, ADD, MOVING, RETURN, missing,

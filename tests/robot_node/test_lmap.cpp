@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // LMap: each landmark's lifecycle as named transitions (candidate -> static ->
 // moving -> returned), without a filter.
 #include "elaslam/robot_node/lmap.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Motion and observation models: analytic Jacobians against central differences at
 // random and at singular points, and the odometry noise model against hand-computed
 // numbers.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The gauge test (issue 42): the rigid fit, the filter moved by a rigid motion, and
 // a robot whose map is right in itself but wrong as a whole, found out by the team
 // map and moved back.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Algorithm 1, path by path, on constructed frames (no simulator).
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A robot node against messages that decode and look valid but are absurd (issue
 // 15): frame numbers near INT32_MAX or forged far ahead, odometer jumps, notices
 // and global maps from outside the team or with absurd contents, a full filter.

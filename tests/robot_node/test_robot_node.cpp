@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The robot node's message layer: every bad message is counted and dropped without
 // touching the filter; duplicated and reordered frames are refused; gaps are bridged.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The robot state file (robot_state.hpp): a node restored from it continues exactly
 // as an uninterrupted one; every kind of damaged or foreign file is refused with a
 // message naming the problem and leaves the node as it was; the atomic save never

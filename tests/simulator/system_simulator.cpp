@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // System test of the simulator process over LCM (label `system`). Runs inside
 // tools/netns_run.sh, which provides a private network namespace and
 // LCM_DEFAULT_URL. Starts build/bin/simulator as a child process and listens.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Landmark layouts: count, inside the world, spacing, determinism.
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Robot paths, landmark steps, odometry noise, random streams.
 #include <cmath>
 #include <cstdint>

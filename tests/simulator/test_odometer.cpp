@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The odometers' systematic error (issue 42; OdometerError): what a robot's
 // odometer reports against the true motion, per robot, and nothing else changed.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Scenario configuration: the default file loads, every kind of bad input is
 // rejected with its key path and a message that says what was expected.
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The range-bearing sensor: noise statistics, field of view, detection probability.
 // Tolerances are ~4-5 standard errors of the estimate, so a correct sensor fails
 // with probability < 1e-4 per check; the draws are seeded, so a run is repeatable.

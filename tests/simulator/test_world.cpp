@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The world over whole runs: determinism, the moving set, landmark motion
 // (speed, reversal, borders), robot paths, field of view, message contents.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A program under test as a child process (system tests), its stderr captured in
 // a temporary file. Killed with SIGKILL on destruction if still running.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Message builders shared by the tests and benchmarks of main_robot's inputs: a
 // landmark event and a POSE with plausible values (positions in metres, variances in
 // square metres) and the fields the caller names.

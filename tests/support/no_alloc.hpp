@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Proof of "no heap allocation" in a region of code, for the fixed-memory tests.
 // Link no_alloc.cpp into the test: it replaces the global operator new (every form)
 // with one that counts calls made inside a NoAllocRegion. Compile the code under

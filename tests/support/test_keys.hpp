@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Deterministic keys and a team's authentication setup for the tests of message
 // authentication (transport/auth_transport.hpp): every sender's key made from a seed
 // of its own, one roster holding them all, one mission.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The sweep on a reduced grid (2 cells x 2 runs, 2 modes): its files and columns,
 # tables.md against runs.csv, and identical runs.csv for --jobs 1 and --jobs 2.
 #   tests/sweep/sweep_check.sh BUILD_DIR

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_auth_duplicate` (docs/security.md): with the team's keys, two
 # live processes that use one robot id and its key (robot_node --robot 2, twice: a
 # copied computer) still both get through authentication (each its own incarnation,

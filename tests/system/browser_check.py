@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The viewer's page in a real browser (headless Chromium, driven over the Chrome
 DevTools Protocol with websocket-client): loads URL, reads the page's test hooks
 (window.viewerStats: states received, frame, robots and landmarks drawn, transport)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_datagrams` (docs/security.md "Bytes from the network"): a keyed
 # live team (simulator, main_robot, every robot_node, the viewer, the monitor and the
 # recorder, each its own process on LCM) while a process without any key sends malformed datagrams

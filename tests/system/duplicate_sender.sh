@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_duplicate_sender`: a second live robot_node with a robot id
 # that is already in use (a mis-typed --robot on a second computer, or an old process
 # that was never stopped) is reported loudly, within a few frames, by both copies and

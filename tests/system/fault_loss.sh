@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_fault_loss`: the fault-injection harness works (docs/faults.md).
 # tools/fault_test.sh, short: one seed, 100 frames, the lossless run, 20 % packet loss
 # (run_team.sh --hosts --loss 20) and robot 2 killed (SIGKILL) after frame 60 and

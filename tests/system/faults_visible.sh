@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_faults` (docs/faults.md, "Faults an operator sees"): conditions
 # that used to leave every STATUS at faults=0 are flagged and said, over LCM in a
 # private namespace, with the team's keys:

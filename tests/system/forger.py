@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """An attacker on the team's LCM network without any team member's key (system test
 `system_forger`, tests/system/forger.sh; issue 15). Until SIGTERM / SIGINT or
 --duration, every --period seconds it sends:

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_forger` (docs/security.md): a live team with its keys (each
 # process its own, elaslam-keys team), attacked by a process on its LCM network
 # without any of them (forger.py: forged

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_frame_accounting`: "frames dropped" means what it says.
 # A live team in a private namespace (80 frames at 20 Hz) where robot 3 starts when
 # robot 1 has done frame 15 (it joins late), and robot 2 is killed (SIGKILL) after

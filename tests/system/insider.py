@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """A team member taken over (system test `system_insider`, tests/system/insider.sh;
 docs/security.md "Threat model"): a process holding one node's secret key (robot
 3's) that signs, with it, messages in other nodes' names, until SIGTERM / SIGINT or

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_insider` (docs/security.md, "Threat model"): a team member taken
 # over, and an earlier mission's recording, against a live team with its keys.
 #   1. a short run of mission M1 records run.lcmlog (another mission's, for step 3);

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Helpers of the system tests (tests/system/*.sh): wait on live LCM traffic and
 compare recorded LCM logs. Needs the PyPI `lcm` (the project's .venv) and the
 generated Python types (BUILD/lcmgen/python).

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test (system_main_restart): killing main_robot (SIGKILL) mid-run and
 # restarting it ends with the same global map as an uninterrupted run.
 #   1. reference: the live team, uninterrupted (tools/run_team.sh in a namespace);

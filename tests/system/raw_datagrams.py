@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Malformed LCM datagrams, sent raw to the team's multicast group: what reaches a
 node's LCM receive path from anyone on its network, key or not (system test
 `system_datagrams`, tests/system/datagram_attack.sh; docs/security.md "Bytes from the

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test (system_replay): a recorded live run, replayed into fresh nodes, gives
 # the same poses frame by frame.
 #   1. the live team records run.lcmlog (tools/run_team.sh in a private namespace);

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_robot_restart`: a robot_node killed at any instant and started
 # again with the same command continues from its --state file.
 # For each seed, two live teams in a private namespace (150 frames at 20 Hz; robot 2

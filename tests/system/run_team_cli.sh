@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test `system_run_team_cli`: tools/run_team.sh as a user meets it.
 # 1. Bad arguments are refused before anything starts (exit 2, the argument named,
 #    no output directory, no set-up or build); a valid-looking combination the

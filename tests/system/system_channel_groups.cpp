@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Channel groups over real udpm:// (grouped_lcm_transport.hpp), in a private network
 // namespace (tools/netns_run.sh sets LCM_DEFAULT_URL): each group's channels go out on
 // its own port and only there, a subscriber hears what it subscribed to from every

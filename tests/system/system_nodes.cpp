@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // System tests of the robot_node and main_robot processes over LCM (label `system`).
 // Run inside tools/netns_run.sh: a private network namespace, LCM_DEFAULT_URL set.
 // Waits are bounded loops on handleTimeout; readiness is seen on the nodes' STATUS

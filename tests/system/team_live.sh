@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test: the live team (separate processes over LCM in a private network
 # namespace, recorded by lcm-logger) runs end to end, every robot publishes a pose
 # for every frame, and its metrics agree with the in-process run of the same

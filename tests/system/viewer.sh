@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test (system_viewer): the viewer shown a recorded run, in a real browser.
 #   1. the live team records run.lcmlog (tools/run_team.sh in a private namespace);
 #   2. in a second namespace the viewer starts (--port 0) and lcm-logplayer plays the

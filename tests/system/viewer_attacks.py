@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The viewer as an HTTP service under attack (system_viewer_attacks, started by
 tests/system/viewer_attacks.sh; docs/security.md, "The viewer as an HTTP service"). Each case attacks a
 running viewer, checks that it keeps answering and refuses what it should, and

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test (system_viewer_attacks): the viewer as a hardened HTTP service
 # (docs/security.md, "The viewer as an HTTP service"). A real viewer (--lcm-url memq://: it needs no LCM
 # traffic) is attacked by tests/system/viewer_attacks.py, one case after the other,

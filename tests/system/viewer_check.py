@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """The viewer's /state.json against the log it was shown (system_viewer): the last
 POSE_<r> of each robot, the GLOBAL_MAP assembled from its chunks (each chunk stands
 for its id range) and the highest frame, all as the viewer must have drawn them.

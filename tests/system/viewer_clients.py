@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Slow, stalled and too many browsers cost the viewer nothing unbounded
 (system_viewer): MAX event streams are opened and never read while the viewer
 publishes; /state.json still answers at once; a browser that reads gets a stream

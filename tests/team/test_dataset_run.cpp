@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The team on real data: two minutes of all five robots of UTIAS MRCLAM dataset6
 // (when the data is in the repository, data/mrclam/dataset6: tools/get_mrclam.sh), against
 // Vicon, with config/mrclam.yaml. Bounds are stated next to the figures measured

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The adapter from recorded messages to the metrics (team/frame_data.hpp) refuses
 // what a node would refuse (issue 15): evaluate once reported a latency p50 of
 // -4.7 s from POSEs with a forged source_utime.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A robot that misses frames (a restart, a radio outage): the frames after the gap
 // carry the odometer's whole motion over the gap in one increment.
 #include <gtest/gtest.h>

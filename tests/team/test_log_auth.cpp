@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading a keyed team's recording as its nodes read the wire (log_auth.hpp): what
 // verifies loses its trailer and is decoded as recorded; forged, altered, replayed,
 // unauthenticated, misattributed and other missions' events are refused and counted

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Frame accounting (account_frames) on hand-built POSE / STATUS / SENSOR records, and
 // the log summary (summarize_log, log_info) on a synthetic LCM log whose every
 // number is known: counts, bytes, rates, time span, RUN_INFO, per-robot accounting,

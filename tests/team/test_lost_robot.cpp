@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A robot that loses its heading (a 25 deg kick in its odometer, unmodelled) in a
 // team: what it does to itself and to the others, with and without the team map.
 #include <gtest/gtest.h>

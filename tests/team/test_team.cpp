@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The whole team in one process: accuracy against ground truth, the ELA's benefit
 // under dynamism, notices between robots, determinism.
 #include <gtest/gtest.h>

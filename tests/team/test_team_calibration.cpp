@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The odometer's systematic error estimated online (issue 42), through the whole
 // team (robot nodes, main_robot, the metrics): the paper's team with odometers that
 // overstate the turn by 1/0.9 and the distance by 1/0.95 (the real MRCLAM robots'

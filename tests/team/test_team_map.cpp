@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The team's map back to its robots (robot.team_map, team_aid.hpp; docs/decisions.md
 // "The team helps its members"): no double counting, shown by the NEES of the
 // channel filter in a linear world and of the robots' poses in the simulated team,

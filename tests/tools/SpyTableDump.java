@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A Java agent for tests/tools/spy_headless.sh: inside the lcm-spy JVM that
 // tools/spy.sh starts (JAVA_TOOL_OPTIONS=-javaagent:<jar>=<file>), it writes what
 // lcm-spy's window shows, every 250 ms, to <file>: the title of each window and

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Bad configurations and bad command-line numbers against every program
 # (docs/security.md): each must exit 2 with a message on stderr that names the
 # problem (the key path, the option or the file), and none may die by a signal.

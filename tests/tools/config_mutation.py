@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Mutated configurations against every program that reads one (docs/security.md).
 
   tests/tools/config_mutation.py --bin BUILD/bin [--count N] [--seed S] [--jobs J]

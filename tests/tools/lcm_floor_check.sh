@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/lcm_floor (LCM's own one-way latency at a rate): inside a private network
 # namespace (port 7850), 200 messages at 1 kHz all arrive and the quantiles it prints
 # are ordered and positive; bad numbers on the command line exit 2 naming the option.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # log_merge (tools/log_merge.cpp): logs written here byte by byte in LCM's log format
 # (big-endian: magic 0xEDA1DA01, event number, timestamp, channel length, data length,
 # channel, data) are merged into one in timestamp order, ties in the inputs' order,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Test `mrclam_crossval` (ctest): tools/mrclam_crossval.py on MRCLAM dataset6 (skipped,
 exit 77, without data/mrclam/dataset6: tools/get_mrclam.sh). Checks that every fold ran with finite errors and
 that config/mrclam.yaml holds what the fit on all five robots gives (within the

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/mrclam_heldout.py on a made-up recording whose answer is known: five robots
 # drive straight from known starts among 15 surveyed landmarks with exact odometry and
 # sightings, one misread barcode, one odometry glitch; `prepare` must find every start within 1 cm

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/paired_cells.py on a made-up runs.csv whose answer is known: per cell, ela
 # always 0.010 m below ekf (a significant win), 0.001 m above on average with
 # 0.010 m of scatter (a loss that is noise), always 0.010 m above (a significant

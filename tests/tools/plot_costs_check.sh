@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # tools/plot_costs.py on short runs of bench_ekf and bench_main (issue 18's cost
 # curves, docs/benchmarks.md): both PNGs written; a file without the benchmarks and
 # a missing file are refused with exit 1 naming them. Timings are not checked.

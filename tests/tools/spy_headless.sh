@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # System test of tools/spy.sh: lcm-spy starts headless (Xvfb), opens its "LCM Spy"
 # window, decodes the simulator's channels with the elaslam types, and a screenshot
 # of it is kept in <build>/tests/spy/spy.png (with spy.log, table.txt, windows.txt).

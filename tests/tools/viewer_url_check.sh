@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # wait_viewer_url (tools/viewer_url.sh), under set -euo pipefail as its callers run:
 #   1. a background job whose output file appears only after the first looks found
 #      none (as on a loaded machine) gives its URL, and those looks say nothing;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The receive path of message authentication allocates nothing: open() verifies a
 // message in place (the hash state on the stack, the payload the same bytes without
 // the trailer), accepted or refused; and a steady flow of signed messages through

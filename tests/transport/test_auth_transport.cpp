@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Message authentication (auth_transport.hpp): sign and verify, every reason a message
 // is refused (no trailer, a key not the sender's, a signature that does not verify,
 // the sender-channel binding, another mission, replays, counter jumps, stale

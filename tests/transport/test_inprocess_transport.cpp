@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The in-process transport: memq://'s order (LCM.md), deterministic, reusable.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The LCM transport over memq:// (one process, no network).
 #include <gtest/gtest.h>
 

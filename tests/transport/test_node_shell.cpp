@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The node shell over both transports (the in-process one and LCM's memq://): decode
 // into one message, refusals counted and rate-limited, handlers that never throw,
 // periodic callbacks, stop on a signal.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The nodes on the message layer, over the in-process transport: RobotPorts and
 // MainPorts (what robot_node, main_robot and the in-process team run all run), the
 // channel suffix, and the simulator's lockstep waits.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A steady flow through the node shell and the in-process transport allocates
 // nothing: messages are decoded into the input's one message, encoded into the
 // shell's one buffer, queued in reused slots.

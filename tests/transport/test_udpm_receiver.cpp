@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The bytes from the network (docs/security.md "Bytes from the network"): LCM's
 // datagrams parsed by DatagramAssembler with every size checked (udpm_receiver.hpp),
 // the checks every transport applies to a message it hands over (malformed_message),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's access token: the file's checks (as the team key's), making one, the
 // comparison and who must show it.
 #include <sys/stat.h>

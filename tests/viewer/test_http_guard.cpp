@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // HeadScan, ConnectionCaps and the address rules: what the viewer takes of a request
 // before httplib parses it, and how many connections a peer may hold.
 #include <string>

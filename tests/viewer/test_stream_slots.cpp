@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ReadProgress and StreamSlots: which event stream's reader has stopped taking what is
 // sent, and whose slot a new stream takes when all are held.
 #include <chrono>

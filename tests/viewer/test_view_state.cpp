@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ViewState: what the viewer draws, from the bus's messages; bad ones change nothing.
 #include <cmath>
 #include <limits>

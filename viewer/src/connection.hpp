@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One client connection of the viewer's guarded HTTP service (guarded_server.hpp):
 // its socket, its peer, the bytes of the request being collected, and the counters
 // of what the guard refused. Internal to the viewer executable.

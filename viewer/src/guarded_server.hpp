@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // httplib's server behind the viewer's limits (HttpLimits, docs/security.md, "The viewer as an HTTP service").
 // httplib 0.11.4 gives each accepted connection a thread of its pool at once, reads
 // the request head there with a timeout per read (not per request) and bounds a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's head reader (guarded_server.hpp): one thread that collects every
 // connection's next request (head and body) with epoll, each within its deadline and
 // checked by HeadScan as its bytes arrive, and hands a whole request to the workers.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "elaslam/viewer/http_guard.hpp"
 
 #include <arpa/inet.h>

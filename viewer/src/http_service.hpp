@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the viewer serves over HTTP: the newest state (Latest), the routes (/,
 // /state.json, /events) behind the access check, and the listening socket (--bind,
 // --port, --http-netns).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // viewer: the team live in a browser. Subscribes to the team's channels as a plain
 // listener and serves a page that draws the global map, the robots and their health,
 // pushed over Server-Sent Events; /state.json is the same state for scripts.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the kernel shows of a TCP socket's send side, for the event streams' stall
 // check (ReadProgress, include/elaslam/viewer/stream_slots.hpp). Its own file: the
 // kernel's <linux/tcp.h>, whose struct tcp_info has tcpi_bytes_acked, cannot be

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's command line (the usage comment of viewer/src/main.cpp lists it) and
 // the access token it asks for (access_token.hpp, docs/security.md, "The viewer as an HTTP service").
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Files that survive a crash at any instant: a reader (the next start) sees the old
 // content or the new one, never half of either. Used for the processes' state files.
 #pragma once

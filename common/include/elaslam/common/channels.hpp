@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Every LCM channel name of the system, built in one place (docs/design.md section 2).
 // An optional suffix (e.g. "_SIM2") lets two teams share one LCM network.
 #pragma once

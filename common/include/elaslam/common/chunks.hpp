@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cutting a per-landmark message (a robot's snapshot, the global map) into chunks by
 // landmark id so that each fits one datagram (contract::kMaxChunkBytes) and stands
 // alone: chunk i covers the ids [id_begin, id_end), the chunks cover [0, max_id)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What every program's command line shares: the one way out of main (exit codes,
 // no exception escapes), parsing with numeric options that refuse nan and inf,
 // --version, the config lookup rule, the command line as text (provenance in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Configuration loading (yaml-cpp): one options struct per component, every error
 // collected with its key path and reported at once, ranges checked, unknown keys
 // rejected, and the effective configuration recorded as it is read so that it can

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The message contract's capacities (the array sizes of lcmtypes/*.lcm), in one
 // place, checked against the generated types at compile time. Every bound on a
 // count field and every error message about one is built from these constants.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The conditions a node flags in its STATUS (node_status_t.fault_flags), by name: one
 // place for what the monitor, the viewer and the tools call each bit.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SE(2) helpers and angle wrapping. Frames: W (world), B (robot body), O (odometry).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fixed-memory histogram of durations in microseconds, for p50 / p99 / max of
 // per-frame processing times. 1 us buckets up to kLinearUs, then a single overflow
 // bucket (the max is kept exactly). No allocation after construction.

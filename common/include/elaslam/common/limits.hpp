@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a message (or a state file) may say and still be believed (issue 15): the
 // plausibility bounds every receiver applies after the contract's structural checks
 // (contract.hpp), and the reasons a message is refused, counted per reason in

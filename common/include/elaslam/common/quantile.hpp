@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one quantile convention of the project (latency and processing-time
 // percentiles, miss-run statistics): the nearest rank. The q-quantile of n samples
 // is the ceil(q n)-th smallest (1-based), so p50 of 1..100 is 50, p99 is 99 and

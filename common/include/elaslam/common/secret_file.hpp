@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading a secret from a file (a node's key, the viewer's access token): the checks
 // both share. A secret file is refused unless it is a regular file (not a symbolic
 // link, a directory, a FIFO or a device), owned by the running user or by root,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The seal of a state file: a header line that names the file's format and its
 // version and carries a MAC over every byte of the file, so that a damaged or
 // hand-altered file is refused before any of it is parsed. The sealed file stays

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Chi-square quantiles for gates. Computed once at start-up, never per frame.
 #pragma once
 

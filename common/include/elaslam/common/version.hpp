@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The build's version and source commit (generated at build time by
 // cmake/version.cmake into the build tree).
 #pragma once

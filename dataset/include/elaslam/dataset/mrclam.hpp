@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Importer for the UTIAS Multi-Robot Cooperative Localization and Mapping dataset
 // (Leung et al., IJRR 2011; data/mrclam/dataset6/README.md, tools/get_mrclam.sh): the text files of
 // one recording become, frame by frame, the messages the simulator would publish

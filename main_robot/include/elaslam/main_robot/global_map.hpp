@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The team's global map (paper section 3.3.2; docs/design.md section 5). Per landmark id:
 // the latest estimate from each robot, a fused estimate, the contributing robots,
 // a status (STATIC, MOVING) and the frame it last changed. Fixed capacity.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main_robot's message layer, without I/O: validates LMAP_EVENT / LMAP_SNAPSHOT,
 // applies them to the GlobalMap, and fills GLOBAL_MAP, DYNAMIC_NOTICE and
 // STATUS_MAIN. The main_robot process and the in-process team run share it, and

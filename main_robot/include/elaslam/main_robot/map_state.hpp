@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // main_robot's state file (--state PATH): the global map, kept across restarts.
 // The body is GlobalMap::to_json's document (format key "elaslam.global_map.v1", as
 // before); the file seals it (common/state_seal.hpp: format "elaslam.global_map",

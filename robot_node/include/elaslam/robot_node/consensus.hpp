@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `consensus` mode (ours, docs/design.md section 4): pairwise consistency of co-observed
 // landmarks' relative vectors and the largest mutually consistent set, found
 // exactly (every maximal clique is enumerated; the sets are small).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fixed-memory planar EKF-SLAM (docs/design.md section 3). Paper equations held here:
 // the state X = [R; M] (eqs 1-2, here with the odometer's calibration states), prediction (eqs 3-6, with the models of
 // models.hpp), correction (eqs 7-13), augmentation by the inverse observation

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The expected landmark area (ELA) gate (paper section 3.3, eq 16; docs/design.md
 // section 4) and the pairwise relative-vector test that `consensus` mode builds on.
 // ElaGate decides, per frame, one verdict for every mapped landmark in view and for

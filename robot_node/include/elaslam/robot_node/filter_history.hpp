@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The filter's last few frames of operations, so that a candidate's sightings can
 // correct the robot once it is confirmed (docs/decisions.md, "Confirmation without
 // loss"). A candidate is held in the filter as an inert state: its sightings

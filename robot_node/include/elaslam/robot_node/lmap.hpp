@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The robot's local map, L-map (paper section 3.3, Algorithm 1; docs/design.md section 4):
 // everything the robot keeps per landmark id (status, last world position and
 // covariance from the inverse observation g(R, y), sightings, streaks, the drift

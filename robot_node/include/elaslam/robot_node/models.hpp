@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Motion and observation models of the planar EKF-SLAM, as pure functions that
 // return a value and, only when asked, fixed-size Jacobians (GTSAM style).
 // Frames: W world, B robot body. Paper eqs 3 and 6 (motion), 7 and 13 (observation),

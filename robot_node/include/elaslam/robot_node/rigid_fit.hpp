@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one rigid motion of the plane that best carries a robot's landmark estimates
 // onto the team's (issue 42, "a map that agrees with itself"). A robot that drove
 // through a stretch without landmarks on a biased odometer maps everything it sees

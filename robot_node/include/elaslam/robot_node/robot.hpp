@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One frame of Algorithm 1 (paper section 3.3) end to end, for every mode: predict
 // from the odometer increment, judge the mapped landmarks in view (ElaGate), correct
 // the filter with the accepted ones, move each landmark along its lifecycle (LMap):

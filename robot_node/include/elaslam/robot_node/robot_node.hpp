@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The robot node's message layer, without I/O: validates incoming messages, keeps
 // frame order, runs the Robot, and fills the outgoing messages (POSE, LMAP_EVENT
 // with a per-robot seq, LMAP_SNAPSHOT, STATUS_ROBOT). The robot_node process and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Options of one robot node: the `robot:` section of a config file.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A robot node's state file: everything a RobotNode needs to continue after a
 // restart as if it had never stopped (robot_node --state PATH; docs/deployment.md,
 // docs/decisions.md "robot state file"): the filter (mean, covariance, slot layout),

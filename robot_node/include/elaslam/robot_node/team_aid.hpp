@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The team's map back to a robot without double counting (issue 16; the argument is
 // in docs/decisions.md, "The team helps its members").
 //

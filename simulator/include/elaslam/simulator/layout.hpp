@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Initial landmark positions (world frame W). Independent of the dynamism, the
 // landmark speed and the robots: only the layout keys and, for "random", the
 // layout stream of the seed decide them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulator's waits on the team (docs/design.md section 1):
 // - lockstep (--lockstep): after frame k the simulator waits until every robot's
 //   POSE_<r> of frame k has come, bounded by a timeout, so the team runs as fast as

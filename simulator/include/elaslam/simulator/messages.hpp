@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The LCM messages of one frame (lcmtypes/*.lcm). The caller supplies utime
 // (wall clock at publish, microseconds since the epoch).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Ground-truth motion of robots and landmarks, and the odometer's noise.
 // Frames: W world, B robot body.
 #pragma once

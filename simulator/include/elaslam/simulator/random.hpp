@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Deterministic random numbers: bit-identical for the same seed with any standard
 // library. std::mt19937_64 is specified exactly by the standard;
 // std::normal_distribution and std::uniform_real_distribution are not, so the

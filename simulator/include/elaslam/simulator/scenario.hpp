@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated experiment of the paper (section 4, docs/design.md section 6): world,
 // landmark layout, moving landmarks, robots on semicircular paths, sensor and
 // odometry noise. SI units inside; angles in radians unless the name says _deg.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulator's clock (docs/design.md section 6): frame k is due at t0 + k / F, every
 // deadline from the same origin so that no drift accumulates. The world's work for a
 // frame is done ahead of its deadline (the frame's processing time) and its messages

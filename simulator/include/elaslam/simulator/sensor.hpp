@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The range-bearing sensor (paper Fig. 1 and eq 7): every landmark within D/2 of
 // the robot centre, full 360 degrees, known ids, Gaussian range and bearing noise.
 #pragma once

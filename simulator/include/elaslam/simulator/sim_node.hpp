@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulator on the message layer (docs/design.md sections 1 and 6): publishes RUN_INFO
 // (what the run is: scenario, seed, dynamism, speed, rate, effective config) and
 // STATUS_SIM before the first frame and about once a second, then SENSOR_<r> for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated world, frame by frame: true robot poses on their semicircles,
 // static and moving landmarks, each robot's odometer and sensor frame.
 // No I/O; deterministic for a given ScenarioOptions (random.hpp).

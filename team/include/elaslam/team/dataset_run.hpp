@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The team on recorded data (UTIAS MRCLAM) instead of the simulator: the same
 // in-process run as run_scenario, fed by the dataset importer's frames.
 // Config: config/mrclam.yaml (`dataset:`, `robot:`, `main:` sections).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Frame accounting: what happened to each frame of a recorded run, for one robot
 // (logged, not yet started, dropped by the robot, processed but lost by the
 // recorder), from the POSEs' frames_processed counts and the robots' STATUS. Used by

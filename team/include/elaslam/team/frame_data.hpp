@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // From the team's messages to the metrics' FrameData (metrics.hpp): the one adapter
 // shared by the in-process run (team_run.cpp) and the evaluation of a recording
 // (tools/evaluate.cpp), so both read the messages the same way by construction.

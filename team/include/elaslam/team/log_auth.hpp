@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading a keyed team's recording as its nodes read the wire (docs/security.md,
 // "Message authentication"): a recorder records everything on the group, what an
 // attacker injected too, and LCM's decoders ignore the 98-byte trailer, so a tool

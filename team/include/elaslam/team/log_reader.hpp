@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reading a recorded LCM log (lcm-logger's format) robustly: every whole event is
 // returned, bytes between events that are not one are skipped and counted, and a
 // truncated or corrupt tail ends the read. Used by log_info and evaluate.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a recorded LCM log holds, like `ros2 bag info`: its channels (count, bytes,
 // rate, type, undecodable events), the run it recorded (RUN_INFO), the frames it
 // covers, and per robot an account of every frame of the run: logged, never

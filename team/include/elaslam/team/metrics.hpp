@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Metrics of docs/design.md section 7 (paper eqs 17-19), computed from ground truth and
 // the team's outputs frame by frame. The same accumulator serves the in-process
 // run (run_scenario, sweep) and the evaluation of recorded LCM logs (evaluate), so

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Output files of a run: metrics.json, frames.csv, trajectories/robot<R>.tum and
 // robot<R>_gt.tum, and a short summary table. Shared by run_scenario and evaluate.
 #pragma once

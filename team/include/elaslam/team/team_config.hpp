@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One config file for the whole team: `scenario:` (simulator), `robot:` (every
 // robot node), `main:` (main_robot). Loaded and checked together, so that the
 // sections agree with each other (e.g. the robots' field of view and the sensor's).

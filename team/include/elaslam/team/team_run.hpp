@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The whole team in one process, in lockstep (docs/design.md section 1, way 2):
 // simulator + every robot node + main_robot, frame by frame, over the in-process
 // transport (transport/inprocess_transport.hpp), each node on the node shell with the

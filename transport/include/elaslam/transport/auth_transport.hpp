@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Message authentication (docs/security.md "Message authentication"). Every message
 // carries, after LCM's encoded payload, a trailer of 98 bytes, big-endian:
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A process's incarnation: a number larger at each start of the same node, that does
 // not come from the wall clock (docs/security.md "Incarnations"). Receivers tell a
 // restarted sender from a replay of its old messages by it (auth_transport.hpp) and

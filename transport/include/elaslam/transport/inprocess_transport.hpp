@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The in-process transport: every node of a team in one process and one thread,
 // wired through one FIFO queue (docs/design.md section 1, way 2). It behaves as LCM's
 // memq:// does (LCM.md): messages are dispatched in the order they were published, a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The keys of message authentication (auth_transport.hpp, docs/security.md): every
 // node that sends has a key pair of its own (Ed25519, libsodium); the team's public
 // keys, one or two per sender (two while a key is rotated), are the roster in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The transport over LCM 1.3.1 (LCM.md): udpm:// between processes and hosts, also
 // memq:// and file://. liblcm publishes. On udpm:// this transport receives itself
 // (UdpmReceiver, udpm_receiver.hpp: liblcm's receive thread crashes on malformed

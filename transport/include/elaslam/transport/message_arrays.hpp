@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Receiving messages with variable-length arrays without allocating: the node shell
 // decodes every input into one message allocated at subscription (node_shell.hpp);
 // reserve_arrays() gives its arrays room for the largest count the wire format can

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The node shell: what stands between a node's logic (RobotNode, MainNode, the
 // simulator's world) and a transport, the same in every process and in the
 // in-process team run. Per input: decode into a message allocated once at

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What every process's main() shares around its node shell: the stop flag that
 // SIGINT / SIGTERM set, the wall clock that stamps messages, the --lcm-url,
 // --channel-suffix, --key-file and --mission options, and opening LCM (authenticated

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A sender's sequence numbers (1, 2, 3, ...; docs/design.md section 2: every stream that
 // must not silently lose data carries a per-sender seq): how many messages were lost
 // before each one. A sender that restarts without its state starts at 1 again with a

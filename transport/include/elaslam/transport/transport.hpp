@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A transport moves encoded messages between named channels (docs/architecture.md,
 // transport/). Two implementations: LCM (lcm_transport.hpp: udpm:// in the
 // deployment, memq:// and file:// too) and in-process (inprocess_transport.hpp: one

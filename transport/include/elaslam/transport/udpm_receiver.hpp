@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The receiving side of LCM's udpm:// transport, with every byte checked before it
 // is used (docs/security.md "Bytes from the network").
 //

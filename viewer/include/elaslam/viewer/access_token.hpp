@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's access token (docs/security.md, "The viewer as an HTTP service"): a peer that is not this
 // machine's loopback must show it, as "Authorization: Bearer TOKEN" or "?token=TOKEN"
 // (a browser's EventSource cannot set a header). The token is 32 or more random bytes

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's HTTP limits (docs/security.md, "The viewer as an HTTP service"): what a request may be before
 // httplib parses it, and how many connections clients may hold. Pure logic, tested
 // without sockets (tests/viewer/test_http_guard.cpp); the socket side is

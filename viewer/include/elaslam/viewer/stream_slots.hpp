@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's event streams (--max-clients slots): which reader has stopped taking
 // what is sent, and which stream a new one may evict when every slot is held
 // (docs/security.md, "The viewer as an HTTP service"). Pure logic, tested without sockets

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The viewer's inputs on the message layer (transport/node_shell.hpp): RUN_INFO,
 // POSE_<r>, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_<r>, CANDIDATES_<r> and
 // GROUND_TRUTH into a ViewState, on bounded queues. The viewer process and the fuzz

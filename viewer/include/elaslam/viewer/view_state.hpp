@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the viewer draws (viewer/STATE_SCHEMA.md): the team's state as the bus tells
 // it, built from RUN_INFO, POSE_<r>, GLOBAL_MAP (its chunks), DYNAMIC_NOTICE,
 // STATUS_ROBOT_<r> and GROUND_TRUTH, and written as one JSON document. A plain
