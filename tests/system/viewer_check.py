@@ -13,7 +13,7 @@ import re
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "tools"))
-import decode_log  # noqa: E402  (its load_types finds the generated message types)
+from elaslam_tool import load_lcm_types  # noqa: E402  (finds the generated message types)
 import lcm  # noqa: E402
 
 
@@ -21,7 +21,7 @@ def main():
     args = sys.argv[1:]
     build = args[args.index("--build-dir") + 1]
     log_path, state_path = [a for i, a in enumerate(args) if a != "--build-dir" and (i == 0 or args[i - 1] != "--build-dir")]
-    T = decode_log.load_types(build)
+    T = load_lcm_types(build, __file__)
     poses, lms, moving, frame = {}, {}, set(), -1
     for ev in lcm.EventLog(log_path, "r"):
         if re.fullmatch(r"POSE_\d+", ev.channel):
