@@ -7,8 +7,9 @@
   readme_check.py check [--source DIR] [--build DIR]
       the table (tests/readme/commands.txt) against the README: every README
       command has an entry, every entry matches a README command (exit 1 if not)
-  readme_check.py run --build DIR [--source DIR] [--scratch DIR] [--only REGEX]
-      check, then run every entry in a scratch copy of the repository root and
+  readme_check.py run --build DIR [--source DIR] [--scratch DIR] [--only REGEX] [--fresh]
+      check, then run every entry in a scratch copy of the repository root (with
+      --fresh: a git clone of its HEAD, nothing built, in README order) and
       print a table of command / seconds / result; exit 0 when everything that
       ran passed, 1 on a failure, 77 when nothing could run (ctest: skipped)
   readme_check.py help --build DIR [--source DIR] [--scratch DIR]
@@ -291,10 +292,11 @@ def namespaces_usable():
     return subprocess.run(["ip", "netns", "list"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode == 0
 
 
-def make_scratch(source, build, scratch):
+def make_scratch(source, build, scratch, fresh=False):
     """<scratch>/repo mirrors the repository root: links to the source folders and
     build -> the test's build dir; outputs (results/, runs/, ...) are real folders
-    there."""
+    there. fresh: a git clone of the source's HEAD instead, with nothing built, no
+    .venv and no data, as a new user has it."""
     marker = os.path.join(scratch, ".readme_scratch")
     if os.path.isdir(scratch) and os.listdir(scratch):
         if not os.path.isfile(marker):
@@ -305,6 +307,10 @@ def make_scratch(source, build, scratch):
     os.makedirs(os.path.join(scratch, "logs"))
     os.makedirs(repo)
     open(marker, "w").close()
+    if fresh:
+        os.rmdir(repo)
+        subprocess.run(["git", "clone", "--quiet", "--no-hardlinks", source, repo], check=True)
+        return repo
     for name in sorted(os.listdir(source)):
         if name in (".git", "runs", "results", "Testing") or name.startswith("build"):
             continue
@@ -362,10 +368,15 @@ def cmd_run(args):
     if not ok:
         return 1
     scratch = os.path.abspath(args.scratch or os.path.join(build, "tests", "readme", "scratch"))
-    repo = make_scratch(source, build, scratch)
-    env = command_env(build)
     root_ok = namespaces_usable()
-    print(f"scratch: {repo} (build -> {build}); root with network namespaces: {'yes' if root_ok else 'no'}\n")
+    if args.fresh and not root_ok:
+        # The first command (tools/run_team.sh) needs root; without it nothing after it is built.
+        print("readme_check: --fresh needs root and network namespaces (the first command): skipped")
+        return 77
+    repo = make_scratch(source, build, scratch, args.fresh)
+    env = command_env(os.path.join(repo, "build") if args.fresh else build)
+    where = "a fresh clone, nothing built" if args.fresh else f"build -> {build}"
+    print(f"scratch: {repo} ({where}); root with network namespaces: {'yes' if root_ok else 'no'}\n")
     rows, done, failed, ran = [], {}, [], 0
     for i, e in enumerate(entries, 1):
         label = e.text if e.kind == "readme" else f"(extra) {e.text}"
@@ -501,6 +512,10 @@ def main():
                                              "emptied first")
         if name == "run":
             s.add_argument("--only", help="run only the entries whose command matches this regex")
+            s.add_argument("--fresh", action="store_true",
+                           help="run the commands in a git clone of the source's HEAD with nothing built "
+                                "(a new user's order: the first command builds what the team needs, "
+                                "`cmake --build build` the rest); needs root")
         if name == "help":
             s.add_argument("--timeout", type=float, default=30.0, help="per command [s]")
     args = ap.parse_args()
