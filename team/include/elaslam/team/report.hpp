@@ -24,7 +24,7 @@ struct RunInfo {
   // Real (recorded) data has no dynamism, speed or seed: the summary then says what
   // the data is (`data`, e.g. "MRCLAM dataset6, robot barcodes kept") instead.
   bool simulated = true;
-  std::string data;
+  std::string data = "";
 };
 
 /// Version of metrics.json's layout; docs/data_dictionary.md describes every key.
