@@ -135,7 +135,7 @@ void run_ekf_frames(benchmark::State& state, bool joseph, bool full_view, bool c
   const int n = static_cast<int>(state.range(0));
   const Scene scene(n);
   EkfOptions o = options_for(n, joseph);
-  if (calibrated) {  // the odometer's calibration states estimated (issue 42)
+  if (calibrated) {  // the odometer's calibration states estimated
     o.calibration.turn_scale_sigma = o.calibration.speed_scale_sigma = 0.1;
     o.calibration.turn_bias_sigma = 0.02;
     o.calibration.turn_scale_walk = o.calibration.speed_scale_walk = 1e-3;
@@ -168,7 +168,7 @@ void BM_EkfSlamFrameJosephForm(benchmark::State& state) { run_ekf_frames(state, 
 // The same frame, then the full covariance view (completes the upper triangle):
 // what a caller pays per frame if it needs all of P rather than blocks of it.
 void BM_EkfSlamFrameWithFullView(benchmark::State& state) { run_ekf_frames(state, false, true); }
-// The default frame with the odometer's calibration states estimated (issue 42): the
+// The default frame with the odometer's calibration states estimated: the
 // prediction's cross terms read 6 columns instead of 3.
 void BM_EkfSlamFrameCalibrated(benchmark::State& state) { run_ekf_frames(state, false, false, true); }
 

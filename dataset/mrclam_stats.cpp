@@ -16,7 +16,7 @@
 // window start): along track, across track, heading. var per m = variance / mean
 // window length (about the mean: the scale bias excluded); ms per m = mean square /
 // mean window length (bias included: what a filter that models no bias should use).
-// Odometer calibration (issue 42, the filter's robot.odometry_calibration): per robot,
+// Odometer calibration (the filter's robot.odometry_calibration): per robot,
 // least squares of Vicon's increments on the odometer's over every frame step
 // (mrclam::fit_odometry), over the whole run and each half, on the frames as the
 // filter gets them (--config's dataset section: the odometry delay matters).
@@ -555,7 +555,7 @@ void report_calibration(const mrclam::Dataset& d, const Args& a, json* out) {
   const mrclam::FrameSource src(d, fo);
   const int n = src.num_frames(), half = n / 2;
   const int window = std::max(1, static_cast<int>(std::lround(a.calibration_window_s * a.rate)));
-  std::printf("\nOdometer calibration (issue 42: true increment = speed scale x reported translation, turn scale x\n"
+  std::printf("\nOdometer calibration (true increment = speed scale x reported translation, turn scale x\n"
               "reported turn + bias x dt), least squares of Vicon's increments on the odometer's over windows of\n"
               "%d frames (%.3g s) at %.3g Hz, frames imported %s; whole run and each half (%d frames):\n",
               window, window / a.rate, a.rate,

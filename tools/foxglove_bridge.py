@@ -63,7 +63,7 @@ import signal  # noqa: E402
 import threading  # noqa: E402
 import time  # noqa: E402
 
-from elaslam_tool import types_dirs  # noqa: E402
+from elaslam_tool import load_lcm_types  # noqa: E402
 from lcm_udpm import UdpmReceiver, parse_udpm_url  # noqa: E402
 
 MAX_ROBOTS = 16              # contract::kMaxRobots
@@ -486,14 +486,7 @@ def main() -> int:
         address = parse_udpm_url(args.lcm_url)
     except ValueError as e:
         ap.error(f"--lcm-url: {e}")
-    dirs = types_dirs(args.build_dir, __file__)
-    found = next((d for d in dirs if os.path.isfile(os.path.join(d, "elaslam", "__init__.py"))), None)
-    if found is None:
-        print(f"{PROG}: no generated Python message types (elaslam/__init__.py) in {', '.join(dict.fromkeys(dirs))}: "
-              "build first (cmake --build BUILD) or give --build-dir", file=sys.stderr)
-        return 2
-    sys.path.insert(0, found)
-    import elaslam as T
+    T = load_lcm_types(args.build_dir, __file__)
 
     ports = [address[1] + g for g in GROUPS] if args.channel_groups else [address[1]]
     try:  # LCM here, in this namespace; the server perhaps in another

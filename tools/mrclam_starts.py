@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""A recording from many start times (issue 42): the same MRCLAM recording started
+"""A recording from many start times: the same MRCLAM recording started
 later is a different run for the filters (other robots stand or drive when the maps
 begin, other landmarks come first), so the mean over several starts says more than
 one run. Runs run_dataset for each start, mode and barcode setting, in parallel, and

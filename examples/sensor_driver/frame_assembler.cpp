@@ -6,18 +6,9 @@
 #include <sstream>
 #include <utility>
 
+#include "elaslam/common/geometry.hpp"
+
 namespace elaslam::examples {
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-double wrap(double a) {
-  a = std::fmod(a + kPi, 2.0 * kPi);
-  if (a < 0.0) a += 2.0 * kPi;
-  return a - kPi;
-}
-
-}  // namespace
 
 FrameAssembler::FrameAssembler(const AssemblerOptions& options, Emit emit) : options_(options), emit_(std::move(emit)) {
   obs_.reserve(static_cast<std::size_t>(options_.max_observations) + 1);
@@ -31,19 +22,28 @@ void FrameAssembler::advance_to(double t) {
     frame_ = 0;
     return;
   }
-  const double period = 1.0 / options_.rate_hz;
-  while (t >= t0_ + static_cast<double>(frame_ + 1) * period) emit_current();
+  while (t >= frame_start(frame_ + 1)) emit_current();
+}
+
+double FrameAssembler::frame_start(std::int64_t k) const { return t0_ + static_cast<double>(k) / options_.rate_hz; }
+
+bool FrameAssembler::take_time(double t) {
+  if (started_ && t < frame_start(frame_)) {  // older than the frame being filled
+    ++counters_.out_of_order;
+    return false;
+  }
+  advance_to(t);
+  return true;
 }
 
 void FrameAssembler::emit_current() {
-  const double period = 1.0 / options_.rate_hz;
   // The nearest observations when there are too many (the far ones carry the least).
   if (static_cast<int>(obs_.size()) > options_.max_observations) {
     std::sort(obs_.begin(), obs_.end(), [](const range_bearing_t& a, const range_bearing_t& b) { return a.range < b.range; });
     counters_.over_capacity += static_cast<std::int64_t>(obs_.size()) - options_.max_observations;
     obs_.resize(static_cast<std::size_t>(options_.max_observations));
   }
-  msg_.utime = static_cast<std::int64_t>(std::llround((t0_ + static_cast<double>(frame_ + 1) * period) * 1e6));
+  msg_.utime = static_cast<std::int64_t>(std::llround(frame_start(frame_ + 1) * 1e6));
   msg_.frame = static_cast<std::int32_t>(frame_);
   msg_.robot_id = static_cast<std::int16_t>(options_.robot_id);
   msg_.odom_x = odom_[0];
@@ -68,12 +68,8 @@ void FrameAssembler::odometry(double t, double x, double y, double theta) {
     ++counters_.bad_lines;
     return;
   }
-  if (started_ && t < t0_ + static_cast<double>(frame_) / options_.rate_hz) {
-    ++counters_.out_of_order;
-    return;
-  }
-  advance_to(t);
-  odom_[0] = x, odom_[1] = y, odom_[2] = wrap(theta);
+  if (!take_time(t)) return;
+  odom_[0] = x, odom_[1] = y, odom_[2] = wrap_angle(theta);
   have_odom_ = true;
 }
 
@@ -87,13 +83,9 @@ void FrameAssembler::detection(double t, int id, double range, double bearing) {
     ++counters_.bad_detections;
     return;
   }
-  if (started_ && t < t0_ + static_cast<double>(frame_) / options_.rate_hz) {
-    ++counters_.out_of_order;
-    return;
-  }
-  advance_to(t);
+  if (!take_time(t)) return;
   range_bearing_t o{};
-  o.landmark_id = id, o.range = range, o.bearing = wrap(bearing);
+  o.landmark_id = id, o.range = range, o.bearing = wrap_angle(bearing);
   for (auto& seen : obs_) {
     if (seen.landmark_id == id) {  // the contract allows one sighting per landmark per frame
       seen = o;

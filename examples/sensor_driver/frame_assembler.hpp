@@ -61,6 +61,8 @@ class FrameAssembler {
 
  private:
   void advance_to(double t);  // emit every frame that ends at or before t
+  double frame_start(std::int64_t k) const;  // [s]
+  bool take_time(double t);  // false (counted) for a reading older than the frame being filled
   void emit_current();
 
   AssemblerOptions options_;

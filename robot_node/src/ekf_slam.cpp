@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Fixed-memory planar EKF-SLAM (docs/design.md section 3): prediction (paper eqs 3-6),
 // correction (eqs 7-13), augmentation (eq 15) and mean(diag(P)) (eq 19) on the
-// state of eqs 1-2 with the odometer's calibration states (issue 42: updates need
-// no change for them, H has zero columns there, and every row of the gain comes
+// state of eqs 1-2 with the odometer's calibration states (updates need
+// no change for them: H has zero columns there, and every row of the gain comes
 // from P's columns like the landmarks'); ekf_slam.hpp lists where the other
 // equations live.
 //
@@ -48,22 +48,19 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool finite(const RangeBearing& z) { return std::isfinite(z.range) && std::isfinite(z.bearing); }
 
-// ---- the order of three-term sums, as before the calibration states ------------------
+// ---- the order of three-term sums ----------------------------------------------------
 //
 // add_landmark's P_lX = G_x P_RX^T and update_landmark_only's P_RX H_x^T are sums
-// of three products per entry. Before issue 42 they were Eigen expressions, and
-// Eigen's coefficient-based product added an entry up either left to right,
-// (a0 + a1) + a2 (two entries at once, in a vector register), or as a0 + (a1 + a2)
-// (one entry alone), depending on where the entry sat in memory in that layout (3
-// pose states; a leading dimension of 3 + 2 capacity, odd). The calibration states
-// moved every landmark by 3 states, and with it that choice for some entries: the
-// last bit of a few sums, and through them the golden results. These loops add up
-// every entry in the order the filter without calibration states used for it
-// (measured for every size up to 128 landmarks), so that with the states frozen
-// the filter is that one bit for bit (tests/golden; both orders are equally
-// exact), and they never allocate.
+// of three products per entry. Each entry is added in the order Eigen's
+// coefficient-based product gives it in the pose-only layout (3 pose states, a
+// leading dimension of 3 + 2 capacity): left to right, (a0 + a1) + a2, for the
+// entries it pairs in a vector register, a0 + (a1 + a2) for the others, by where
+// the entry sits in that layout (measured for every size up to 128 landmarks).
+// With the calibration states frozen the filter is then the pose-only filter bit
+// for bit (tests/golden's references; both orders are equally exact), and the
+// loops never allocate.
 //
-// The index of state i in that layout (-1: a calibration state, which had none).
+// The index of state i in the pose-only layout (-1: a calibration state).
 Index index_before(Index i) { return i < kCal ? i : (i < kV ? -1 : i - kC); }
 double sum3(double a0, double a1, double a2, bool left_to_right) {
   return left_to_right ? (a0 + a1) + a2 : a0 + (a1 + a2);

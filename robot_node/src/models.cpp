@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Motion and observation models (paper eqs 3, 6, 7, 13, 15) and the odometer's
-// calibration (issue 42). Pure functions; the Jacobians are analytic and checked
+// calibration. Pure functions; the Jacobians are analytic and checked
 // against central differences in tests/robot_node/test_models.cpp.
 #include "elaslam/robot_node/models.hpp"
 

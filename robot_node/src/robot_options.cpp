@@ -102,7 +102,7 @@ void parse(config::Reader& r, RobotOptions* o) {
         o->recovery_sigma_theta = deg2rad(deg);
       },
       /*optional=*/true);
-  // The odometer's calibration states (issue 42; EkfSlam, CalibrationOptions): prior
+  // The odometer's calibration states (EkfSlam, CalibrationOptions): prior
   // mean and std dev, random walk per sqrt(second). All sigmas and walks 0 (the
   // defaults): frozen at the means.
   r.section(

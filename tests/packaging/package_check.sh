@@ -322,7 +322,7 @@ mode_deb() {
   for want in "elaslam-common (= $VERSION-1)" "default-jre | java-runtime" liblcm-java libjchart2d-java; do
     case ", $sdep," in *", $want"*) ;; *) fail "elaslam-spy Depends lacks $want: $sdep" ;; esac
   done
-  # Maintainer: not the old placeholder; the copyright file is DEP-5 and Apache-2.0.
+  # Maintainer: not a placeholder; the copyright file is DEP-5 and Apache-2.0.
   case "$(dpkg-deb -f "${DEB[elaslam-common]}" Maintainer)" in
     *elaslam.example*|"") fail "Maintainer is a placeholder: $(dpkg-deb -f "${DEB[elaslam-common]}" Maintainer)" ;;
   esac

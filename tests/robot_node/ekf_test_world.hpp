@@ -23,7 +23,7 @@ using Vec2 = Eigen::Vector2d;
 
 // Full X = [R; C; M], full P, dense Jacobians of the whole state; eqs 4-5, 8-12 and
 // 15 as printed, with O(n^3) products; the odometer's calibration states C as
-// issue 42 states them (F_V = [[F_x, F_u du/dc], [0, I]], noise F_u J_r U J_r^T F_u^T,
+// models.hpp states them (F_V = [[F_x, F_u du/dc], [0, I]], noise F_u J_r U J_r^T F_u^T,
 // random walk over dt), propagated densely whether estimated or frozen. Landmarks are kept in insertion order and removed
 // by deleting their rows and columns, so slots differ from EkfSlam's after a removal:
 // the comparison goes by id.

@@ -34,7 +34,7 @@ using Layout = StateLayout;
 
 // ---- known answer ------------------------------------------------------------------------
 
-// The odometer's calibration estimated (issue 42): a prior and a random walk on
+// The odometer's calibration estimated: a prior and a random walk on
 // every state, so that every term of the vehicle block's prediction counts.
 EkfOptions calibrated(EkfOptions o) {
   o.calibration.prior = {0.95, 1.02, 0.01};

@@ -28,7 +28,7 @@ struct Tally {
 TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
   const TeamConfig base = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
   // Two runs with filters of 24 slots: robots evict (Robot::make_room). The last two
-  // with the odometer's calibration estimated (robot.odometry_calibration, issue 42).
+  // with the odometer's calibration estimated (robot.odometry_calibration).
   struct Run {
     Mode mode;
     int capacity;

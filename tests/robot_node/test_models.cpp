@@ -138,7 +138,7 @@ TEST(EkfModels, MotionIsCompose) {
   EXPECT_NEAR(next.theta, -kPi / 2, 1e-12);  // wrapped into [-pi, pi)
 }
 
-// ---- the odometer's calibration (issue 42) -------------------------------------------------
+// ---- the odometer's calibration ------------------------------------------------------
 
 Vec3 to_vec(const OdometryCalibration& c) { return {c.turn_scale, c.speed_scale, c.turn_bias}; }
 OdometryCalibration to_calibration(const Vec3& v) { return {v(0), v(1), v(2)}; }

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The odometer's systematic error estimated online (issue 42): a robot whose
+// The odometer's systematic error estimated online: a robot whose
 // odometer reports 11 % more turn and 5 % more distance than it drives (turn scale
 // 0.9, speed scale 0.95: the MRCLAM robots' kind of error) estimates both and ends
 // as well placed as the same robot with a true odometer; the time each prediction

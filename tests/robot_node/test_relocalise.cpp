@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The gauge test (issue 42): the rigid fit, the filter moved by a rigid motion, and
+// The gauge test: the rigid fit, the filter moved by a rigid motion, and
 // a robot whose map is right in itself but wrong as a whole, found out by the team
 // map and moved back.
 #include <gtest/gtest.h>
@@ -204,7 +204,7 @@ RobotOptions kick_options() {
 
 // The issue's test: relocalised within two team maps of sharing three landmarks with
 // the team, by the motion that undoes the kick, and right afterwards (pose within
-// 5 cm and 1 deg; B's landmarks within 5 cm). Without the gauge test (the old rule:
+// 5 cm and 1 deg; B's landmarks within 5 cm). Without the gauge test (the lost rule alone:
 // most disagree and the robot saw trouble itself) it never comes back: it saw no
 // trouble, its map agrees with itself.
 TEST(Relocalise, ARobotKickedWhereItSawNothingComesBackByTheTeamMap) {

@@ -182,7 +182,7 @@ TEST(RobotState, RestoredNodeContinuesBitIdentically) {
   }
 }
 
-// The odometer's calibration states (robot.odometry_calibration, issue 42) are in the
+// The odometer's calibration states (robot.odometry_calibration) are in the
 // filter (and in the history's lagged filter), each prediction in the history carries
 // its dt, and the robot keeps its last frame's utime: restarts before every frame give
 // the uninterrupted run's messages (POSE, events, snapshots, STATUS's estimate) and

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The odometers' systematic error (issue 42; OdometerError): what a robot's
+// The odometers' systematic error (OdometerError): what a robot's
 // odometer reports against the true motion, per robot, and nothing else changed.
 #include <cmath>
 #include <string>

@@ -195,7 +195,7 @@ TEST(SimScenario, AllProblemsReportedAtOnce) {
   }
 }
 
-// ---- Systematic odometer error, turns in place, empty regions (issue 42) ----------
+// ---- Systematic odometer error, turns in place, empty regions ---------------------
 
 TEST(SimScenario, OdometerErrorIsNoneByDefaultForEveryRobotOrPerRobot) {
   // GIVEN no odometer keys THEN no robot's odometer has an error

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Landmark-free stretches (issue 42): config/odometry_bias.yaml's robot 1 turns
+// Landmark-free stretches: config/odometry_bias.yaml's robot 1 turns
 // 115 deg in place inside the empty region, sees nothing meanwhile, and sees
 // landmarks again afterwards; moving landmarks never enter the region.
 #include <cmath>

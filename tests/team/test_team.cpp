@@ -217,7 +217,7 @@ TEST(TeamConfig, TheSimulatorsFullestFrameMustFitTheRobots) {
   EXPECT_TRUE(check_shared_config(path).empty());
 }
 
-// config/odometry_bias.yaml (issue 42, docs/simulator.md "Landmark-free stretches")
+// config/odometry_bias.yaml (docs/simulator.md "Landmark-free stretches")
 // is a whole configuration like paper.yaml: every node takes it, and a team runs on
 // it with the world it describes (63 landmarks, robot 1 turning in place).
 TEST(TeamConfig, TheOdometryBiasExampleIsAWholeConfigThatRuns) {

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The odometer's systematic error estimated online (issue 42), through the whole
+// The odometer's systematic error estimated online, through the whole
 // team (robot nodes, main_robot, the metrics): the paper's team with odometers that
 // overstate the turn by 1/0.9 and the distance by 1/0.95 (the real MRCLAM robots'
 // kind of error), with robot.odometry_calibration on, against the same team with
@@ -23,7 +23,7 @@ namespace elaslam {
 namespace {
 
 // The simulator's frames with every robot's odometer replaced by one with the
-// systematic error of `c` (issue 42's convention, OdometryCalibration: true increment
+// systematic error of `c` (OdometryCalibration's convention: true increment
 // = (s_v dx_r, s_v dy_r, s_w dtheta_r + b dt)): each step's increment of the
 // simulator's odometer d becomes the reported (d.x / s_v, d.y / s_v,
 // (d.theta - b dt) / s_w), accumulated into the reported odometer.

@@ -265,7 +265,7 @@ class FrameSource {
   Stats stats_;
 };
 
-/// The odometer's systematic error against Vicon, in issue 42's convention (the
+/// The odometer's systematic error against Vicon, in OdometryCalibration's convention (the
 /// filter's odometry calibration, robot_node/models.hpp): the true increment of a
 /// frame step of dt seconds is (s_v dx_r, s_v dy_r, s_w dtheta_r + b dt) for the
 /// reported one, both in the robot frame at the step start. Fitted by least squares

@@ -7,7 +7,7 @@
 //
 // State X = [R; C; M]: R = (x, y, theta) of the robot in W, C = (s_w, s_v, b) the
 // odometer's calibration (turn scale, speed scale, turn-rate bias; models.hpp,
-// OdometryCalibration; issue 42), M = landmark positions in W, one 2-vector per
+// OdometryCalibration), M = landmark positions in W, one 2-vector per
 // occupied slot. R and C are the vehicle block V. With the calibration frozen
 // (CalibrationOptions all zero, the default) C holds the prior's constants and its
 // rows of P stay zero: the filter is then the paper's on X = [R; M], bit for bit.
@@ -43,7 +43,7 @@ struct StateLayout {
   static constexpr int dim(int num_landmarks) { return kVehicleDim + kLandmarkDim * num_landmarks; }
 };
 
-/// The odometer's calibration states C (issue 42): their prior and random walk.
+/// The odometer's calibration states C: their prior and random walk.
 /// All sigmas and walks zero (the default): frozen at the prior's means, which the
 /// prediction applies as known constants (1, 1, 0: the odometer as reported).
 struct CalibrationOptions {

@@ -25,7 +25,7 @@ struct OdometryNoise {
   double var_rot_per_m = 0.0;     // [rad^2/m]
 };
 
-/// The odometer's systematic error (issue 42): the true increment of a step of dt
+/// The odometer's systematic error: the true increment of a step of dt
 /// seconds whose odometer reports (dx_r, dy_r, dtheta_r), in B at the step start, is
 ///   dx = s_v dx_r,  dy = s_v dy_r,  dtheta = s_w dtheta_r + b dt.
 /// The simulator produces the error with the same convention. Identity: 1, 1, 0.

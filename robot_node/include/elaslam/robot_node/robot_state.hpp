@@ -25,7 +25,7 @@
 namespace elaslam {
 
 constexpr const char* kRobotStateFormat = "elaslam.robot_state";
-/// 2 (issue 42): the filter's state has the odometer's calibration states after the
+/// Version 2: the filter's state has the odometer's calibration states after the
 /// pose (StateLayout), predictions in the history carry their dt, and the robot its
 /// last frame's utime. A file of another version is refused (the robot starts fresh).
 constexpr int kRobotStateVersion = 2;

@@ -49,7 +49,7 @@ struct OdometryOptions {
 /// true increment is
 ///   dx = speed_scale * dx_r,  dy = speed_scale * dy_r,
 ///   dtheta = turn_scale * dtheta_r + turn_bias_rad_s * dt.
-/// On MRCLAM the true turn is 0.87-0.95 of the reported one (issue 42). The
+/// On MRCLAM the true turn is 0.87-0.95 of the reported one (docs/mrclam.md). The
 /// defaults are no error. sensor_frame_t says nothing of it: the noise model it
 /// carries stays the configured one.
 struct OdometerError {
