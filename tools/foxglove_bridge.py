@@ -21,15 +21,17 @@ open that in Foxglove (docs/tools.md, "Foxglove"). Channels (topics):
   /robot<r>/pose     foxglove.PoseInFrame     POSE_<r>, frame "map"
   /robot<r>/trail    foxglove.PosesInFrame    its last --trail poses
   /robot<r>/stats    elaslam.RobotStats (JSON) per frame: pose sigmas, covariance trace,
-                                              NEES against GROUND_TRUTH, error, counts
+                                              the frame's NIS (POSE), NEES against
+                                              GROUND_TRUTH, error, counts
   /truth             foxglove.SceneUpdate     GROUND_TRUTH: true landmarks and robots
   /notices           foxglove.Log             DYNAMIC_NOTICE: a landmark found moving
   /status/<node>     elaslam.NodeStatus (JSON) STATUS_ROBOT_<r>, STATUS_MAIN, STATUS_SIM
   /bridge            elaslam.BridgeStats (JSON) the bridge's own counters, once a second
 
-NIS: no message on the bus carries it (node_status_t has the consistency monitor's
-verdict only, FAULT_INCONSISTENT, shown as `inconsistent` in /robot<r>/stats); the
-per-frame consistency figure is the pose NEES against ground truth when the bus has it.
+Consistency per frame: the robot's NIS as POSE carries it (nis, nis_dof and nis_per_dof,
+about 1 for a consistent filter; no ground truth needed), the consistency monitor's
+verdict (`inconsistent`, from STATUS), and the pose NEES against ground truth when the
+bus has it (a simulated run).
 
 LCM is read by tools/lcm_udpm.py (not liblcm: one malformed datagram kills its
 receive thread); malformed datagrams, undecodable and implausible messages are
@@ -91,7 +93,8 @@ NUM = ("number", "null")
 ROBOT_STATS = {"robot": "integer", "frame": "integer", "x_m": "number", "y_m": "number", "theta_rad": "number",
                "sigma_x_m": "number", "sigma_y_m": "number", "sigma_theta_rad": "number", "pose_cov_trace": "number",
                "mean_diag_p": "number", "num_obs": "integer", "num_accepted": "integer", "num_rejected": "integer",
-               "num_landmarks": "integer", "processing_us": "integer", "nees": NUM, "error_m": NUM,
+               "num_landmarks": "integer", "processing_us": "integer", "nis": NUM, "nis_dof": "integer",
+               "nis_per_dof": NUM, "nees": NUM, "error_m": NUM,
                "inconsistent": "integer", "fault_flags": "integer", "latency_ms": NUM}
 
 
@@ -275,6 +278,8 @@ class Bridge:
         cov = p.cov
         if not finite(p.x, p.y, p.theta, *cov[0], *cov[1], *cov[2]) or abs(p.x) > WORLD_BOUND_M or abs(p.y) > WORLD_BOUND_M:
             return "pose or covariance not finite or out of bounds"
+        if not finite(p.nis) or p.nis < 0 or p.nis_dof < 0 or p.nis_dof % 2:
+            return "nis negative or not finite, or nis_dof not even"
         s, now = self.s, time.time_ns()
         stamp = s.ts(p.utime)
         ch_pose, ch_trail, _ = self.robot_channels(r)
@@ -300,7 +305,8 @@ class Bridge:
             "sigma_theta_rad": math.sqrt(max(0.0, cov[2][2])), "pose_cov_trace": cov[0][0] + cov[1][1] + cov[2][2],
             "mean_diag_p": clean(p.mean_diag_p), "num_obs": p.num_obs, "num_accepted": p.num_accepted,
             "num_rejected": p.num_rejected, "num_landmarks": p.num_landmarks, "processing_us": p.processing_us,
-            "nees": None, "error_m": None, "inconsistent": bit, "fault_flags": flags,
+            "nis": p.nis if p.nis_dof > 0 else None, "nis_dof": p.nis_dof,
+            "nis_per_dof": p.nis / p.nis_dof if p.nis_dof > 0 else None, "nees": None, "error_m": None, "inconsistent": bit, "fault_flags": flags,
             "latency_ms": clean((now / 1000 - p.source_utime) / 1000) if p.source_utime > 0 else None}
         # Consistency against ground truth (NEES, 3 dof): the frame's GROUND_TRUTH may come
         # after the pose (the robots are quicker than the simulator's last message): the

@@ -176,6 +176,10 @@ std::string check_pose(const pose_estimate_t& p, const MessageLimits& l, Refusal
   *reason = Refusal::kMalformed;
   if (p.frame < 0) return contract::got("frame is negative", p.frame);
   if (p.incarnation < 0) return contract::got("incarnation is negative", p.incarnation);
+  if (!std::isfinite(p.nis) || p.nis < 0.0) return "nis is negative or not finite (got " + num(p.nis) + ")";
+  if (p.nis_dof < 0 || p.nis_dof > 2 * contract::kMaxObsPerFrameLimit || p.nis_dof % 2 != 0)
+    return contract::got("nis_dof is not an even number in [0, 2 x " + std::to_string(contract::kMaxObsPerFrameLimit) + "]",
+                         p.nis_dof);
   *reason = Refusal::kImplausible;
   if (std::string e = check_position(p.x, p.y, l, "position"); !e.empty()) return e;
   if (!std::isfinite(p.theta)) return "theta is not finite";

@@ -50,6 +50,8 @@ bool ConsistencyMonitor::end_frame() {
   const int dof = frame_dof_;
   frame_nis_ = 0.0;
   frame_dof_ = 0;
+  last_nis_ = nis;
+  last_dof_ = dof;
   if (ring_.empty()) return inconsistent_ = false;
   Entry& e = ring_[next_];
   if (filled_ == ring_.size()) {
@@ -95,6 +97,8 @@ void ConsistencyMonitor::restart() {
   dof_ = 0;
   frame_nis_ = 0.0;
   frame_dof_ = 0;
+  last_nis_ = 0.0;
+  last_dof_ = 0;
   inconsistent_ = false;
 }
 

@@ -117,6 +117,8 @@ FrameSummary Robot::process(const FrameInput& in) {
 // kept, so the map moves with the pose) and the window starts over.
 void Robot::check_consistency(FrameSummary* s) {
   s->inconsistent = monitor_.end_frame();
+  s->nis = monitor_.frame_nis();
+  s->nis_dof = monitor_.frame_dof();
   if (!s->inconsistent || !options_.consistency_recover) return;
   const double xy = options_.recovery_sigma_xy * options_.recovery_sigma_xy;
   const double th = options_.recovery_sigma_theta * options_.recovery_sigma_theta;

@@ -275,6 +275,8 @@ void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, con
   pose_.num_accepted = static_cast<int16_t>(s.num_accepted);
   pose_.num_rejected = static_cast<int16_t>(s.num_rejected);
   pose_.num_landmarks = static_cast<int16_t>(f.num_landmarks());
+  pose_.nis = s.nis;
+  pose_.nis_dof = static_cast<int16_t>(s.nis_dof);
   pose_.frames_processed = frames_this_run_;
   pose_.event_seq = seq_;  // after fill_events: this frame's events included
   pose_.snapshot_chunks = static_cast<int16_t>(snapshot_ready_ ? num_chunks_ : 0);

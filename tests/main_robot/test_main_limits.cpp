@@ -162,6 +162,32 @@ TEST(MainLimits, DenormalOrZeroCovarianceIsRefused) {
   EXPECT_TRUE(node.map().entry(3).fused.allFinite());
 }
 
+// A POSE's frame NIS must be a finite non-negative number with an even number of
+// degrees of freedom within the contract's bound; anything else is refused as
+// malformed, names the field and leaves the robot's frame where it was.
+TEST(MainLimits, APoseWithAnImpossibleNisIsRefused) {
+  MainNode node(options());
+  std::string why;
+  pose_estimate_t p = pose(1, 0);
+  p.nis = 12.5;
+  p.nis_dof = 8;
+  EXPECT_EQ(node.on_pose(p, &why), 0) << why;
+  for (double bad : {-1.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    pose_estimate_t q = pose(1, 1);
+    q.nis = bad;
+    EXPECT_EQ(node.on_pose(q, &why), -1);
+    EXPECT_NE(why.find("nis is negative or not finite"), std::string::npos) << why;
+  }
+  for (int bad : {-2, 3, 2 * contract::kMaxObsPerFrameLimit + 2}) {
+    pose_estimate_t q = pose(1, 1);
+    q.nis_dof = static_cast<std::int16_t>(bad);
+    EXPECT_EQ(node.on_pose(q, &why), -1);
+    EXPECT_NE(why.find("nis_dof"), std::string::npos) << why;
+  }
+  EXPECT_EQ(node.counters().refused[Refusal::kMalformed], 6);
+  EXPECT_EQ(node.on_pose(pose(1, 1), &why), 1) << why;
+}
+
 // Snapshots had no position bound (1e300 m accepted; events refused over 1e6 m).
 TEST(MainLimits, PositionsBeyondTheWorldBoundAreRefusedInEventsAndSnapshots) {
   MainNode node(options());

@@ -75,6 +75,7 @@ class Session:
         self.next_sub = 1
         self.times = {}         # topic -> receive times (monotonic)
         self.last = {}          # topic -> last payload
+        self.nis = {}           # /robot<r>/stats topic -> [sum of nis, sum of nis_dof, messages with nis_dof > 0]
         self.protocol = ws.getsubprotocol() if hasattr(ws, "getsubprotocol") else None
         self.server_info = None
 
@@ -111,6 +112,13 @@ class Session:
             if ch is not None:
                 self.times.setdefault(ch["topic"], []).append(now)
                 self.last[ch["topic"]] = bytes(data[13:])
+                if ch["topic"].endswith("/stats"):
+                    st = json.loads(bytes(data[13:]))
+                    acc = self.nis.setdefault(ch["topic"], [0.0, 0, 0])
+                    if st.get("nis_dof", 0) > 0:
+                        acc[0] += st["nis"]
+                        acc[1] += st["nis_dof"]
+                        acc[2] += 1
         return True
 
 
@@ -207,6 +215,12 @@ def main():
         st = json.loads(stats) if stats else {}
         if st.get("nees") is None or st.get("sigma_x_m") is None:
             fails.append(f"robot {r}: /robot{r}/stats has no nees or sigma_x_m: {st}")
+        # The robots' NIS from POSE: present in most frames, and near 1 per dof (a filter
+        # with movers accepted before they are found runs above 1; 3 is far beyond).
+        nis, dof, with_nis = s.nis.get(f"/robot{r}/stats", [0.0, 0, 0])
+        rates[r]["nis_per_dof"] = round(nis / dof, 3) if dof else None
+        if with_nis < len(t) // 2 or not dof or not 0.3 < nis / dof < 3.0:
+            fails.append(f"robot {r}: NIS in {with_nis} of {len(t)} stats, nis/dof {rates[r]['nis_per_dof']}")
     bridge = json.loads(s.last["/bridge"]) if "/bridge" in s.last else {}
     if len(s.times.get("/map", [])) < 3 or b"landmarks/static" not in s.last.get("/map", b""):
         fails.append(f"/map: {len(s.times.get('/map', []))} messages, the last without landmarks/static")

@@ -46,6 +46,9 @@ class ConsistencyMonitor {
   int window_frames() const { return static_cast<int>(ring_.size()); }
 
   bool inconsistent() const { return inconsistent_; }
+  /// The last ended frame's NIS and degrees of freedom (0 and 0 without a correction).
+  double frame_nis() const { return last_nis_; }
+  int frame_dof() const { return last_dof_; }
   double window_nis() const { return nis_; }
   int window_dof() const { return dof_; }
   /// The threshold of the window's NIS for `dof` degrees of freedom.
@@ -63,6 +66,8 @@ class ConsistencyMonitor {
   int min_dof_;
   double frame_nis_ = 0.0;
   int frame_dof_ = 0;
+  double last_nis_ = 0.0;
+  int last_dof_ = 0;
   double nis_ = 0.0;
   int dof_ = 0;
   bool inconsistent_ = false;

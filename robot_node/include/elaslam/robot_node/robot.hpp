@@ -75,6 +75,8 @@ struct FrameSummary {
   int evicted = 0;        // landmarks that left the full filter to make room (make_room)
   int restored = 0;       // evicted landmarks seen again and back in the filter
   int events_dropped = 0; // events beyond the fixed event buffer (should stay 0)
+  double nis = 0.0;           // the frame's corrections' NIS (sum of d2; own filter) ...
+  int nis_dof = 0;            // ... and its degrees of freedom (2 per correction)
   bool inconsistent = false;  // the consistency monitor's verdict after this frame
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
   int drifted = 0;            // 1: the own filter had drifted from the aided one: no MOVING finding (own_filter_drifted)
