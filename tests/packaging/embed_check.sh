@@ -11,10 +11,14 @@
 #       examples/embed_robot as a superproject with elaslam inside it
 #       (-DELASLAM_SOURCE_DIR: add_subdirectory): configures, builds the message types
 #       in its build tree (not the whole library: CI time), leaves the source tree alone
+#   embed_check.sh fetchcontent BUILD_DIR INTREE_PROGRAM
+#       the same with elaslam fetched by FetchContent from this clone's git repository
+#       at its HEAD commit (-DELASLAM_GIT_REPOSITORY, -DELASLAM_GIT_TAG); skipped when
+#       the source tree is not a git clone
 # Everything happens in a temporary folder (removed at exit). Exit 77 (skipped) when a
 # tool it needs is missing.
 set -euo pipefail
-MODE="${1:?usage: embed_check.sh embed|superproject BUILD_DIR INTREE_PROGRAM}"
+MODE="${1:?usage: embed_check.sh embed|superproject|fetchcontent BUILD_DIR INTREE_PROGRAM}"
 BUILD="$(cd "${2:?BUILD_DIR}" && pwd)"
 INTREE="${3:?INTREE_PROGRAM}"
 SRC="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -125,18 +129,21 @@ mode_embed() {
   echo "embed: ok"
 }
 
+# elaslam inside examples/embed_robot: LABEL, elaslam's build folder under the
+# superproject's, then the superproject's configure options.
 mode_superproject() {
-  local B="$TMP/super" before after t0 t1
+  local label="$1" sub="$2" B="$TMP/super" before after t0 t1
+  shift 2
   before="$(cd "$SRC" && git status --porcelain 2>/dev/null || true)"
   t0=$(date +%s)
-  "$CMAKE" -S "$EXAMPLE" -B "$B" "${GENERATOR[@]}" -DELASLAM_SOURCE_DIR="$SRC" > "$TMP/configure.log" 2>&1 \
-    || { cat "$TMP/configure.log"; fail "configure with add_subdirectory(elaslam)"; }
+  "$CMAKE" -S "$EXAMPLE" -B "$B" "${GENERATOR[@]}" "$@" > "$TMP/configure.log" 2>&1 \
+    || { cat "$TMP/configure.log"; fail "$label: configure with $*"; }
   # The message types and the version, built inside the superproject's tree.
   "$CMAKE" --build "$B" --target elaslam_lcmtypes_gen elaslam_version_gen > "$TMP/build.log" 2>&1 \
-    || { cat "$TMP/build.log"; fail "build elaslam_lcmtypes_gen in the superproject"; }
+    || { cat "$TMP/build.log"; fail "$label: build elaslam_lcmtypes_gen in the superproject"; }
   t1=$(date +%s)
-  [ -f "$B/elaslam/lcmgen/cpp/elaslam/pose_estimate_t.hpp" ] || fail "no generated headers in $B/elaslam/lcmgen"
-  [ -f "$B/elaslam/share/elaslam/VERSION" ] || fail "no VERSION in $B/elaslam/share/elaslam"
+  [ -f "$B/$sub/lcmgen/cpp/elaslam/pose_estimate_t.hpp" ] || fail "$label: no generated headers in $B/$sub/lcmgen"
+  [ -f "$B/$sub/share/elaslam/VERSION" ] || fail "$label: no VERSION in $B/$sub/share/elaslam"
   [ ! -e "$B/lcmgen" ] && [ ! -e "$B/bin" ] || fail "elaslam wrote into the superproject's top build folder"
   # Only the libraries: no tests, programs or install rules by default.
   # Every target of the build (not only the primary ones `--target help` shows).
@@ -147,20 +154,31 @@ mode_superproject() {
   fi
   has_target() { grep -qx "$1" "$TMP/targets.txt"; }
   for t in elaslam_robot elaslam_main elaslam_transport elaslam_common embed_robot; do
-    has_target "$t" || fail "no target $t in the superproject"
+    has_target "$t" || fail "$label: no target $t in the superproject"
   done
   for t in test_robot robot_node main_robot simulator run_scenario viewer; do
-    ! has_target "$t" || fail "target $t in the superproject (tests and programs are off there by default)"
+    ! has_target "$t" || fail "$label: target $t in the superproject (tests and programs are off there by default)"
   done
-  [ ! -e "$B/elaslam/packaging" ] || fail "install rules (packaging/) in the superproject"
+  [ ! -e "$B/$sub/packaging" ] || fail "$label: install rules (packaging/) in the superproject"
   after="$(cd "$SRC" && git status --porcelain 2>/dev/null || true)"
-  [ "$before" = "$after" ] || fail "the source tree changed: $after"
-  note "superproject: configured and built the message types in $((t1 - t0)) s"
-  echo "superproject: ok"
+  [ "$before" = "$after" ] || fail "$label: the source tree changed: $after"
+  note "$label: configured and built the message types in $((t1 - t0)) s"
+}
+
+# FetchContent from this clone's repository at HEAD (what is committed: a user's
+# GIT_REPOSITORY URL and tag); the fetched tree must be that commit.
+mode_fetchcontent() {
+  command -v git >/dev/null 2>&1 || skip "git not found"
+  local head
+  head="$(git -C "$SRC" rev-parse --verify HEAD 2>/dev/null)" || skip "$SRC is not a git clone with a commit"
+  mode_superproject fetchcontent _deps/elaslam-build -DELASLAM_GIT_REPOSITORY="$SRC" -DELASLAM_GIT_TAG="$head"
+  [ "$(git -C "$TMP/super/_deps/elaslam-src" rev-parse HEAD)" = "$head" ] || fail "fetchcontent: the fetched tree is not $head"
+  note "fetchcontent: elaslam $head fetched into _deps/elaslam-src"
 }
 
 case "$MODE" in
   embed) mode_embed ;;
-  superproject) mode_superproject ;;
+  superproject) mode_superproject superproject elaslam -DELASLAM_SOURCE_DIR="$SRC"; echo "superproject: ok" ;;
+  fetchcontent) mode_fetchcontent; echo "fetchcontent: ok" ;;
   *) echo "embed_check.sh: unknown mode '$MODE'" >&2; exit 2 ;;
 esac

@@ -7,7 +7,11 @@
 #    (the in-tree backend needs no setuptools or wheel); `import elaslam`, every type of
 #    lcmtypes/*.lcm is there, a pose_estimate_t encodes and decodes; the metadata names
 #    the version and the dependency on lcm; nothing written into BUILD/python
-# 2. with lcm from the package index: `pip install BUILD/python` (the dependency
+# 2. without the network, from the source tree: `pip install --no-index --no-deps
+#    ./python` in a second venv (the backend runs lcm-gen on lcmtypes/*.lcm); every
+#    type's fingerprint and a pose_estimate_t's bytes equal those of step 1's package;
+#    nothing written into python/
+# 3. with lcm from the package index: `pip install BUILD/python` (the dependency
 #    resolved), a pose_estimate_t through LCM's memq:// transport
 # Exit 77 (skipped) when python3 cannot make a venv, or when step 1 passed and lcm
 # cannot be installed (no index reachable and no wheel in pip's find-links).
@@ -61,7 +65,31 @@ PY
 after="$(cd "$PKG" && find . | sort)"
 [ "$before" = "$after" ] || fail "pip wrote into $PKG: $(diff <(echo "$before") <(echo "$after") || true)"
 
-# ---- 2. with lcm ---------------------------------------------------------------------
+# ---- 2. pip install ./python, no network ----------------------------------------------
+# What each package says of the types: fingerprints and one message's bytes.
+describe() {
+  (cd "$TMP" && "$1/python" - "${types[@]}") <<'PY'
+import sys
+import elaslam
+m = elaslam.pose_estimate_t()
+m.utime, m.frame, m.robot_id, m.x, m.nis, m.nis_dof = 5, 7, 3, 1.5, 12.25, 8
+print(" ".join(f"{t}:{getattr(elaslam, t)._get_packed_fingerprint().hex()}" for t in sys.argv[1:]))
+print(m.encode().hex())
+PY
+}
+python3 -m venv "$TMP/venv2" > "$TMP/venv2.log" 2>&1 || { cat "$TMP/venv2.log"; fail "second venv"; }
+src_before="$(cd "$SRC/python" && find . | sort)"
+t0=$(date +%s)
+"$TMP/venv2/bin/pip" install --no-index --no-deps --disable-pip-version-check "$SRC/python" > "$TMP/pip_src.log" 2>&1 \
+  || { cat "$TMP/pip_src.log"; fail "pip install --no-index --no-deps $SRC/python"; }
+note "pip install ./python (lcm-gen at install): $(( $(date +%s) - t0 )) s"
+[ "$(cd "$SRC/python" && find . | sort)" = "$src_before" ] || fail "pip wrote into $SRC/python"
+a="$(describe "$V")" || fail "the build tree's package: $a"
+b="$(describe "$TMP/venv2/bin")" || fail "the source tree's package: $b"
+[ "$a" = "$b" ] || fail "./python and build/python differ: $(diff <(echo "$a" | tr ' ' '\n') <(echo "$b" | tr ' ' '\n') || true)"
+note "./python and build/python: the same ${#types[@]} fingerprints, the same bytes"
+
+# ---- 3. with lcm ---------------------------------------------------------------------
 t0=$(date +%s)
 if ! "$V/pip" install --disable-pip-version-check --timeout 20 --retries 1 "$PKG" > "$TMP/pip2.log" 2>&1; then
   cat "$TMP/pip2.log"
