@@ -47,14 +47,11 @@ const char* to_string(EventKind k) {
 Robot::Robot(const RobotOptions& options, int robot_id)
     : options_(options),
       robot_id_(robot_id),
-      ekf_(options.ekf),
-      history_(options.ekf, history_window(options), history_ops(options)),
-      aided_history_(options.ekf, options.team_map_fuse ? history_window(options) : 0, history_ops(options)),
+      filters_(options.ekf, options.team_map_fuse, history_window(options), history_ops(options)),
       team_(options.team_map_fuse ? options.ekf.max_landmark_id : 0, options.team_map_min_gain),
       lmap_(options.ekf.max_landmark_id, lifecycle_rules(options)),
       gate_(options),
       monitor_(options.consistency_window_frames, options.consistency_probability) {
-  if (options.team_map_fuse) aided_.emplace(options.ekf);
   team_gate_threshold_ = options.team_map_gate_probability < 1.0 ? chi2_quantile(options.team_map_gate_probability, 2)
                                                                   : std::numeric_limits<double>::infinity();
   restore_threshold_ = chi2_quantile(options.drift_gate_probability, 2);
@@ -122,7 +119,7 @@ void Robot::check_consistency(FrameSummary* s) {
   if (!s->inconsistent || !options_.consistency_recover) return;
   const double xy = options_.recovery_sigma_xy * options_.recovery_sigma_xy;
   const double th = options_.recovery_sigma_theta * options_.recovery_sigma_theta;
-  mirror_predict(last_frame_, Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), /*dt=*/0.0, s);
+  filters_.predict(last_frame_, Pose2{}, Eigen::Vector3d(xy, xy, th).asDiagonal(), /*dt=*/0.0, &s->filter_faults);
   monitor_.restart();
   s->recovered = true;
 }
@@ -150,11 +147,9 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     // file): the odometer has dead-reckoned since frame 0; its prior says so.
     if (in.frame > 0)
       P0 = dead_reckoning_cov(P0, in.frame, options_.late_start_step_m, options_.late_start_turn, in.noise);
-    ekf_.reset(in.odometer, P0);
-    if (aided_) aided_->reset(in.odometer, P0);
+    filters_.reset(in.odometer, P0);  // the histories start over too
     team_.clear();
     initialised_ = true;
-    restart_history();
   } else if (in.reanchor) {
     // A new odometer origin: no increment, and the frames since the last one driven
     // anywhere within the vehicle's bounds. (The calibration's random walk still
@@ -162,13 +157,13 @@ void Robot::predict(const FrameInput& in, FrameSummary* s) {
     const double k = std::max(1, in.frame - last_frame_);
     const double step = options_.max_step_m * k, turn = std::min(kPi, options_.max_turn * k);
     const Eigen::Matrix3d U = Eigen::Vector3d(step * step, step * step, turn * turn).asDiagonal();
-    mirror_predict(in.frame, Pose2{}, U, step_seconds(in), s);
+    filters_.predict(in.frame, Pose2{}, U, step_seconds(in), &s->filter_faults);
   } else {
     // Frames missed since the last one (in.frame - last_frame_ > 1): the increment
     // spans them all, and its noise is theirs compounded.
     const Pose2 increment = between(last_odometer_, in.odometer);
-    mirror_predict(in.frame, increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise),
-                   step_seconds(in), s);
+    filters_.predict(in.frame, increment, gap_odometry_covariance(increment, in.frame - last_frame_, in.noise),
+                   step_seconds(in), &s->filter_faults);
   }
   last_odometer_ = in.odometer;
   last_utime_ = in.utime;
@@ -180,8 +175,8 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
   const bool gate = options_.mode == Mode::kGated;
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
-    if (!ekf_.has_landmark(o.landmark_id)) continue;
-    const UpdateReport r = mirror_update(o.landmark_id, o.z, gate, s);
+    if (!filters_.own().has_landmark(o.landmark_id)) continue;
+    const UpdateReport r = filters_.update(last_frame_, o.landmark_id, o.z, gate, &s->filter_faults);
     if (r.status == EkfStatus::kOk) monitor_.add(r.d2);
     gate_.record({o.landmark_id, gate ? GateKind::kInnovation : GateKind::kNone, r.d2, r.threshold,
                   r.status != EkfStatus::kGated});
@@ -196,10 +191,10 @@ void Robot::process_classic(const FrameInput& in, FrameSummary* s) {
   }
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
-    if (ekf_.has_landmark(o.landmark_id)) continue;
+    if (filters_.own().has_landmark(o.landmark_id)) continue;
     ++s->num_candidates;
     make_room(s);  // an archived landmark comes back as new: its ADD replaces the old estimate at main
-    if (!added(mirror_add(o.landmark_id, o.z, s), s)) continue;
+    if (!added(filters_.add(last_frame_, o.landmark_id, o.z, &s->filter_faults), s)) continue;
     lmap_.map_at_once(o.landmark_id, in.frame);
     emit(EventKind::kAdd, o.landmark_id);
     ++s->num_added;
@@ -216,10 +211,10 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   //    consensus clique or the single-landmark test, then the drift test).
   for (int k = 0; k < in.num_obs; ++k) {
     const Observation& o = in.obs[static_cast<std::size_t>(k)];
-    if (lmap_[o.landmark_id].status == LandmarkStatus::kStatic && ekf_.has_landmark(o.landmark_id))
+    if (lmap_[o.landmark_id].status == LandmarkStatus::kStatic && filters_.own().has_landmark(o.landmark_id))
       gate_.add_to_view(o.landmark_id, o.z);  // not the archived ones (restore_archived, below)
   }
-  gate_.judge_view(ekf_, &lmap_);
+  gate_.judge_view(filters_.own(), &lmap_);
   // 3, inside: correct the filter (eqs 7-13), in view order; with lone_needs_check,
   //    a landmark judged alone only if it has once agreed with another (checked).
   for (int k = 0; k < gate_.view_size(); ++k) {
@@ -252,21 +247,16 @@ void Robot::process_ela(const FrameInput& in, FrameSummary* s) {
   lmap_.set_few_static(s->num_accepted < 3);
   handle_candidates(in, s);
   // Confirmed candidates' earlier sightings, into the filters (FilterHistory).
-  s->filter_faults += history_.end_frame(in.frame, &ekf_);
-  if (aided_) s->filter_faults += aided_history_.end_frame(in.frame, &*aided_);
+  s->filter_faults += filters_.end_frame(in.frame);
 }
 
 bool Robot::own_filter_drifted() const {
-  return aided_ && options_.team_map_drift_check && pose_drifted(ekf_, *aided_, drift3_threshold_);
-}
-
-void Robot::restart_history() {
-  history_.restart(ekf_);
-  if (aided_) aided_history_.restart(*aided_);
+  return filters_.has_aided() && options_.team_map_drift_check &&
+         pose_drifted(filters_.own(), filters_.aided(), drift3_threshold_);
 }
 
 void Robot::correct(int id, const RangeBearing& z, FrameSummary* s) {
-  const UpdateReport r = mirror_update(id, z, false, s);
+  const UpdateReport r = filters_.update(last_frame_, id, z, false, &s->filter_faults);
   if (r.status == EkfStatus::kOk) {
     monitor_.add(r.d2);
     ++s->num_accepted;
@@ -291,16 +281,16 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     if (e.status == LandmarkStatus::kStatic || e.moved_frame == in.frame) continue;
     ++s->num_candidates;
     record_sighting(id, o.z);
-    if (e.status == LandmarkStatus::kCandidate && ekf_.has_landmark(id)) {
-      if (gate_.judge_candidate(id, ekf_.check(id, o.z), &lmap_)) {
+    if (e.status == LandmarkStatus::kCandidate && filters_.own().has_landmark(id)) {
+      if (gate_.judge_candidate(id, filters_.own().check(id, o.z), &lmap_)) {
         if (lmap_.candidate_consistent(id)) {
           confirm(id, o.z, s);
         } else if (options_.candidate_updates) {
-          mirror_update_landmark_only(id, o.z, s);
+          filters_.update_landmark_only(last_frame_, id, o.z, &s->filter_faults);
         }
         continue;
       }
-      mirror_remove(id);
+      filters_.remove(last_frame_, id);
       if (lmap_.candidate_inconsistent(id)) {
         emit_at(EventKind::kMoving, id, e.position, e.cov);
         ++s->num_moving;
@@ -309,7 +299,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     // New, seen again after moving or after a gap, or inconsistent: (re)anchor here.
     lmap_.anchor_candidate(id, in.frame);
     make_room(s);
-    added(mirror_add(id, o.z, s), s);  // kFull: candidate outside the filter
+    added(filters_.add(last_frame_, id, o.z, &s->filter_faults), s);  // kFull: candidate outside the filter
   }
 }
 
@@ -317,10 +307,9 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
 // from now on, starting with this frame's sighting.
 void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   const bool returned = lmap_.confirm(id, last_frame_);
-  history_.upgrade(id);
   FilterHistory::Op held;
   held.kind = FilterHistory::Kind::kHeldPosition;
-  aided_history_.upgrade(id, &held);
+  filters_.upgrade(id, &held);
   if (held.kind == FilterHistory::Kind::kPosition) {
     // The team estimate held for the candidate (hold_team_estimate) corrects the
     // aided filter as of its team map (the rebuild at the end of this frame): the
@@ -333,7 +322,7 @@ void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
     team_.commit(id, inc);
     ++team_counters_.fused;
   }
-  if (mirror_update(id, z, false, s).status == EkfStatus::kOk) {
+  if (filters_.update(last_frame_, id, z, false, &s->filter_faults).status == EkfStatus::kOk) {
     ++s->num_accepted;
   } else {
     ++s->filter_faults;
@@ -346,11 +335,11 @@ void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
 // frames lose their streak: they leave the filter (they never corrected the
 // robot) and start over when seen again.
 void Robot::drop_unseen_candidates() {
-  for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
-    const int id = ekf_.id_at(slot);
+  for (int slot = filters_.own().num_landmarks() - 1; slot >= 0; --slot) {
+    const int id = filters_.own().id_at(slot);
     const LMapEntry& e = lmap_[id];
     if (e.status == LandmarkStatus::kStatic || last_frame_ - e.last_seen_frame < options_.candidate_gap_frames) continue;
-    mirror_remove(id);
+    filters_.remove(last_frame_, id);
     lmap_.drop_candidate(id);
   }
 }
@@ -362,9 +351,9 @@ void Robot::drop_unseen_candidates() {
 // probability.
 void Robot::check_missing(FrameSummary* s) {
   if (options_.missing_frames <= 0) return;
-  const Pose2 pose = ekf_.pose();
-  for (int slot = ekf_.num_landmarks() - 1; slot >= 0; --slot) {
-    const int id = ekf_.id_at(slot);
+  const Pose2 pose = filters_.own().pose();
+  for (int slot = filters_.own().num_landmarks() - 1; slot >= 0; --slot) {
+    const int id = filters_.own().id_at(slot);
     const LMapEntry& e = lmap_[id];
     if (e.status != LandmarkStatus::kStatic) continue;
     const bool expected = e.last_seen_frame != last_frame_ && expected_in_view(id, pose);
@@ -375,7 +364,7 @@ void Robot::check_missing(FrameSummary* s) {
 // Well inside the field of view: the disc of sensor_range_m, or the cone of
 // +-fov_half_angle_deg in it, shrunk by fov_margin_m at its edges.
 bool Robot::expected_in_view(int id, const Pose2& pose) const {
-  const Eigen::Vector2d d = ekf_.landmark(id) - pose.translation();
+  const Eigen::Vector2d d = filters_.own().landmark(id) - pose.translation();
   const double range = d.norm();
   if (!(range < options_.sensor_range - options_.fov_margin)) return false;
   if (!(options_.fov_half_angle < kPi)) return true;
@@ -386,16 +375,16 @@ bool Robot::expected_in_view(int id, const Pose2& pose) const {
 // Remove a STATIC landmark found moving; seen now, it is re-anchored as a candidate
 // where it is (it may come back when it stops).
 void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
-  const Eigen::Vector2d last = ekf_.landmark(id);
-  const Eigen::Matrix2d last_cov = ekf_.landmark_cov(id);
-  if (mirror_remove(id) != EkfStatus::kOk) {
+  const Eigen::Vector2d last = filters_.own().landmark(id);
+  const Eigen::Matrix2d last_cov = filters_.own().landmark_cov(id);
+  if (filters_.remove(last_frame_, id) != EkfStatus::kOk) {
     ++s->filter_faults;
     return;
   }
   lmap_.found_moving(id, last_frame_, seen != nullptr);
   if (seen) {
     record_sighting(id, *seen);
-    added(mirror_add(id, *seen, s), s);
+    added(filters_.add(last_frame_, id, *seen, &s->filter_faults), s);
   }
   emit_at(EventKind::kMoving, id, last, last_cov);
   ++s->num_moving;
@@ -409,14 +398,14 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
 // (an UPDATE; the global map keeps it) and stays in the L-map as archived, listed
 // in the snapshots; a candidate is dropped, as one unseen too long is. O(n).
 bool Robot::make_room(FrameSummary* s) {
-  if (ekf_.num_landmarks() < ekf_.capacity()) return true;
-  const Eigen::Vector2d here = ekf_.pose().translation();
+  if (filters_.own().num_landmarks() < filters_.own().capacity()) return true;
+  const Eigen::Vector2d here = filters_.own().pose().translation();
   int victim = -1;
   double farthest = options_.sensor_range;
-  for (int slot = 0; slot < ekf_.num_landmarks(); ++slot) {
-    const int id = ekf_.id_at(slot);
+  for (int slot = 0; slot < filters_.own().num_landmarks(); ++slot) {
+    const int id = filters_.own().id_at(slot);
     if (lmap_[id].last_seen_frame == last_frame_) continue;
-    const double d = (ekf_.landmark(id) - here).norm();
+    const double d = (filters_.own().landmark(id) - here).norm();
     if (d > farthest) {
       farthest = d;
       victim = id;
@@ -425,10 +414,10 @@ bool Robot::make_room(FrameSummary* s) {
   if (victim < 0) return false;
   if (lmap_[victim].status == LandmarkStatus::kStatic) {
     emit(EventKind::kUpdate, victim);
-    lmap_.archive(victim, ekf_.landmark(victim), ekf_.landmark_cov(victim));
-    mirror_remove(victim);
+    lmap_.archive(victim, filters_.own().landmark(victim), filters_.own().landmark_cov(victim));
+    filters_.remove(last_frame_, victim);
   } else {
-    mirror_remove(victim);
+    filters_.remove(last_frame_, victim);
     lmap_.drop_candidate(victim);
   }
   ++s->evicted;
@@ -447,12 +436,12 @@ void Robot::restore_archived(const FrameInput& in, FrameSummary* s) {
     const LMapEntry& e = lmap_[o.landmark_id];
     if (e.status != LandmarkStatus::kStatic || !e.archived) continue;
     make_room(s);
-    if (!added(mirror_add(o.landmark_id, o.z, s), s)) continue;  // stays archived
+    if (!added(filters_.add(last_frame_, o.landmark_id, o.z, &s->filter_faults), s)) continue;  // stays archived
     const Eigen::Vector2d kept = e.position;
     const Eigen::Matrix2d kept_cov = e.cov;
     lmap_.unarchive(o.landmark_id);
     ++s->restored;
-    const double d2 = mahalanobis2(ekf_.landmark(o.landmark_id) - kept, ekf_.landmark_cov(o.landmark_id) + kept_cov);
+    const double d2 = mahalanobis2(filters_.own().landmark(o.landmark_id) - kept, filters_.own().landmark_cov(o.landmark_id) + kept_cov);
     if (d2 > restore_threshold_) mark_moving(o.landmark_id, &o.z, s);
   }
 }
@@ -461,8 +450,8 @@ void Robot::restore_archived(const FrameInput& in, FrameSummary* s) {
 void Robot::record_sighting(int id, const RangeBearing& z) {
   Eigen::Matrix<double, 2, 3> Gx;
   Eigen::Matrix2d Gz;
-  const Eigen::Vector2d p_LinW = inverse_observe(ekf_.pose(), z, &Gx, &Gz);
-  const Eigen::Matrix2d C = Gx * ekf_.pose_cov() * Gx.transpose() + Gz * ekf_.measurement_cov() * Gz.transpose();
+  const Eigen::Vector2d p_LinW = inverse_observe(filters_.own().pose(), z, &Gx, &Gz);
+  const Eigen::Matrix2d C = Gx * filters_.own().pose_cov() * Gx.transpose() + Gz * filters_.own().measurement_cov() * Gz.transpose();
   lmap_.record_sighting(id, p_LinW, C);
 }
 
@@ -485,70 +474,15 @@ bool Robot::apply_notice(int landmark_id, int frame) {
   // ekf is the paper's baseline: every landmark static, also one the team (or main's
   // body rule, main.body_radius_m) found moving.
   if (options_.mode == Mode::kEkf || !lmap_.valid_id(landmark_id)) return false;
-  const bool in_filter = ekf_.has_landmark(landmark_id);
+  const bool in_filter = filters_.own().has_landmark(landmark_id);
   const bool held = in_filter && lmap_[landmark_id].status == LandmarkStatus::kStatic;
-  const bool removed = in_filter && mirror_remove(landmark_id) == EkfStatus::kOk;
+  const bool removed = in_filter && filters_.remove(last_frame_, landmark_id) == EkfStatus::kOk;
   lmap_.told_moving(landmark_id, frame, removed || lmap_[landmark_id].archived);
   return removed && held;
 }
 
-// ---- the own and the aided filter (team_aid.hpp) ------------------------------------
-
-EkfStatus Robot::mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt,
-                                FrameSummary* s) {
-  const FilterHistory::Op op = FilterHistory::predict(frame, increment, U, dt);
-  const EkfStatus st = ekf_.predict(increment, U, dt);
-  if (st == EkfStatus::kOk) {
-    history_.record(op);
-  } else {
-    ++s->filter_faults;
-  }
-  mirror_to_aided(op, s);
-  return st;
-}
-
-// An observation the gate accepted corrects both filters (never gated again in the
-// aided one: the decision was taken).
-UpdateReport Robot::mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s) {
-  const UpdateReport r = ekf_.update(id, z, gate);
-  if (r.status != EkfStatus::kOk) return r;
-  const FilterHistory::Op op = FilterHistory::update(last_frame_, id, z);
-  history_.record(op);
-  mirror_to_aided(op, s);
-  return r;
-}
-
-void Robot::mirror_update_landmark_only(int id, const RangeBearing& z, FrameSummary* s) {
-  const FilterHistory::Op op = FilterHistory::update_landmark_only(last_frame_, id, z);
-  if (!history_.apply_and_record(op, &ekf_)) ++s->filter_faults;
-  mirror_to_aided(op, s);
-}
-
-EkfStatus Robot::mirror_add(int id, const RangeBearing& z, FrameSummary* s) {
-  const EkfStatus st = ekf_.add_landmark(id, z);
-  if (st != EkfStatus::kOk) return st;
-  const FilterHistory::Op op = FilterHistory::add(last_frame_, id, z);
-  history_.record(op);
-  // The team channel is kept (team_aid.hpp): what the team's estimate taught the
-  // pose and map before the landmark left stays in the aided filter.
-  mirror_to_aided(op, s);
-  return st;
-}
-
-EkfStatus Robot::mirror_remove(int id) {
-  const FilterHistory::Op op = FilterHistory::remove(last_frame_, id);
-  const EkfStatus st = ekf_.remove_landmark(id);
-  if (st == EkfStatus::kOk) history_.record(op);
-  mirror_to_aided(op, nullptr);  // refused when its add had failed: nothing to remove
-  return st;
-}
-
-void Robot::mirror_to_aided(const FilterHistory::Op& op, FrameSummary* s) {
-  if (aided_ && !aided_history_.apply_and_record(op, &*aided_) && s != nullptr) ++s->filter_faults;
-}
-
 bool Robot::team_eligible(int id) const {
-  return aided_ && lmap_.valid_id(id) && lmap_[id].status == LandmarkStatus::kStatic && aided_->has_landmark(id);
+  return filters_.has_aided() && lmap_.valid_id(id) && lmap_[id].status == LandmarkStatus::kStatic && filters_.aided().has_landmark(id);
 }
 
 const char* to_string(TeamVerdict v) {
@@ -596,7 +530,7 @@ Robot::GaugeTest Robot::gauge_test(const EkfSlam& f, const TeamEstimate* estimat
 }
 
 TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
-  if (!aided_) return TeamVerdict::kNone;
+  if (!filters_.has_aided()) return TeamVerdict::kNone;
   // The robot is wrong as a whole when both its filters are: the own one (what it
   // reports, what its gate runs on; the team map is the fusion of the others' own
   // maps, like with like) and the aided one each fail the team map and are carried
@@ -607,9 +541,9 @@ TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
   // bias every odometer shares turns every own map the same way; docs/decisions.md,
   // "A map that agrees with itself").
   GaugeTest own;
-  if (options_.team_map_gauge_test) own = gauge_test(ekf_, estimates, n);
+  if (options_.team_map_gauge_test) own = gauge_test(filters_.own(), estimates, n);
   if (own.fires) {
-    const GaugeTest aided = gauge_test(*aided_, estimates, n);
+    const GaugeTest aided = gauge_test(filters_.aided(), estimates, n);
     const Eigen::Vector3d d(wrap_angle(own.motion.rotation - aided.motion.rotation),
                             own.motion.translation.x() - aided.motion.translation.x(),
                             own.motion.translation.y() - aided.motion.translation.y());
@@ -623,12 +557,12 @@ TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
     const TeamEstimate& e = estimates[k];
     if (!team_eligible(e.landmark_id)) continue;
     ++tested;
-    if (aided_->check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) ++disagree;
+    if (filters_.aided().check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) ++disagree;
   }
   team_counters_.offered += tested;
   // Candidates' estimates are held, never fused now: whatever the verdict, and also
   // when the robot holds nothing STATIC yet.
-  if (options_.team_map_hold_candidates && aided_history_.enabled())
+  if (options_.team_map_hold_candidates && filters_.aided_history().enabled())
     for (int k = 0; k < n; ++k) hold_team_estimate(estimates[k]);
   if (tested == 0 && !own.fires) return TeamVerdict::kNone;
   TeamVerdict verdict = own.fires ? TeamVerdict::kRelocalised : TeamVerdict::kHeld;
@@ -652,10 +586,11 @@ TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
 // counted once. The L-map's positions are the own filter's (record_sighting).
 void Robot::relocalise(const GaugeTest& own, const GaugeTest& aided) {
   const RigidMotion& T = own.motion;
-  if (ekf_.apply_rigid_motion(T.rotation, T.translation) != EkfStatus::kOk) return;
-  aided_->apply_rigid_motion(aided.motion.rotation, aided.motion.translation);
+  if (filters_.apply_rigid_motion(T.rotation, T.translation, aided.motion.rotation, aided.motion.translation) !=
+      EkfStatus::kOk)
+    return;
   lmap_.apply_rigid_motion(T.rotation, T.translation);
-  restart_history();
+  filters_.restart_history();
   monitor_.restart();
   trouble_frame_ = -1;
   ++team_counters_.relocalised;
@@ -675,21 +610,20 @@ void Robot::relocalise(const GaugeTest& own, const GaugeTest& aided) {
 // team_map_gate_probability) is not fused unless the robot was found lost; nothing
 // is counted as fused then, and the next team map tries again.
 bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
-  if (test && aided_->check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) {
+  if (test && filters_.aided().check_position(e.landmark_id, e.position, e.cov).d2 > team_gate_threshold_) {
     ++team_counters_.gated;
     return false;
   }
   TeamIncrement inc;
   // The epoch: how many times this robot has known the landmark to move (team_aid.hpp).
-  if (!team_.offer(e.landmark_id, lmap_[e.landmark_id].times_moving, e.position, e.cov, aided_->landmark(e.landmark_id),
-                   aided_->landmark_cov(e.landmark_id), &inc))
+  if (!team_.offer(e.landmark_id, lmap_[e.landmark_id].times_moving, e.position, e.cov, filters_.aided().landmark(e.landmark_id),
+                   filters_.aided().landmark_cov(e.landmark_id), &inc))
     return false;
-  const UpdateReport r = aided_->update_position(e.landmark_id, inc.z, inc.R);
+  const UpdateReport r = filters_.update_aided_position(last_frame_, e.landmark_id, inc.z, inc.R);
   if (r.status != EkfStatus::kOk) {
     ++team_counters_.refused;
     return false;
   }
-  aided_history_.record(FilterHistory::update_position(last_frame_, e.landmark_id, inc.z, inc.R));
   team_.commit(e.landmark_id, inc);
   ++team_counters_.fused;
   team_counters_.nis_sum += r.d2;
@@ -708,15 +642,15 @@ bool Robot::fuse_team_estimate(const TeamEstimate& e, bool test) {
 // is: the newest held one carries everything the channel has not counted.
 bool Robot::hold_team_estimate(const TeamEstimate& e) {
   const int id = e.landmark_id;
-  if (!lmap_.valid_id(id) || lmap_[id].status != LandmarkStatus::kCandidate || !aided_->has_landmark(id)) return false;
-  if (aided_->check_position(id, e.position, e.cov).d2 > team_gate_threshold_) {
+  if (!lmap_.valid_id(id) || lmap_[id].status != LandmarkStatus::kCandidate || !filters_.aided().has_landmark(id)) return false;
+  if (filters_.aided().check_position(id, e.position, e.cov).d2 > team_gate_threshold_) {
     ++team_counters_.gated;
     return false;
   }
   TeamIncrement inc;
-  if (!team_.offer(id, lmap_[id].times_moving, e.position, e.cov, aided_->landmark(id), aided_->landmark_cov(id), &inc))
+  if (!team_.offer(id, lmap_[id].times_moving, e.position, e.cov, filters_.aided().landmark(id), filters_.aided().landmark_cov(id), &inc))
     return false;
-  aided_history_.record(FilterHistory::held_position(last_frame_, id, inc.z, inc.R));
+  filters_.hold_aided_position(last_frame_, id, inc.z, inc.R);
   ++team_counters_.held;
   return true;
 }
@@ -730,7 +664,7 @@ bool Robot::added(EkfStatus st, FrameSummary* s) {
 
 void Robot::emit(EventKind kind, int id) {
   lmap_.reported(id, last_frame_);
-  emit_at(kind, id, ekf_.landmark(id), ekf_.landmark_cov(id));
+  emit_at(kind, id, filters_.own().landmark(id), filters_.own().landmark_cov(id));
 }
 
 void Robot::emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C) {

@@ -179,7 +179,7 @@ LandmarkStatus parse_status(const json& v, const std::string& where) {
 
 }  // namespace
 
-// Friend of Robot and RobotNode: the only code that reads and writes their private state for the file.
+// Friend of Robot, its FilterPair and RobotNode: the only code that reads and writes their private state for the file.
 struct RobotStateAccess {
   static json save(const RobotNode& n);
   static void load(const json& state, RobotNode* scratch);
@@ -307,7 +307,7 @@ json RobotStateAccess::save(const RobotNode& n) {
   if (!window.empty()) robot["consistency_window"] = std::move(window);
   // The aided filter and what the team channel fused into it (robot.team_map.fuse):
   // optional, absent in files of before 2026-12-04.
-  if (r.aided_) {
+  if (r.filters_.aided_) {
     json channel = json::array();
     for (int id = 0; id < r.team_.max_landmark_id(); ++id)
       if (r.team_.fused_information(id).any())
@@ -315,12 +315,12 @@ json RobotStateAccess::save(const RobotNode& n) {
                            {"epoch", r.team_.epoch(id)},
                            {"Y", to_json(r.team_.fused_information(id))},
                            {"y", to_json(r.team_.fused_vector(id))}});
-    robot["aided"] = {{"filter", save_filter(*r.aided_)}, {"channel", std::move(channel)}};
-    if (r.aided_history_.enabled()) robot["aided"]["history"] = save_history(r.aided_history_);
+    robot["aided"] = {{"filter", save_filter(*r.filters_.aided_)}, {"channel", std::move(channel)}};
+    if (r.filters_.aided_history_.enabled()) robot["aided"]["history"] = save_history(r.filters_.aided_history_);
   }
   // The filter history (robot.ela.candidate_history_frames): optional, absent in files
   // of before 2026-12-04 (the history then starts over from the filter).
-  if (r.history_.enabled()) robot["history"] = save_history(r.history_);
+  if (r.filters_.own_history_.enabled()) robot["history"] = save_history(r.filters_.own_history_);
   return {{"robot_id", n.robot_id_},
           {"mode", to_string(o.mode)},
           {"capacity", o.ekf.capacity},
@@ -328,7 +328,7 @@ json RobotStateAccess::save(const RobotNode& n) {
           {"incarnation", n.incarnation_},
           {"node", save_node(n)},
           {"robot", robot},
-          {"filter", save_filter(r.ekf_)},
+          {"filter", save_filter(r.filters_.own_)},
           {"lmap", save_lmap(r.lmap_)}};
 }
 
@@ -511,24 +511,24 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
   Eigen::MatrixXd P;
   std::vector<int> slot_ids;
   parse_filter(need(s, "state", "filter"), "filter", *r, &x, &P, &slot_ids);
-  if (r->ekf_.restore(x, P, slot_ids) != EkfStatus::kOk) fail("filter.slot_ids", "a landmark id appears twice");
+  if (r->filters_.own_.restore(x, P, slot_ids) != EkfStatus::kOk) fail("filter.slot_ids", "a landmark id appears twice");
   r->team_.clear();
-  if (!r->aided_) return;  // (a file of a node with robot.team_map.fuse on: its aided filter is left out)
+  if (!r->filters_.aided_) return;  // (a file of a node with robot.team_map.fuse on: its aided filter is left out)
   const json& robot = need(s, "state", "robot");
   if (!robot.contains("aided")) {
     // Absent in files of before 2026-12-04 (or of a node with the team map off):
     // the aided filter restarts as the own filter, the team's information to be
     // fused again from the next team map.
-    r->aided_->restore(x, P, slot_ids);
+    r->filters_.aided_->restore(x, P, slot_ids);
     return;
   }
   const json& aided = robot.at("aided");
   parse_filter(need(aided, "robot.aided", "filter"), "robot.aided.filter", *r, &x, &P, &slot_ids);
   for (std::size_t k = 0; k < slot_ids.size(); ++k)
-    if (!r->ekf_.has_landmark(slot_ids[k]))  // the aided filter mirrors the own filter's landmarks
+    if (!r->filters_.own_.has_landmark(slot_ids[k]))  // the aided filter mirrors the own filter's landmarks
       fail("robot.aided.filter.slot_ids[" + std::to_string(k) + "]",
            "landmark " + std::to_string(slot_ids[k]) + " is not in the own filter");
-  if (r->aided_->restore(x, P, slot_ids) != EkfStatus::kOk) fail("robot.aided.filter.slot_ids", "a landmark id appears twice");
+  if (r->filters_.aided_->restore(x, P, slot_ids) != EkfStatus::kOk) fail("robot.aided.filter.slot_ids", "a landmark id appears twice");
   // The team channel: per landmark, the epoch and the information fused (Y:
   // symmetric, positive semi-definite; y). It outlives the landmark's stay in the
   // aided filter (team_aid.hpp), so any id.
@@ -647,12 +647,12 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
 }
 
 void RobotStateAccess::load_histories(const json& s, Robot* r) {
-  r->restart_history();
+  r->filters_.restart_history();
   const json& robot = need(s, "state", "robot");
-  if (r->history_.enabled() && robot.contains("history"))
-    load_history(robot.at("history"), "robot.history", r->ekf_, *r, &r->history_);
-  if (r->aided_ && r->aided_history_.enabled() && robot.contains("aided") && robot.at("aided").contains("history"))
-    load_history(robot.at("aided").at("history"), "robot.aided.history", *r->aided_, *r, &r->aided_history_);
+  if (r->filters_.own_history_.enabled() && robot.contains("history"))
+    load_history(robot.at("history"), "robot.history", r->filters_.own_, *r, &r->filters_.own_history_);
+  if (r->filters_.aided_ && r->filters_.aided_history_.enabled() && robot.contains("aided") && robot.at("aided").contains("history"))
+    load_history(robot.at("aided").at("history"), "robot.aided.history", *r->filters_.aided_, *r, &r->filters_.aided_history_);
 }
 
 void RobotStateAccess::load_lmap(const json& s, Robot* r) {
@@ -679,8 +679,8 @@ void RobotStateAccess::load_lmap(const json& s, Robot* r) {
 // The filter holds exactly the STATIC landmarks that are not archived and (some)
 // candidates: what Robot keeps true.
 void RobotStateAccess::check_consistency(const Robot& r) {
-  for (int slot = 0; slot < r.ekf_.num_landmarks(); ++slot) {
-    const int id = r.ekf_.id_at(slot);
+  for (int slot = 0; slot < r.filters_.own_.num_landmarks(); ++slot) {
+    const int id = r.filters_.own_.id_at(slot);
     const LandmarkStatus st = r.lmap_[id].status;
     if (st != LandmarkStatus::kStatic && st != LandmarkStatus::kCandidate)
       fail("filter.slot_ids[" + std::to_string(slot) + "]",
@@ -688,10 +688,10 @@ void RobotStateAccess::check_consistency(const Robot& r) {
   }
   for (int id = 0; id < r.lmap_.size(); ++id) {
     const LMapEntry& e = r.lmap_[id];
-    if (e.archived && (e.status != LandmarkStatus::kStatic || r.ekf_.has_landmark(id)))
+    if (e.archived && (e.status != LandmarkStatus::kStatic || r.filters_.own_.has_landmark(id)))
       fail("lmap", "landmark " + std::to_string(id) + " is archived but " +
-                       (r.ekf_.has_landmark(id) ? std::string("in the filter") : "not static"));
-    if (e.status == LandmarkStatus::kStatic && !e.archived && !r.ekf_.has_landmark(id))
+                       (r.filters_.own_.has_landmark(id) ? std::string("in the filter") : "not static"));
+    if (e.status == LandmarkStatus::kStatic && !e.archived && !r.filters_.own_.has_landmark(id))
       fail("lmap", "landmark " + std::to_string(id) + " is static but neither in the filter nor archived");
   }
 }

@@ -11,12 +11,12 @@
 
 #include <array>
 #include <cstdint>
-#include <optional>
 #include <vector>
 
 #include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/consistency.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/filter_pair.hpp"
 #include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/filter_history.hpp"
 #include "elaslam/robot_node/lmap.hpp"
@@ -177,16 +177,16 @@ class Robot {
   // ---- state ------------------------------------------------------------------
   /// The own filter: the robot's own observations only; its map is what the robot
   /// reports (events, snapshots).
-  const EkfSlam& filter() const { return ekf_; }
+  const EkfSlam& filter() const { return filters_.own(); }
   /// The robot's best estimate: the aided filter with options.team_map_fuse, else
   /// the own one. Its pose is the robot's pose (POSE).
-  const EkfSlam& estimate() const { return aided_ ? *aided_ : ekf_; }
+  const EkfSlam& estimate() const { return filters_.estimate(); }
   const TeamCounters& team_counters() const { return team_counters_; }
   const Relocalisation& last_relocalisation() const { return relocalisation_; }
   const TeamChannel& team_channel() const { return team_; }
   const LMap& lmap() const { return lmap_; }
   /// The own filter's history (options.candidate_history_frames).
-  const FilterHistory& history() const { return history_; }
+  const FilterHistory& history() const { return filters_.own_history(); }
   const RobotOptions& options() const { return options_; }
   int robot_id() const { return robot_id_; }
   bool initialised() const { return initialised_; }
@@ -226,12 +226,6 @@ class Robot {
   void restore_archived(const FrameInput& in, FrameSummary* s);
   void record_sighting(int id, const RangeBearing& z);
   void emit(EventKind kind, int id);
-  // The operations that change which landmarks are held, or that every filter must
-  // see, on the own filter and then the aided one; the own filter's status is returned.
-  EkfStatus mirror_add(int id, const RangeBearing& z, FrameSummary* s);
-  EkfStatus mirror_remove(int id);
-  UpdateReport mirror_update(int id, const RangeBearing& z, bool gate, FrameSummary* s);
-  void mirror_update_landmark_only(int id, const RangeBearing& z, FrameSummary* s);
   /// A team estimate of a landmark the aided filter holds as STATIC (else false).
   bool team_eligible(int id) const;
   /// Fuse what the team estimate adds (TeamChannel); `test`: only when it agrees.
@@ -248,26 +242,15 @@ class Robot {
   /// `aided`'s (apply_team_map); the histories, the consistency window and the
   /// trouble memory start over.
   void relocalise(const GaugeTest& own, const GaugeTest& aided);
-  EkfStatus mirror_predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt, FrameSummary* s);
-  /// The operation on the aided filter (when there is one), recorded in its history
-  /// when it succeeds, counted in s->filter_faults (when given) when not.
-  void mirror_to_aided(const FilterHistory::Op& op, FrameSummary* s);
   /// An add_landmark's status: false (counted) unless kOk.
   bool added(EkfStatus st, FrameSummary* s);
   void emit_at(EventKind kind, int id, const Eigen::Vector2d& p, const Eigen::Matrix2d& C);
 
   RobotOptions options_;
   int robot_id_;
-  EkfSlam ekf_;   // the own filter: sole owner of the mean and covariance the robot reports
-  // With team_map_fuse: the aided filter, the same operations on the same landmarks
-  // as ekf_ plus the team's increments (the mirror_* helpers keep them together).
-  std::optional<EkfSlam> aided_;
-  // Their histories (candidate_history_frames), fed by the mirror_* helpers and
-  // fuse_team_estimate.
-  FilterHistory history_;
-  FilterHistory aided_history_;
-  /// Both filters' histories start over from the filters as they are now.
-  void restart_history();
+  // The own filter (sole owner of the mean and covariance the robot reports) and,
+  // with team_map_fuse, the aided one, with their histories, kept in step.
+  FilterPair filters_;
   TeamChannel team_;
   TeamCounters team_counters_;
   Relocalisation relocalisation_;
