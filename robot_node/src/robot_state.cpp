@@ -190,6 +190,9 @@ struct RobotStateAccess {
   static json save_history(const FilterHistory& h);
   static void load_history(const json& h, const std::string& key, const EkfSlam& current, const Robot& r,
                            FilterHistory* out);
+  static FilterHistory::Op parse_op(const json& entry, const std::string& where, int first_frame, const Robot& r);
+  static void check_replay(const FilterHistory& h, const std::string& key, std::size_t parsed, const EkfSlam& current,
+                           const Robot& r);
   static json save_lmap(const LMap& m);
   static void check_header(const json& s, const RobotNode& n);
   static void load_node(const json& s, RobotNode* n);
@@ -568,73 +571,84 @@ void RobotStateAccess::load_history(const json& h, const std::string& key, const
   // Any number (a file saved with a longer window than this node's: the excess goes
   // into the lagged filter), within a structural bound.
   const json& ops = array(need(h, key, "ops"), key + ".ops", 0, kMaxHistoryOps);
-  const double bound = r.options_.limits.world_bound;
-  const int max_id = r.options_.ekf.max_landmark_id - 1;
   std::vector<FilterHistory::Op> parsed;
   int previous = 0;  // frames in order, none after the robot's last
   for (std::size_t k = 0; k < ops.size(); ++k) {
-    const std::string w = key + ".ops[" + std::to_string(k) + "]";
-    const json& j = array(ops[k], w, 3, 6);
-    FilterHistory::Op op;
-    const json& kind = j[0];
-    bool known = false;
-    for (const auto kd : {FilterHistory::Kind::kPredict, FilterHistory::Kind::kUpdate, FilterHistory::Kind::kLandmarkOnly,
-                          FilterHistory::Kind::kPosition, FilterHistory::Kind::kAdd, FilterHistory::Kind::kRemove,
-                          FilterHistory::Kind::kHeldPosition})
-      if (kind.is_string() && kind.get<std::string>() == FilterHistory::to_string(kd)) op.kind = kd, known = true;
-    if (!known) fail(w + "[0] (kind)", kind.dump() + " is not an operation");
-    op.frame = static_cast<int>(whole(j[1], w + "[1] (frame)", previous, r.last_frame_));
-    previous = op.frame;
-    const bool predict = op.kind == FilterHistory::Kind::kPredict;
-    op.id = static_cast<int>(whole(j[2], w + "[2] (id)", predict ? -1 : 0, predict ? -1 : max_id));
-    const std::size_t values = predict                                       ? 3
-                               : op.kind == FilterHistory::Kind::kPosition || op.kind == FilterHistory::Kind::kHeldPosition ? 2
-                               : op.kind == FilterHistory::Kind::kRemove   ? 0
-                                                                           : 1;
-    if (j.size() != 3 + values) fail(w, "has " + std::to_string(j.size()) + " entries, a " + FilterHistory::to_string(op.kind) + " has " + std::to_string(3 + values));
-    switch (op.kind) {
-      case FilterHistory::Kind::kPredict: {
-        const json& u = array(j[3], w + "[3] (increment)", 3, 3);
-        op.increment = {real(u[0], w + "[3][0]", -bound, bound), real(u[1], w + "[3][1]", -bound, bound),
-                        real(u[2], w + "[3][2]", -kPi - kAngleSlack, kPi + kAngleSlack)};
-        const json& U = array(j[4], w + "[4] (U)", 9, 9);
-        for (int e = 0; e < 9; ++e)
-          op.U(e / 3, e % 3) = real(U[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
-        const double scale = std::max(op.U.trace(), 1e-300);
-        if ((op.U.diagonal().array() < 0.0).any()) fail(w + "[4] (U)", "negative variance");
-        if ((op.U - op.U.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail(w + "[4] (U)", "not symmetric");
-        op.dt = real(j[5], w + "[5] (dt)", 0.0, kMaxStepSeconds);
-        break;
-      }
-      case FilterHistory::Kind::kUpdate:
-      case FilterHistory::Kind::kLandmarkOnly:
-      case FilterHistory::Kind::kAdd: {
-        const json& z = array(j[3], w + "[3] (range, bearing)", 2, 2);
-        op.z = {real(z[0], w + "[3][0] (range)", 1e-9, bound), real(z[1], w + "[3][1] (bearing)", -kPi - kAngleSlack, kPi + kAngleSlack)};
-        break;
-      }
-      case FilterHistory::Kind::kPosition:
-      case FilterHistory::Kind::kHeldPosition: {
-        op.p = vec2(j[3], w + "[3] (position)", bound);
-        const json& R = array(j[4], w + "[4] (R)", 4, 4);
-        for (int e = 0; e < 4; ++e)
-          op.R(e / 2, e % 2) = real(R[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
-        if (!(op.R(0, 0) > 0.0) || !(op.R.determinant() > 0.0) || std::fabs(op.R(0, 1) - op.R(1, 0)) > 1e-9 * op.R.trace())
-          fail(w + "[4] (R)", "not symmetric positive definite");
-        break;
-      }
-      case FilterHistory::Kind::kRemove: break;
-    }
-    parsed.push_back(op);
+    parsed.push_back(parse_op(ops[k], key + ".ops[" + std::to_string(k) + "]", previous, r));
+    previous = parsed.back().frame;
   }
   if (out->restore(x, P, slot_ids, parsed) != EkfStatus::kOk) fail(key + ".lagged.slot_ids", "a landmark id appears twice");
-  // The lagged filter and the operations held must give the saved filter (restore
-  // has put those beyond the ring into the lagged filter already).
+  check_replay(*out, key, parsed.size(), current, r);
+}
+
+// One operation of a saved history, [kind, frame, id, values...], its frame at least
+// `first_frame` and at most the robot's last.
+FilterHistory::Op RobotStateAccess::parse_op(const json& entry, const std::string& w, int first_frame, const Robot& r) {
+  const double bound = r.options_.limits.world_bound;
+  const int max_id = r.options_.ekf.max_landmark_id - 1;
+  const json& j = array(entry, w, 3, 6);
+  FilterHistory::Op op;
+  const json& kind = j[0];
+  bool known = false;
+  for (const auto kd : {FilterHistory::Kind::kPredict, FilterHistory::Kind::kUpdate, FilterHistory::Kind::kLandmarkOnly,
+                        FilterHistory::Kind::kPosition, FilterHistory::Kind::kAdd, FilterHistory::Kind::kRemove,
+                        FilterHistory::Kind::kHeldPosition})
+    if (kind.is_string() && kind.get<std::string>() == FilterHistory::to_string(kd)) op.kind = kd, known = true;
+  if (!known) fail(w + "[0] (kind)", kind.dump() + " is not an operation");
+  op.frame = static_cast<int>(whole(j[1], w + "[1] (frame)", first_frame, r.last_frame_));
+  const bool predict = op.kind == FilterHistory::Kind::kPredict;
+  op.id = static_cast<int>(whole(j[2], w + "[2] (id)", predict ? -1 : 0, predict ? -1 : max_id));
+  const std::size_t values = predict                                       ? 3
+                             : op.kind == FilterHistory::Kind::kPosition || op.kind == FilterHistory::Kind::kHeldPosition ? 2
+                             : op.kind == FilterHistory::Kind::kRemove   ? 0
+                                                                         : 1;
+  if (j.size() != 3 + values) fail(w, "has " + std::to_string(j.size()) + " entries, a " + FilterHistory::to_string(op.kind) + " has " + std::to_string(3 + values));
+  switch (op.kind) {
+    case FilterHistory::Kind::kPredict: {
+      const json& u = array(j[3], w + "[3] (increment)", 3, 3);
+      op.increment = {real(u[0], w + "[3][0]", -bound, bound), real(u[1], w + "[3][1]", -bound, bound),
+                      real(u[2], w + "[3][2]", -kPi - kAngleSlack, kPi + kAngleSlack)};
+      const json& U = array(j[4], w + "[4] (U)", 9, 9);
+      for (int e = 0; e < 9; ++e)
+        op.U(e / 3, e % 3) = real(U[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
+      const double scale = std::max(op.U.trace(), 1e-300);
+      if ((op.U.diagonal().array() < 0.0).any()) fail(w + "[4] (U)", "negative variance");
+      if ((op.U - op.U.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) fail(w + "[4] (U)", "not symmetric");
+      op.dt = real(j[5], w + "[5] (dt)", 0.0, kMaxStepSeconds);
+      break;
+    }
+    case FilterHistory::Kind::kUpdate:
+    case FilterHistory::Kind::kLandmarkOnly:
+    case FilterHistory::Kind::kAdd: {
+      const json& z = array(j[3], w + "[3] (range, bearing)", 2, 2);
+      op.z = {real(z[0], w + "[3][0] (range)", 1e-9, bound), real(z[1], w + "[3][1] (bearing)", -kPi - kAngleSlack, kPi + kAngleSlack)};
+      break;
+    }
+    case FilterHistory::Kind::kPosition:
+    case FilterHistory::Kind::kHeldPosition: {
+      op.p = vec2(j[3], w + "[3] (position)", bound);
+      const json& R = array(j[4], w + "[4] (R)", 4, 4);
+      for (int e = 0; e < 4; ++e)
+        op.R(e / 2, e % 2) = real(R[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
+      if (!(op.R(0, 0) > 0.0) || !(op.R.determinant() > 0.0) || std::fabs(op.R(0, 1) - op.R(1, 0)) > 1e-9 * op.R.trace())
+        fail(w + "[4] (R)", "not symmetric positive definite");
+      break;
+    }
+    case FilterHistory::Kind::kRemove: break;
+  }
+  return op;
+}
+
+// The lagged filter and the operations held must give the saved filter (restore has
+// put those beyond the ring into the lagged filter already); `parsed`: the
+// operations the file listed.
+void RobotStateAccess::check_replay(const FilterHistory& h, const std::string& key, std::size_t parsed,
+                                    const EkfSlam& current, const Robot& r) {
   EkfSlam replay(r.options_.ekf);
-  replay.assign(*out->lagged());
-  const std::size_t first_held = parsed.size() - static_cast<std::size_t>(out->held());
-  for (int k = 0; k < out->held(); ++k)
-    if (!FilterHistory::apply(out->op(k), &replay))
+  replay.assign(*h.lagged());
+  const std::size_t first_held = parsed - static_cast<std::size_t>(h.held());
+  for (int k = 0; k < h.held(); ++k)
+    if (!FilterHistory::apply(h.op(k), &replay))
       fail(key + ".ops[" + std::to_string(first_held + static_cast<std::size_t>(k)) + "]", "the lagged filter refuses it");
   bool same = replay.num_landmarks() == current.num_landmarks();
   for (int slot = 0; same && slot < current.num_landmarks(); ++slot) same = replay.id_at(slot) == current.id_at(slot);

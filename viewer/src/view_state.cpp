@@ -220,59 +220,53 @@ bool ViewState::on_candidates(const candidate_list_t& m) {
   return true;
 }
 
-std::string ViewState::to_json(double now_s, const std::string& viewer_counters_json) const {
-  nlohmann::json j;
-  j["frame"] = frame_;
-  j["frames_total"] = frames_total_;
-  j["world"] = nullptr;
-  nlohmann::json robots = nlohmann::json::array();
-  for (const auto& [id, r] : robots_) {
-    if (!r.has_pose && !r.has_status && !r.has_truth) continue;
-    nlohmann::json o;
-    o["id"] = id;
-    o["frame"] = r.frame;
-    if (r.has_pose) {
-      o["x"] = r.x, o["y"] = r.y, o["theta"] = r.theta;
-      o["cov"] = {r.cxx, r.cxy, r.cyy};
-    } else {
-      o["x"] = o["y"] = o["theta"] = o["cov"] = nullptr;
-    }
-    o["trail"] = trail_json(r.trail);
-    if (r.has_truth) {
-      o["truth"] = {{"x", r.tx}, {"y", r.ty}, {"theta", r.ttheta}};
-    } else {
-      o["truth"] = nullptr;
-    }
-    o["truth_trail"] = trail_json(r.truth_trail);
-    if (r.has_status) {
-      const node_status_t& s = r.status;
-      // Counters are >= 0 (on_status); their sum saturates (a forged STATUS may say 2^63 - 1).
-      std::int64_t refused = s.auth_refused;
-      for (std::int64_t n : s.refused) refused = n > INT64_MAX - refused ? INT64_MAX : refused + n;
-      o["health"] = {{"frames", s.frames},
-                     {"frames_dropped", s.frames_dropped},
-                     {"refused", refused},
-                     {"decode_errors", s.decode_errors},
-                     {"faults", faults_json(s.fault_flags)},
-                     {"queue_drops", s.queue_drops},
-                     {"filter_faults", s.filter_faults},
-                     {"latency_p50_us", s.processing_us_p50},
-                     {"latency_p99_us", s.processing_us_p99},
-                     {"status_age_s", now_s - r.status_s},
-                     {"odometry", {{"turn_scale", s.odom_turn_scale},
-                                   {"turn_scale_sigma", s.odom_turn_scale_sigma},
-                                   {"speed_scale", s.odom_speed_scale},
-                                   {"speed_scale_sigma", s.odom_speed_scale_sigma},
-                                   {"turn_bias_rad_s", s.odom_turn_bias_rad_s},
-                                   {"turn_bias_sigma_rad_s", s.odom_turn_bias_sigma_rad_s}}}};
-    } else {
-      o["health"] = nullptr;
-    }
-    robots.push_back(std::move(o));
+nlohmann::json ViewState::robot_json(int id, const Robot& r, double now_s) {
+  nlohmann::json o;
+  o["id"] = id;
+  o["frame"] = r.frame;
+  if (r.has_pose) {
+    o["x"] = r.x, o["y"] = r.y, o["theta"] = r.theta;
+    o["cov"] = {r.cxx, r.cxy, r.cyy};
+  } else {
+    o["x"] = o["y"] = o["theta"] = o["cov"] = nullptr;
   }
-  j["robots"] = std::move(robots);
-  // Candidates: not static in the map (new, or back after moving: the candidate
-  // replaces the moving entry), seen by a robot lately; the first robot's is drawn.
+  o["trail"] = trail_json(r.trail);
+  if (r.has_truth) {
+    o["truth"] = {{"x", r.tx}, {"y", r.ty}, {"theta", r.ttheta}};
+  } else {
+    o["truth"] = nullptr;
+  }
+  o["truth_trail"] = trail_json(r.truth_trail);
+  if (!r.has_status) {
+    o["health"] = nullptr;
+    return o;
+  }
+  const node_status_t& s = r.status;
+  // Counters are >= 0 (on_status); their sum saturates (a forged STATUS may say 2^63 - 1).
+  std::int64_t refused = s.auth_refused;
+  for (std::int64_t n : s.refused) refused = n > INT64_MAX - refused ? INT64_MAX : refused + n;
+  o["health"] = {{"frames", s.frames},
+                 {"frames_dropped", s.frames_dropped},
+                 {"refused", refused},
+                 {"decode_errors", s.decode_errors},
+                 {"faults", faults_json(s.fault_flags)},
+                 {"queue_drops", s.queue_drops},
+                 {"filter_faults", s.filter_faults},
+                 {"latency_p50_us", s.processing_us_p50},
+                 {"latency_p99_us", s.processing_us_p99},
+                 {"status_age_s", now_s - r.status_s},
+                 {"odometry", {{"turn_scale", s.odom_turn_scale},
+                               {"turn_scale_sigma", s.odom_turn_scale_sigma},
+                               {"speed_scale", s.odom_speed_scale},
+                               {"speed_scale_sigma", s.odom_speed_scale_sigma},
+                               {"turn_bias_rad_s", s.odom_turn_bias_rad_s},
+                               {"turn_bias_sigma_rad_s", s.odom_turn_bias_sigma_rad_s}}}};
+  return o;
+}
+
+// Candidates: not static in the map (new, or back after moving: the candidate
+// replaces the moving entry), seen by a robot lately; the first robot's is drawn.
+nlohmann::json ViewState::landmarks_json() const {
   struct Drawn {
     int robot;
     const std::array<double, 6>* c;  // id, x, y, cxx, cxy, cyy
@@ -313,7 +307,19 @@ std::string ViewState::to_json(double now_s, const std::string& viewer_counters_
                    {"status", "candidate"},
                    {"contributors", {d.robot}}});
   }
-  j["landmarks"] = std::move(lms);
+  return lms;
+}
+
+std::string ViewState::to_json(double now_s, const std::string& viewer_counters_json) const {
+  nlohmann::json j;
+  j["frame"] = frame_;
+  j["frames_total"] = frames_total_;
+  j["world"] = nullptr;
+  nlohmann::json robots = nlohmann::json::array();
+  for (const auto& [id, r] : robots_)
+    if (r.has_pose || r.has_status || r.has_truth) robots.push_back(robot_json(id, r, now_s));
+  j["robots"] = std::move(robots);
+  j["landmarks"] = landmarks_json();
   nlohmann::json truth = nlohmann::json::array();
   for (const TruthLandmark& t : truth_landmarks_)
     truth.push_back({{"id", t.id}, {"x", t.x}, {"y", t.y}, {"moving", t.moving}});

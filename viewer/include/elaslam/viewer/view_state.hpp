@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "elaslam/candidate_list_t.hpp"
 #include "elaslam/common/contract.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
@@ -100,6 +102,10 @@ class ViewState {
   void see_source_frame(int frame);
   Robot& robot(int id) { return robots_[id]; }
   void push_trail(std::deque<std::array<double, 2>>* t, double x, double y) const;
+  // Parts of to_json: each robot's entry; the map's landmarks with the candidates
+  // drawn in the places that are not static in the map.
+  static nlohmann::json robot_json(int id, const Robot& r, double now_s);
+  nlohmann::json landmarks_json() const;
 
   ViewLimits limits_;
   int frame_ = -1;
