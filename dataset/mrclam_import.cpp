@@ -17,6 +17,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/dataset/cli_overrides.hpp"
 #include "elaslam/dataset/mrclam.hpp"
 #include "elaslam/run_info_t.hpp"
 
@@ -83,36 +84,24 @@ run_info_t run_info(const mrclam::FrameSource& src, const mrclam::Options& o, co
 }
 
 struct Args {
-  std::string dataset_dir, config_path, robots, out_path;
-  double rate = 0.0, start = 0.0, duration = 0.0;
-  bool rate_given = false, start_given = false, duration_given = false;  // the options given override the config
+  std::string dataset_dir, config_path, out_path;
+  mrclam::DatasetOverrides overrides;  // --rate, --start, --duration, --robots
   bool with_robot_barcodes = false, check = false;
 };
 
 /// -1 to go on, else the exit code.
 int parse_args(int argc, char** argv, Args* a) {
-  namespace lim = mrclam::limits;
   CLI::App app{"elaslam mrclam_import: a UTIAS MRCLAM recording as an LCM log (SENSOR_<id>, GROUND_TRUTH)"};
   app.add_option("--dataset", a->dataset_dir, "dataset directory (RobotN_*.dat, Barcodes.dat, ...)")
       ->required()
       ->check(CLI::ExistingDirectory);
   cli::add_version_flag(app, "mrclam_import");
   cli::add_config_option(app, &a->config_path, "its dataset: section", "mrclam.yaml");
-  auto* rate = app.add_option("--rate", a->rate, "frames per second (default dataset.rate_hz)")
-                    ->check(cli::range(lim::kRateMinHz, lim::kRateMaxHz));
-  app.add_option("--robots", a->robots, "robots to import, e.g. 1,2,3,4,5 (default dataset.robots)");
+  mrclam::add_options(app, &a->overrides);
   app.add_flag("--with-robot-barcodes", a->with_robot_barcodes, "keep other robots' barcodes as moving landmarks");
-  auto* start = app.add_option("--start", a->start, "[s] first frame after the common start (default dataset.start_s)")
-                     ->check(cli::range(0.0, lim::kStartMaxS));
-  auto* duration =
-      app.add_option("--duration", a->duration, "[s] length, 0 = to the common end (default dataset.duration_s)")
-          ->check(cli::range(0.0, lim::kDurationMaxS));
   app.add_option("--out", a->out_path, "output LCM log")->required();
   app.add_flag("--check", a->check, "check the configuration with the overrides and exit (0: valid); reads no data");
   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
-  a->rate_given = rate->count() > 0;
-  a->start_given = start->count() > 0;
-  a->duration_given = duration->count() > 0;
   return -1;
 }
 
@@ -121,12 +110,9 @@ int parse_args(int argc, char** argv, Args* a) {
 bool options(Args* a, mrclam::Options* o, std::string* effective_yaml) {
   a->config_path = cli::find_config(a->config_path, "mrclam.yaml").path;
   *o = mrclam::load_options(a->config_path, effective_yaml);
-  if (a->rate_given) o->rate_hz = a->rate;
-  if (a->start_given) o->start_s = a->start;
-  if (a->duration_given) o->duration_s = a->duration;
   if (a->with_robot_barcodes) o->with_robot_barcodes = true;
   std::string why;
-  if (!a->robots.empty() && !mrclam::parse_robot_list(a->robots, &o->robots, &why)) {
+  if (!mrclam::apply(a->overrides, o, &why)) {
     std::fprintf(stderr, "mrclam_import: --robots: %s\n", why.c_str());
     return false;
   }

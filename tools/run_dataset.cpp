@@ -26,6 +26,7 @@
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
+#include "elaslam/dataset/cli_overrides.hpp"
 #include "elaslam/team/dataset_run.hpp"
 #include "elaslam/team/report.hpp"
 
@@ -160,10 +161,9 @@ void write_report(const std::string& path, const mrclam::FrameSource& src, const
 }
 
 struct Args {
-  std::string dataset_dir, config_path, mode, out_dir, robots_text, modes_text = "ekf,gated,ela,consensus";
+  std::string dataset_dir, config_path, mode, out_dir, modes_text = "ekf,gated,ela,consensus";
   bool barcodes = false, report = false, no_plots = false, check = false;
-  double rate = 0.0, start = 0.0, duration = 0.0;
-  bool rate_given = false, start_given = false, duration_given = false;  // the options given override the config
+  mrclam::DatasetOverrides overrides;  // --rate, --start, --duration, --robots
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 };
 
@@ -177,13 +177,7 @@ int parse_args(int argc, char** argv, Args* a) {
   app.add_option("--mode", a->mode, "ekf, gated, ela or consensus (default: robot.mode)")
       ->check(CLI::IsMember({"ekf", "gated", "ela", "consensus"}));
   app.add_flag("--with-robot-barcodes", a->barcodes, "keep other robots' barcodes (moving landmarks)");
-  app.add_option("--robots", a->robots_text, "robots to use, e.g. 1,2,3,4,5 (default: dataset.robots)");
-  namespace lim = mrclam::limits;
-  auto* rate = app.add_option("--rate", a->rate, "frames per second")->check(cli::range(lim::kRateMinHz, lim::kRateMaxHz));
-  auto* start = app.add_option("--start", a->start, "first frame this many seconds after the common start")
-                     ->check(cli::range(0.0, lim::kStartMaxS));
-  auto* duration = app.add_option("--duration", a->duration, "seconds to run (0: to the end)")
-                        ->check(cli::range(0.0, lim::kDurationMaxS));
+  mrclam::add_options(app, &a->overrides);
   app.add_flag("--report", a->report, "every mode without and with robot barcodes, and report.md");
   app.add_option("--modes", a->modes_text, "modes for --report");
   app.add_option("--jobs", a->jobs, "parallel runs for --report")->check(cli::range(1, 256));
@@ -191,9 +185,6 @@ int parse_args(int argc, char** argv, Args* a) {
   app.add_flag("--no-plots", a->no_plots, "do not call tools/plot_dataset.py (paths.png per run)");
   app.add_flag("--check", a->check, "check the configuration with the overrides and exit (0: valid); reads no data");
   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
-  a->rate_given = rate->count() > 0;
-  a->start_given = start->count() > 0;
-  a->duration_given = duration->count() > 0;
   return -1;
 }
 
@@ -208,13 +199,10 @@ bool configure(Args* a, DatasetConfig* cfg, std::vector<std::string>* modes) {
     std::fprintf(stderr, "run_dataset: warning: %s\n", advice.c_str());
   mrclam::Options& o = cfg->dataset;
   std::string why;
-  if (!a->robots_text.empty() && !mrclam::parse_robot_list(a->robots_text, &o.robots, &why)) {
+  if (!mrclam::apply(a->overrides, &o, &why)) {
     std::fprintf(stderr, "run_dataset: --robots: %s\n", why.c_str());
     return false;
   }
-  if (a->rate_given) o.rate_hz = a->rate;
-  if (a->start_given) o.start_s = a->start;
-  if (a->duration_given) o.duration_s = a->duration;
   if (!a->report) {
     modes->push_back(a->mode.empty() ? to_string(cfg->robot.mode) : a->mode);
     return true;
