@@ -14,6 +14,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/robot_node/state_keeper.hpp"
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/world.hpp"
 #include "elaslam/team/frame_data.hpp"
@@ -155,6 +156,9 @@ class InProcessTeam {
   std::vector<std::unique_ptr<NodeShell>> robot_shells_;
   std::vector<RobotNode> robots_;  // reserved: the ports hold references
   std::vector<std::unique_ptr<RobotPorts<NodeShell>>> robot_ports_;
+  // The restart policy robot_node runs, without a state file: a sensor source that
+  // starts over (a provider that replays) restarts the robot as the process would.
+  std::vector<StateKeeper> keepers_;
   NodeShell world_;  // the frame source and the recorder
   int frame_ = 0;
   std::int64_t first_utime_ = 0;
@@ -185,11 +189,13 @@ InProcessTeam::InProcessTeam(const RobotOptions& robot_options, const GlobalMapO
   // main_robot, the robots in order (DYNAMIC_NOTICE), the recorder.
   main_ports_.open();
   robots_.reserve(R);
+  keepers_.reserve(R);
   for (int i = 0; i < num_robots_; ++i) {
     const int id = frames.robot_id(i);
     robot_shells_.push_back(std::make_unique<NodeShell>(bus_, quiet("robot_node " + std::to_string(id))));
     RobotNode& node = robots_.emplace_back(robot_options, id);
     auto& ports = *robot_ports_.emplace_back(std::make_unique<RobotPorts<NodeShell>>(*robot_shells_.back(), node));
+    keepers_.emplace_back(std::string(), robot_options, &node, /*resumed=*/false, node.incarnation(), /*mission=*/0);
     ports.open();
     ports.after_frame([this](const RobotNode& n) {  // observations that corrected the pose, by landmark
       for (const GateRecord& g : n.robot().gate_records())
@@ -246,6 +252,7 @@ void InProcessTeam::run_frame(int k) {
     world_.publish(channels::sensor(frames_.robot_id(i)), sensor_);
   }
   bus_.dispatch_all();  // robots -> main_robot -> notices -> robots
+  for (StateKeeper& keeper : keepers_) keeper.turn();
   main_ports_.publish_map(k);
   bus_.dispatch_all();  // -> the recorder
   acc_.add(f_);

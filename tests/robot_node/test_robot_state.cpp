@@ -691,7 +691,7 @@ TEST_F(RobotStateCorrupt, AnotherRobotsOrAnotherConfigurationsStateIsRefused) {
   d["format"] = "elaslam.global_map";
   expect_refused(d.dump(), "format");
   // A file of the layout before the odometer's calibration states (version 1) or of
-  // a later one: refused, the robot starts fresh (robot_node/main.cpp).
+  // a later one: refused, the robot starts fresh (StateKeeper, state_keeper.hpp).
   for (int version : {1, 3}) {
     d = doc_;
     d["version"] = version;
