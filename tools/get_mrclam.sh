@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 # Put the UTIAS MRCLAM recording the project's real-data figures use (dataset6) at
 # data/mrclam/dataset6 inside the repository, and check every file against the
-# checksums in tools/mrclam_dataset6.sha256 (the copy every figure in README.md and
+# checksums in tools/mrclam_dataset6.sha256 (the copy every figure in docs/results.md and
 # docs/mrclam.md was measured on).
 #
 #   tools/get_mrclam.sh [--from DIR] [--zip FILE] [--url URL] [--out DIR] [--check]

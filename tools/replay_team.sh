@@ -18,7 +18,7 @@
 #   terminal it stays up after the summary until Enter is pressed.
 # - As root the team runs in a private network namespace (tools/netns_run.sh; LCM
 #   port P, default 7667) and the viewer's page is served on the host's loopback.
-#   Not as root: LCM_DEFAULT_URL (multicast on loopback must be enabled, README).
+#   Not as root: LCM_DEFAULT_URL (multicast on loopback must be enabled, docs/usage.md).
 # - --channel-groups (or the config's team.channel_groups: true): the nodes open one
 #   LCM port per channel group (tools/lcm_groups.sh); the log is played by one
 #   lcm-logplayer per group (started together: each keeps the log's timing) and

@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Every command of README.md works: the README tests (tests/readme/README.md).
+"""Every command of README.md and of the docs pages it leads to works: the README
+tests (tests/readme/README.md). The pages, read in this order as one README:
+README.md, docs/usage.md, docs/results.md (PAGES in this file); "README commands"
+are theirs.
 
-  readme_check.py extract [--source DIR] [--build DIR]
-      print the commands found in README.md, one a line
+  readme_check.py extract [--source DIR] [--build DIR] [--where]
+      print the commands found in the pages, one a line, in the pages' order
+      (--where: each after the first page that has it and a tab)
   readme_check.py check [--source DIR] [--build DIR]
-      the table (tests/readme/commands.txt) against the README: every README
-      command has an entry, every entry matches a README command (exit 1 if not)
+      the table (tests/readme/commands.txt) against the pages: every command
+      has an entry, every entry matches a command of a page (exit 1 if not)
   readme_check.py run --build DIR [--source DIR] [--scratch DIR] [--only REGEX] [--fresh]
       check, then run every entry in a scratch copy of the repository root (with
       --fresh: a git clone of its HEAD, nothing built, in README order) and
@@ -31,6 +35,16 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+
+# The pages whose commands the README test runs, in the order a new user follows
+# them: README.md (the quick start), then docs/usage.md (the team's options, the
+# viewer, real data, recordings, deployment, every program, the tests), then
+# docs/results.md (the experiments behind every figure). Their commands are read
+# as one README: one list without duplicates, one table (commands.txt), one order
+# (a command that uses build/bin/X comes after the command that builds it, on any
+# page before it or earlier on its own). Other docs pages' commands are examples
+# for their readers, not run here.
+PAGES = ("README.md", "docs/usage.md", "docs/results.md")
 
 # ---- what a README command is ----------------------------------------------------
 # First words of an inline code span that make it a command (see tests/readme/README.md).
@@ -92,10 +106,36 @@ def span_is_command(span, source, programs):
             or first in programs)
 
 
-def readme_commands(source, programs):
-    """The README's commands in order of appearance, without duplicates."""
-    with open(os.path.join(source, "README.md"), encoding="utf-8") as f:
-        lines = f.read().split("\n")
+def read_page(source, page):
+    path = os.path.join(source, page)
+    try:
+        with open(path, encoding="utf-8") as f:
+            return f.read()
+    except OSError as e:
+        raise SystemExit(f"readme_check: cannot read {page}, one of the README test's pages: {e}")
+
+
+def readme_commands(source, programs, pages=PAGES):
+    """The pages' commands, page by page in PAGES order, each page's in order of
+    appearance (its fenced commands, then its inline ones), without duplicates."""
+    found = []
+    for page in pages:
+        found += page_commands(read_page(source, page), source, programs)
+    return list(dict.fromkeys(normalize(c) for c in found))
+
+
+def command_pages(source, programs, pages=PAGES):
+    """{command: the first page that has it}."""
+    where = {}
+    for page in pages:
+        for c in page_commands(read_page(source, page), source, programs):
+            where.setdefault(normalize(c), page)
+    return where
+
+
+def page_commands(page_text, source, programs):
+    """One page's commands in order of appearance: the fenced ones, then the inline ones."""
+    lines = page_text.split("\n")
     found, prose = [], []
     fence, shell_block, pending = None, False, ""
     for line in lines:
@@ -127,7 +167,7 @@ def readme_commands(source, programs):
         span = normalize(m.group(1))
         if span_is_command(span, source, programs):
             found.append(span)
-    return list(dict.fromkeys(normalize(c) for c in found))
+    return found
 
 
 # ---- the table -------------------------------------------------------------------
@@ -228,11 +268,11 @@ def run_team_targets(source):
 NEEDS_FULL_BUILD = ("tools/decode_log.py",)
 
 
-def order_problems(source, cmds):
-    """The README read in order by a new user on a fresh clone: every build/bin/<name>
-    a command uses must be built by an earlier command. Returns the problems."""
-    with open(os.path.join(source, "README.md"), encoding="utf-8") as f:
-        text = normalize(f.read())
+def order_problems(source, cmds, pages=PAGES):
+    """The pages read in order (PAGES) by a new user on a fresh clone: every
+    build/bin/<name> a command uses must be built by an earlier command. Returns
+    the problems."""
+    text = normalize("\n".join(read_page(source, page) for page in pages))
     pos = {c: (text.find(c) if text.find(c) >= 0 else len(text)) for c in cmds}
     team_targets = run_team_targets(source)
     built, everything, problems = set(), False, []
@@ -240,9 +280,9 @@ def order_problems(source, cmds):
         if not everything:
             for prog in re.findall(r"(?<![\w/.])build/bin/([\w-]+)", c):
                 if prog not in built:
-                    problems.append(f"`{c}` uses build/bin/{prog}, which no earlier README command builds")
+                    problems.append(f"`{c}` uses build/bin/{prog}, which no earlier command builds")
             if c.startswith(NEEDS_FULL_BUILD):
-                problems.append(f"`{c}` needs the whole build, which no earlier README command makes")
+                problems.append(f"`{c}` needs the whole build, which no earlier command makes")
         if re.match(r"tools/run_team\.sh(\s|$)", c):
             built |= team_targets
         if (re.match(r"(tools/run_tests\.sh|cmake --build build)(\s|$)", c) and
@@ -252,7 +292,9 @@ def order_problems(source, cmds):
 
 
 def check(source, build, table):
-    cmds = readme_commands(source, project_programs(source))
+    programs = project_programs(source)
+    cmds = readme_commands(source, programs)
+    where = command_pages(source, programs)
     entries = read_table(table)
     mapped = {e.text for e in entries if e.kind == "readme"}
     missing = [c for c in cmds if c not in mapped]
@@ -264,11 +306,12 @@ def check(source, build, table):
         ok = False
         print(f"README commands without an entry in {shown(table, source)} (add them):")
         for c in missing:
-            print(f"\nreadme: {c}\nrun: =")
+            print(f"\n# {where[c]}\nreadme: {c}\nrun: =")
         print()
     if stale:
         ok = False
-        print(f"stale entries in {shown(table, source)} (no such README command; update or remove):")
+        print(f"stale entries in {shown(table, source)} (no such command in {', '.join(PAGES)}; "
+              "update or remove):")
         for e in stale:
             print(f"  line {e.line}: readme: {e.text}")
     if dup:
@@ -277,10 +320,12 @@ def check(source, build, table):
     order = order_problems(source, cmds)
     if order:
         ok = False
-        print("README commands out of order (a new user running them top to bottom on a fresh clone fails):")
+        print(f"README commands out of order (a new user running them top to bottom, {' then '.join(PAGES)}, "
+              "on a fresh clone fails):")
         for p in order:
             print("  " + p)
-    print(f"README commands: {len(cmds)}; table entries: {len(entries)} "
+    per_page = ", ".join(f"{p} {sum(1 for c in cmds if where[c] == p)}" for p in PAGES)
+    print(f"README commands: {len(cmds)} ({per_page}); table entries: {len(entries)} "
           f"({sum(1 for e in entries if e.kind == 'extra')} extra)" + ("" if ok else ": MISMATCH"))
     return ok, entries
 
@@ -516,6 +561,8 @@ def main():
                            help="run the commands in a git clone of the source's HEAD with nothing built "
                                 "(a new user's order: the first command builds what the team needs, "
                                 "`cmake --build build` the rest); needs root")
+        if name == "extract":
+            s.add_argument("--where", action="store_true", help="each command after its page and a tab")
         if name == "help":
             s.add_argument("--timeout", type=float, default=30.0, help="per command [s]")
     args = ap.parse_args()
@@ -524,8 +571,11 @@ def main():
               "e.g. tools/run_tests.sh running ctest)")
         return 77
     if args.cmd == "extract":
-        for c in readme_commands(os.path.abspath(args.source), project_programs(os.path.abspath(args.source))):
-            print(c)
+        source = os.path.abspath(args.source)
+        programs = project_programs(source)
+        where = command_pages(source, programs)
+        for c in readme_commands(source, programs):
+            print(f"{where[c]}\t{c}" if args.where else c)
         return 0
     if args.cmd == "check":
         return 0 if check(os.path.abspath(args.source), args.build, args.table)[0] else 1
