@@ -4,8 +4,10 @@
 # tools/setup.sh --with-test-tools), build, run every test (ctest).
 #   tools/run_tests.sh [--sanitize] [CTEST ARGS...]     e.g. -L unit, -LE system, -R Ekf
 # --sanitize: the same in build/sanitize with AddressSanitizer + UBSan.
-# Labels: unit, system (processes over LCM in network namespaces; root), package
-# (install, Debian packages, systemd units), readme (every command of README.md, docs/usage.md, docs/results.md).
+# Labels: unit, golden (seeded results against tests/golden/reference), system
+# (processes over LCM in network namespaces; root), package (install, Debian
+# packages, systemd units), readme (every command of README.md, docs/usage.md,
+# docs/results.md).
 # Exit status: ctest's (0 when every test passed); 2 on a bad argument.
 set -euo pipefail
 case "${1:-}" in

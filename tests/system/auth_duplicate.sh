@@ -14,6 +14,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 PY="$ROOT/.venv/bin/python"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=60
+# shellcheck source=tests/system/wait_for.sh
+. "$ROOT/tests/system/wait_for.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
   BUILD="$2" OUT="$3" KEYS="$4"
@@ -37,7 +39,13 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEY
   "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD" wait-frame POSE_2 10 > /dev/null
   "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_2.key" --robot 2 > "$OUT/robot_2b.log" 2>&1 & PIDS+=($!)
   wait $SIM || rc=$?
-  sleep 0.5
+  # Before the recorder stops: it has recorded main_robot's GLOBAL_MAP of the last
+  # frame, which goes out once every robot's POSE and events of that frame are in (so
+  # the recorder got those first: one host, datagrams in send order) and again on
+  # main's timer (one lost datagram does not stall the wait).
+  wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame ($((FRAMES - 1)))" \
+    "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame $((FRAMES - 1)) GLOBAL_MAP ||
+    rc=1
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   for p in "${PIDS[@]}"; do wait "$p" || true; done
   PIDS=()

@@ -23,6 +23,8 @@ CONFIG="$ROOT/config/paper.yaml"
 DUP_FRAME=${DUP_FRAME:-30}
 WITHIN=${WITHIN:-30}
 PY="$ROOT/.venv/bin/python"
+# shellcheck source=tests/system/wait_for.sh
+. "$ROOT/tests/system/wait_for.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   BUILD="$2" OUT="$3"
@@ -43,7 +45,12 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   robot 2 robot_node_2b  # the same command again, while the first one runs
   rc=0
   wait "$SIM" || { echo "duplicate_sender: simulator failed"; rc=1; }
-  sleep 0.3  # the last frame's messages reach the logger
+  # Before the logger stops: it has recorded main_robot's GLOBAL_MAP of the last
+  # frame, which goes out once every robot's POSE and events of that frame are in (so
+  # the logger got those first: one host, datagrams in send order) and again on
+  # main's timer (one lost datagram does not stall the wait).
+  wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame (99)" \
+    "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame 99 GLOBAL_MAP || rc=1
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   for p in "${PIDS[@]}"; do wait "$p" || { echo "duplicate_sender: process $p exited with an error"; rc=1; }; done
   PIDS=()

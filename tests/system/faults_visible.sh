@@ -3,7 +3,8 @@
 # System test `system_faults` (docs/faults.md, "Faults an operator sees"): conditions
 # that used to leave every STATUS at faults=0 are flagged and said, over LCM in a
 # private namespace, with the team's keys:
-#   - main_robot down for the first 8 s of the run: the robots flag FAULT_MAIN_SILENT
+#   - main_robot down until both robots have said it is silent (node.main_silent_s
+#     after their start) and sent a STATUS since: the robots flag FAULT_MAIN_SILENT
 #     and say so; main started late: "heard again" and FAULT_PARTITION_HEALED;
 #   - robot 1's state file cannot be saved (its directory does not exist):
 #     FAULT_SAVE_FAILED and one "cannot save its state" line;
@@ -18,6 +19,11 @@ HERE="$ROOT/tests/system"
 PY="$ROOT/.venv/bin/python"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=150
+# shellcheck source=tests/system/wait_for.sh
+. "$HERE/wait_for.sh"
+# Both robots have said that main_robot is silent (node.main_silent_s after their start).
+said_silent() { grep -q "FAULT: robot 1 has not heard main_robot" "$1/robot_1.log" &&
+                grep -q "FAULT: robot 2 has not heard main_robot" "$1/robot_2.log"; }
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
   BUILD="$2" OUT="$3" KEYS="$4"
@@ -35,10 +41,20 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEY
   "$B/simulator" "${K[@]}" --key-file "$KEYS/simulator.key" --frames $FRAMES --wait-for-nodes 2 \
     > "$OUT/simulator.log" 2>&1 &
   SIM=$!
-  sleep 8  # the robots run without main_robot
+  # The robots run without main_robot until both have said so and the recording holds
+  # a STATUS of each sent after that (FAULT_MAIN_SILENT in it: main is still down).
+  wait_for 60 "both robots' 'has not heard main_robot' line" said_silent "$OUT" || exit 1
+  since=${EPOCHREALTIME//[.,]/}
+  wait_for 10 "the recording of a STATUS of robots 1 and 2 after they said main_robot was silent" \
+    "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --since "$since" --frame 0 \
+    STATUS_ROBOT_1 STATUS_ROBOT_2 || exit 1
   "$B/main_robot" "${K[@]}" --key-file "$KEYS/main.key" > "$OUT/main_robot.log" 2>&1 & PIDS+=($!)
   wait $SIM || rc=$?
-  sleep 1.5  # a last STATUS of everyone
+  # A last STATUS of everyone, recorded after the run's last frame.
+  since=${EPOCHREALTIME//[.,]/}
+  wait_for 10 "the recording of a STATUS of robots 1, 2 and main_robot after the last frame" \
+    "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --since "$since" --frame 0 \
+    STATUS_ROBOT_1 STATUS_ROBOT_2 STATUS_MAIN || rc=1
   kill -TERM $ATTACKER 2>/dev/null || true  # (a background job ignores SIGINT)
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   wait $ATTACKER || true

@@ -14,6 +14,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 CONFIG="$ROOT/config/paper.yaml"
 PY="$ROOT/.venv/bin/python"
 CHECK="$ROOT/tests/system/lcm_check.py"
+# shellcheck source=tests/system/wait_for.sh
+. "$ROOT/tests/system/wait_for.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   BUILD="$2" OUT="$3"
@@ -34,8 +36,13 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   "$PY" "$CHECK" --build-dir "$BUILD" wait-frame POSE_1 50 --timeout 60 > /dev/null
   robot 2; PIDS+=($!)
   wait "$SIM"
-  sleep 0.3  # the last frame's messages reach the logger
   rc=0
+  # Before the logger stops: it has recorded main_robot's GLOBAL_MAP of the last
+  # frame, which goes out once every robot's POSE and events of that frame are in (so
+  # the logger got those first: one host, datagrams in send order) and again on
+  # main's timer (one lost datagram does not stall the wait).
+  wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame (79)" \
+    "$PY" "$CHECK" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame 79 GLOBAL_MAP || rc=1
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   for p in "${PIDS[@]}"; do wait "$p" || rc=1; done
   PIDS=()

@@ -8,6 +8,13 @@ generated Python types (BUILD/lcmgen/python).
       wait until N distinct nodes published STATUS_* (robots + main) on LCM_DEFAULT_URL
   lcm_check.py --build-dir B wait-frame CHANNEL FRAME [--timeout S]
       wait until a pose_estimate_t on CHANNEL reaches FRAME
+  lcm_check.py --build-dir B logged LOG [--frame F] [--since UTIME] CHANNEL...
+      one look at a recording that may still be being written (lcm-logger and
+      record flush every 100 ms): exit 0 when it holds a message on every CHANNEL
+      (a regular expression, matched whole), with --frame one of frame F or later,
+      with --since one recorded at or after UTIME (us since the epoch, the
+      recorder's clock); else 1, naming what is missing. The system tests poll it with wait_for
+      (tests/system/wait_for.sh) before they stop a recorder.
   lcm_check.py --build-dir B compare-poses LOG_A LOG_B --robots 1 2 3 --frames N [--tol T]
       POSE_<r> of both logs, by (robot, frame): every frame present once in both,
       max |dx|, |dy|, |dtheta| and covariance below T while the robot's input
@@ -153,6 +160,61 @@ def cmd_wait_frame(args, T):
         return 1
     print(best[0])
     return 0
+
+
+def cmd_logged(args, T):
+    lcm = _need("lcm")
+    # Each message type by its fingerprint, to read the frame of any channel's message.
+    types = {}
+    for name in dir(T):
+        fingerprint = getattr(getattr(T, name), "_get_packed_fingerprint", None)
+        if fingerprint is not None:
+            types[fingerprint()] = getattr(T, name)
+
+    def frame_of(data):
+        """The message's frame; None for a type this build does not know, one without
+        a frame, or bytes that do not decode (a forger's datagram is recorded too)."""
+        cls = types.get(data[:8])
+        try:
+            return getattr(cls.decode(data), "frame", None) if cls is not None else None
+        except Exception:  # noqa: BLE001  (whatever the generated decoder raises on bad bytes)
+            return None
+
+    wanted = [(c, re.compile(c)) for c in args.channels]
+    newest = {c: None for c in args.channels}  # the newest frame seen (True: seen, without --frame)
+    unknown = {c: 0 for c in args.channels}
+    if not os.path.exists(args.log):
+        print(f"logged: no {args.log} yet")
+        return 1
+
+    def satisfied(c):
+        return newest[c] is True or (newest[c] is not None and args.frame is not None and newest[c] >= args.frame)
+
+    # The last event may be half written: the reader stops before it.
+    for ev in lcm.EventLog(args.log, "r"):
+        if args.since is not None and ev.timestamp < args.since:
+            continue
+        for c, pattern in wanted:
+            if satisfied(c) or not pattern.fullmatch(ev.channel):
+                continue
+            if args.frame is None:
+                newest[c] = True
+                continue
+            frame = frame_of(ev.data)
+            if frame is None:
+                unknown[c] += 1
+            else:
+                newest[c] = frame if newest[c] is None else max(newest[c], frame)
+    missing = [c for c in args.channels if not satisfied(c)]
+    for c in missing:
+        seen = "nothing with a frame recorded" if newest[c] is None else f"newest frame {newest[c]}, wanted {args.frame}"
+        if args.frame is None:
+            seen = "nothing recorded"
+        if args.since is not None:
+            seen += f" since {args.since}"
+        print(f"logged: {c}: {seen}" + (f" ({unknown[c]} messages of an unknown type, without a frame or not decoding)"
+                                         if unknown[c] else ""))
+    return 1 if missing else 0
 
 
 def read_poses_and_inputs(path, T, robots):
@@ -342,6 +404,11 @@ def main():
     f.add_argument("channel")
     f.add_argument("frame", type=int)
     f.add_argument("--timeout", type=float, default=60.0)
+    g = sub.add_parser("logged")
+    g.add_argument("log")
+    g.add_argument("channels", nargs="+")
+    g.add_argument("--frame", type=int)
+    g.add_argument("--since", type=int, help="only events recorded at or after this time [us since the epoch]")
     c = sub.add_parser("compare-poses")
     c.add_argument("log_a")
     c.add_argument("log_b")
@@ -363,7 +430,7 @@ def main():
             MISSION = int(args.mission, 16)
     T = load_types(args.build_dir)
     return {"wait-nodes": cmd_wait_nodes, "wait-frame": cmd_wait_frame, "compare-poses": cmd_compare_poses,
-            "compare-maps": cmd_compare_maps, "auth-refused": cmd_auth_refused}[args.cmd](args, T)
+            "compare-maps": cmd_compare_maps, "auth-refused": cmd_auth_refused, "logged": cmd_logged}[args.cmd](args, T)
 
 
 if __name__ == "__main__":

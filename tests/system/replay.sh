@@ -19,10 +19,12 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
+# shellcheck source=tests/system/wait_for.sh
+. "$HERE/wait_for.sh"
 
-# --- step 2, inside the replay namespace: replay.sh --replay BUILD LOG OUT
+# --- step 2, inside the replay namespace: replay.sh --replay BUILD LOG OUT LAST_FRAME
 if [ "${1:-}" = "--replay" ]; then
-  BUILD="$2" LOG="$3" OUT="$4"
+  BUILD="$2" LOG="$3" OUT="$4" LAST="$5"
   CONFIG="$ROOT/config/paper.yaml"
   PY="$ROOT/.venv/bin/python"
   ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
@@ -36,10 +38,18 @@ if [ "${1:-}" = "--replay" ]; then
   done
   # Every node subscribed (it announces itself on STATUS_* once it listens).
   "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" wait-nodes $((${#ROBOTS[@]} + 1)) --timeout 20
-  sleep 0.2  # the logger too (it has no status; it subscribed long before the nodes)
+  # The logger too (it has no status of its own): it has recorded the nodes' STATUS.
+  wait_for 20 "the recording of main_robot's STATUS_MAIN" \
+    "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" STATUS_MAIN || exit 1
   # At the recorded speed (10 Hz): frames arrive in order and spaced as live.
   lcm-logplayer -e '^(SENSOR_[0-9]+|GROUND_TRUTH)$' "$LOG" > "$OUT/logs/logplayer.log" 2>&1
-  sleep 0.5  # the last frame's messages reach the logger
+  # Before the logger stops: it has recorded main_robot's GLOBAL_MAP of the last
+  # frame. main_robot sends it once every robot's POSE and events of that frame are
+  # in, so the logger got those before it (one host: datagrams in send order); its
+  # timer sends the map again, so one lost datagram does not stall the wait.
+  wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame ($LAST)" \
+    "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame "$LAST" GLOBAL_MAP ||
+    exit 1
   rc=0
   for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
   for p in "${PIDS[@]}"; do wait "$p" || rc=1; done
@@ -64,11 +74,11 @@ OUT="$(mktemp -d)"
 "$ROOT/tools/netns_run.sh" --port 7694 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" \
   --out "$OUT/live" "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
 echo "replay: live run recorded"
-"$ROOT/tools/netns_run.sh" --port 7695 -- "$0" --replay "$BUILD" "$OUT/live/run.lcmlog" "$OUT/replay" \
-  > "$OUT/replay.txt" 2>&1 || { cat "$OUT/replay.txt"; exit 1; }
-cat "$OUT/replay.txt"
 ROBOTS=($("$BUILD/bin/simulator" --config "$ROOT/config/paper.yaml" --list-robots))
 FRAMES=$(awk '/^scenario:/ {s = 1; next} /^[^ #]/ {s = 0} s && $1 == "frames:" {print $2; exit}' "$ROOT/config/paper.yaml")
+"$ROOT/tools/netns_run.sh" --port 7695 -- "$0" --replay "$BUILD" "$OUT/live/run.lcmlog" "$OUT/replay" $((FRAMES - 1)) \
+  > "$OUT/replay.txt" 2>&1 || { cat "$OUT/replay.txt"; exit 1; }
+cat "$OUT/replay.txt"
 rc=0
 poses=0
 "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" compare-poses "$OUT/live/run.lcmlog" "$OUT/replay/run.lcmlog" \

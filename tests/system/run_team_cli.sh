@@ -17,6 +17,8 @@ TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
 RT="$ROOT/tools/run_team.sh"
 fail() { echo "run_team_cli: FAIL: $*"; exit 1; }
+# shellcheck source=tests/system/wait_for.sh
+. "$ROOT/tests/system/wait_for.sh"
 
 # ---- 1. arguments checked first ---------------------------------------------------
 refuse() {  # refuse WHAT-THE-ERROR-NAMES ARGS...
@@ -97,6 +99,11 @@ print(f"\nexit status {os.waitstatus_to_exitcode(status)}")
 PY
 grep -q "exit status 130" "$TMP/intr.txt" || { cat "$TMP/intr.txt"; fail "Ctrl-C: exit status not 130"; }
 grep -q "run_team.sh: interrupted: the run did not finish" "$TMP/intr.txt" || { cat "$TMP/intr.txt"; fail "Ctrl-C: not said"; }
-sleep 0.5  # processes reaped by the script before it exits; this is only slack for ps
-if pgrep -f "$TMP/intr" > "$TMP/left"; then ps -fp $(cat "$TMP/left"); fail "Ctrl-C: processes of the run left"; fi
+# run_team.sh reaps its processes before it exits; the deadline is slack for the
+# kernel's bookkeeping only.
+none_left() { ! pgrep -f "$TMP/intr" > /dev/null; }  # (in this shell: no command line naming it)
+if ! wait_for 5 "the end of every process of the interrupted run" none_left; then
+  pgrep -f "$TMP/intr" > "$TMP/left" && ps -fp $(cat "$TMP/left")
+  fail "Ctrl-C: processes of the run left"
+fi
 echo "run_team_cli: Ctrl-C stopped the run (exit 130), nothing left"

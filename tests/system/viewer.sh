@@ -26,6 +26,21 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
 # shellcheck source=tools/viewer_url.sh
 . "$ROOT/tools/viewer_url.sh"
+# shellcheck source=tests/system/wait_for.sh
+. "$HERE/wait_for.sh"
+# The viewer's /state.json (at URL $1) shows at least $2 robots with a pose and $3 landmarks.
+state_shows() {
+  curl -sf "$1/state.json" | python3 -c 'import json, sys
+s = json.load(sys.stdin)
+robots, landmarks = len([r for r in s["robots"] if r["x"] is not None]), len(s["landmarks"])
+print(robots, "robots with a pose,", landmarks, "landmarks, frame", s["frame"])
+sys.exit(0 if robots >= int(sys.argv[1]) and landmarks >= int(sys.argv[2]) else 1)' "$2" "$3"
+}
+# /state.json (at URL $1, saved to $4) agrees with log $3's last POSEs and GLOBAL_MAP
+# (viewer_check.py with build $2).
+state_is_log_end() {
+  curl -sf "$1/state.json" > "$4" && "$ROOT/.venv/bin/python" "$HERE/viewer_check.py" --build-dir "$2" "$3" "$4"
+}
 
 # --- step 2, inside the replay namespace: viewer.sh --inside BUILD LOG OUT
 if [ "${1:-}" = "--inside" ]; then
@@ -39,14 +54,17 @@ if [ "${1:-}" = "--inside" ]; then
   [ -n "$URL" ] || { echo "viewer: no URL"; cat "$OUT/viewer.err"; exit 1; }
   lcm-logplayer "$LOG" > "$OUT/logplayer.log" 2>&1 &
   PLAYER=$!
-  sleep 1
   rc=0
+  # The replay has reached the viewer: what browser_check.py asks to see drawn is there.
+  wait_for 30 "the viewer's state showing 3 robots with a pose and 20 landmarks" state_shows "$URL" 3 20 || rc=1
   "$ROOT/.venv/bin/python" "$HERE/browser_check.py" "$URL/" --out "$OUT/during.png" --seconds 2 \
     --min-rate 10 --robots 3 --min-landmarks 20 --advancing || rc=1
   # Stalled and surplus browsers during the replay (tests/system/viewer_clients.py).
   "$ROOT/.venv/bin/python" "$HERE/viewer_clients.py" "$URL" --max 8 || rc=1
   wait "$PLAYER"
-  sleep 0.5
+  # The viewer has taken in the whole log: its state equals the log's last poses and map.
+  wait_for 20 "the viewer's state equal to the log's last POSEs and GLOBAL_MAP" \
+    state_is_log_end "$URL" "$BUILD" "$LOG" "$OUT/state_end.json" || rc=1
   "$ROOT/.venv/bin/python" "$HERE/browser_check.py" "$URL/" --out "$OUT/after.png" --seconds 0.5 --robots 3 || rc=1
   curl -sf "$URL/state.json" > "$OUT/state.json"
   code=$(curl -s -o /dev/null -w '%{http_code}' "$URL/no-such-page")

@@ -1,0 +1,314 @@
+// SPDX-License-Identifier: Apache-2.0
+// MainNode on its own (main_node.hpp): when a team's frame is finished (every robot
+// seen has sent its POSE and the events up to that POSE's event_seq, and its snapshot
+// when it announced one), what GLOBAL_MAP and GLOBAL_MOVING then carry, when
+// MainPorts publishes them (on a fake shell whose clock the test sets), and the
+// counters. Every expectation is worked out by hand from the messages sent.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "../support/messages.hpp"
+#include "elaslam/main_robot/main_node.hpp"
+
+namespace elaslam {
+namespace {
+
+GlobalMapOptions team_of_three() {
+  GlobalMapOptions o;
+  o.max_landmark_id = 32;
+  std::string why;
+  EXPECT_TRUE(parse_team("1,2,3", &o.limits.team_mask, &why)) << why;
+  return o;
+}
+
+// Robot `robot`'s POSE of `frame`, announcing its events up to `event_seq` and a
+// snapshot of `snapshot_chunks` chunks.
+pose_estimate_t pose(int robot, int frame, std::int64_t event_seq, int snapshot_chunks = 0) {
+  pose_estimate_t p = test::pose_msg(robot, frame);
+  p.event_seq = event_seq;
+  p.snapshot_chunks = static_cast<std::int16_t>(snapshot_chunks);
+  return p;
+}
+
+landmark_event_t add(int robot, std::int64_t seq, int id, int frame, double x, double y, double var) {
+  return test::event_msg(robot, seq, landmark_event_t::ADD, id, frame, x, y, var);
+}
+
+// Chunk `chunk` of `num_chunks` of robot `robot`'s snapshot of `frame`: ids
+// [16 * chunk, 16 * chunk + 16), landmark `id` in it when given.
+lmap_snapshot_t snapshot_chunk(int robot, std::int64_t seq, int frame, int chunk, int num_chunks, int id = -1) {
+  lmap_snapshot_t s{};
+  s.robot_id = static_cast<std::int16_t>(robot);
+  s.seq = seq;
+  s.frame = frame;
+  s.chunk = static_cast<std::int16_t>(chunk);
+  s.num_chunks = static_cast<std::int16_t>(num_chunks);
+  s.id_begin = 16 * chunk;
+  s.id_end = 16 * chunk + 16;
+  if (id >= 0) {
+    landmark_estimate_t l{};
+    l.id = id;
+    l.x = 1.0;
+    l.y = 2.0;
+    l.cov[0][0] = l.cov[1][1] = 0.01;
+    s.landmarks.push_back(l);
+    s.num_landmarks = 1;
+  }
+  return s;
+}
+
+// GIVEN robots 1, 2 and 3, each announcing in its POSE how many events follow
+// WHEN their POSEs and events of frame 0 arrive interleaved
+// THEN frame 0 is finished at the very event that completes the last announcement,
+// and not before: a robot whose POSE is held holds every map back.
+TEST(MainNodeFrames, AFrameIsFinishedWhenEveryRobotsPoseAndAnnouncedEventsAreIn) {
+  MainNode node(team_of_three());
+  EXPECT_EQ(node.on_pose(pose(1, 0, 2)), -1) << "robot 1 announces events 1 and 2: held";
+  EXPECT_EQ(node.on_pose(pose(2, 0, 0)), -1) << "robot 2 has no events, but robot 1 is held";
+  EXPECT_EQ(node.on_pose(pose(3, 0, 1)), -1) << "robot 3 announces event 1: held";
+  ASSERT_TRUE(node.on_event(add(1, 1, 3, 0, 1.0, 2.0, 0.01)));
+  EXPECT_EQ(node.take_finished(), -1) << "robot 1 still waits for its event 2";
+  ASSERT_TRUE(node.on_event(add(3, 1, 5, 0, -1.0, 0.5, 0.04)));
+  EXPECT_EQ(node.take_finished(), -1) << "robot 3 is in, robot 1 is not";
+  ASSERT_TRUE(node.on_event(add(1, 2, 4, 0, 3.0, -2.0, 0.01)));
+  EXPECT_EQ(node.take_finished(), 0) << "robot 1's event 2 completes frame 0";
+  EXPECT_EQ(node.take_finished(), -1) << "taken once";
+
+  // Frame 1 without events: finished by the last of the three POSEs, at once.
+  EXPECT_EQ(node.on_pose(pose(2, 1, 0)), -1);
+  EXPECT_EQ(node.on_pose(pose(1, 1, 2)), -1) << "events up to 2 are in: robot 1 done, robot 3 not";
+  EXPECT_EQ(node.on_pose(pose(3, 1, 1)), 1);
+  EXPECT_EQ(node.take_finished(), -1) << "on_pose returned it; nothing held finished since";
+
+  const MainCounters& c = node.counters();
+  EXPECT_EQ(c.events, 3);
+  EXPECT_EQ(c.gaps, 0);
+  EXPECT_EQ(c.stale_poses, 0);
+  EXPECT_EQ(c.rejected_inputs, 0);
+  EXPECT_EQ(c.maps_published, 0) << "finishing a frame makes no map by itself";
+}
+
+// GIVEN robots 1 and 2 at frame 4, robot 1's next POSE (frame 5) announcing a
+// two-chunk snapshot  THEN frame 5 waits for the snapshot's last chunk, not its
+// first; a snapshot that comes in before its POSE counts when the POSE comes.
+TEST(MainNodeFrames, AnAnnouncedSnapshotHoldsTheFrameUntilItsLastChunk) {
+  MainNode node(team_of_three());
+  ASSERT_TRUE(node.on_event(add(1, 1, 3, 4, 1.0, 2.0, 0.01)));
+  EXPECT_EQ(node.on_pose(pose(1, 4, 1)), 4);
+  EXPECT_EQ(node.on_pose(pose(2, 4, 0)), -1) << "frame 4 was finished already";
+  EXPECT_EQ(node.on_pose(pose(2, 5, 0)), -1) << "robot 1 has not finished frame 5";
+  EXPECT_EQ(node.on_pose(pose(1, 5, 1, 2)), -1) << "its events are in, its snapshot is not";
+  ASSERT_TRUE(node.on_snapshot(snapshot_chunk(1, 1, 5, 0, 2, 3)));
+  EXPECT_EQ(node.take_finished(), -1) << "chunk 0 of 2";
+  ASSERT_TRUE(node.on_snapshot(snapshot_chunk(1, 1, 5, 1, 2)));
+  EXPECT_EQ(node.take_finished(), 5) << "the last chunk finishes frame 5";
+
+  // Frame 6: robot 1's snapshot before its POSE.
+  EXPECT_EQ(node.on_pose(pose(2, 6, 0)), -1);
+  ASSERT_TRUE(node.on_snapshot(snapshot_chunk(1, 1, 6, 0, 1, 3)));
+  EXPECT_EQ(node.take_finished(), -1) << "no POSE of frame 6 from robot 1 yet";
+  EXPECT_EQ(node.on_pose(pose(1, 6, 1, 1)), 6) << "the snapshot it announces is in already";
+  EXPECT_EQ(node.counters().snapshots, 3);
+}
+
+// GIVEN robot 1 alone, its POSE of frame 1 announcing events 1 and 2 that never come
+// WHEN its POSE of frame 2 arrives  THEN frame 1 is let go (finished, late events
+// counted as a gap, a resync asked for after event 0), frame 2 is held for them in
+// its turn; a POSE of a frame already held or finished is ignored and counted.
+TEST(MainNodeFrames, AHeldPoseIsLetGoAtTheNextPoseAndItsLostEventsAreAGap) {
+  MainNode node(team_of_three());
+  EXPECT_EQ(node.on_pose(pose(1, 0, 0)), 0) << "the only robot seen, nothing announced";
+  EXPECT_EQ(node.on_pose(pose(1, 1, 2)), -1) << "held for events 1 and 2";
+  EXPECT_EQ(node.on_pose(pose(1, 2, 2)), 1) << "frame 1 let go";
+  EXPECT_EQ(node.counters().gaps, 1);
+  const auto& resyncs = node.take_resyncs(1000);
+  ASSERT_EQ(resyncs.size(), 1u);
+  EXPECT_EQ(resyncs[0].robot_id, 1);
+  EXPECT_EQ(resyncs[0].after_seq, 0);
+  EXPECT_EQ(resyncs[0].reason, resync_request_t::GAP);
+  EXPECT_EQ(node.counters().resyncs_requested, 1);
+
+  EXPECT_EQ(node.on_pose(pose(1, 1, 2)), -1) << "a late POSE of frame 1";
+  EXPECT_EQ(node.on_pose(pose(1, 2, 2)), -1) << "frame 2's POSE again";
+  EXPECT_EQ(node.counters().stale_poses, 2);
+  ASSERT_TRUE(node.on_event(add(1, 1, 7, 1, 0.0, 0.0, 0.01)));
+  ASSERT_TRUE(node.on_event(add(1, 2, 8, 1, 0.0, 1.0, 0.01)));
+  EXPECT_EQ(node.take_finished(), 2) << "the late events still come: frame 2 is finished";
+  EXPECT_EQ(node.counters().events, 2);
+}
+
+// GIVEN frame 0 finished with landmark 3 from robots 1 and 2 and landmark 9 from
+// robot 3, then robot 3's MOVING of 9 in frame 1  THEN GLOBAL_MAP of frame 1 carries
+// 3 at the information-weighted mean of the two estimates, with both robots as
+// contributors, and 9 in its moving lists (found in frame 1 by robot 3).
+TEST(MainNodeMaps, TheGlobalMapCarriesTheFusedStaticLandmarksAndTheMovingSet) {
+  MainNode node(team_of_three());
+  node.set_incarnation(77);
+  ASSERT_TRUE(node.on_event(add(1, 1, 3, 0, 1.0, 2.0, 0.01)));   // information 100 per axis
+  ASSERT_TRUE(node.on_event(add(2, 1, 3, 0, 1.3, 2.0, 0.02)));   // information 50
+  ASSERT_TRUE(node.on_event(add(3, 1, 9, 0, 5.0, 5.0, 0.01)));
+  EXPECT_EQ(node.on_pose(pose(1, 0, 1)), 0);
+  EXPECT_EQ(node.on_pose(pose(2, 0, 1)), -1);
+  EXPECT_EQ(node.on_pose(pose(3, 0, 1)), -1);
+  ASSERT_TRUE(node.on_event(test::event_msg(3, 2, landmark_event_t::MOVING, 9, 1)));
+  const auto& notices = node.take_notices(5000);
+  ASSERT_EQ(notices.size(), 1u);
+  EXPECT_EQ(notices[0].landmark_id, 9);
+  EXPECT_EQ(notices[0].detected_by, 3);
+  EXPECT_EQ(notices[0].frame, 1);
+  EXPECT_EQ(notices[0].seq, 1);
+  EXPECT_EQ(notices[0].incarnation, 77);
+  for (int r = 1; r <= 3; ++r) EXPECT_EQ(node.on_pose(pose(r, 1, r == 3 ? 2 : 1)), r == 3 ? 1 : -1) << r;
+
+  const std::int64_t now = 123456789;
+  ASSERT_EQ(node.make_global_map(now, 1), 1) << "two entries fit one chunk";
+  const global_map_t& m = node.map_chunk(0);
+  EXPECT_EQ(m.frame, 1);
+  EXPECT_EQ(m.utime, now);
+  EXPECT_EQ(m.incarnation, 77);
+  EXPECT_EQ(m.chunk, 0);
+  EXPECT_EQ(m.num_chunks, 1);
+  EXPECT_EQ(m.id_begin, 0);
+  EXPECT_EQ(m.id_end, 32);
+  ASSERT_EQ(m.num_landmarks, 1);
+  const global_landmark_t& l = m.landmarks[0];
+  EXPECT_EQ(l.id, 3);
+  EXPECT_NEAR(l.x, (100 * 1.0 + 50 * 1.3) / 150, 1e-12);  // 1.1
+  EXPECT_NEAR(l.y, 2.0, 1e-12);
+  EXPECT_NEAR(l.cov[0][0], 1.0 / 150, 1e-15);
+  EXPECT_NEAR(l.cov[1][1], 1.0 / 150, 1e-15);
+  EXPECT_NEAR(l.cov[0][1], 0.0, 1e-15);
+  EXPECT_EQ(l.contributors, 0b011) << "robots 1 and 2";
+  EXPECT_EQ(l.status, global_landmark_t::STATIC);
+  EXPECT_EQ(l.status_frame, 0);
+  ASSERT_EQ(m.num_moving, 1);
+  EXPECT_EQ(m.moving_ids[0], 9);
+  EXPECT_EQ(m.moving_frames[0], 1);
+  EXPECT_EQ(m.moving_by[0], 3);
+
+  // Without a frame, the map is stamped with the newest frame the team finished.
+  ASSERT_EQ(node.make_global_map(now + 1), 1);
+  EXPECT_EQ(node.map_chunk(0).frame, 1);
+  // GLOBAL_MOVING: the moving lists alone.
+  ASSERT_EQ(node.make_moving_set(now + 2, 1), 1);
+  EXPECT_EQ(node.map_chunk(0).num_landmarks, 0);
+  ASSERT_EQ(node.map_chunk(0).num_moving, 1);
+  EXPECT_EQ(node.map_chunk(0).moving_ids[0], 9);
+  EXPECT_EQ(node.counters().maps_published, 2) << "make_moving_set is not a GLOBAL_MAP";
+  EXPECT_EQ(node.counters().map_chunks, 2);
+  EXPECT_EQ(node.counters().notices_sent, 1);
+  EXPECT_EQ(node.counters().events, 4);
+}
+
+// A shell for MainPorts without a transport: it keeps the subscribed handlers to
+// deliver messages by hand, records every publication as "CHANNEL frame", and its
+// clock is whatever the test sets.
+class FakeShell {
+ public:
+  const std::string& suffix() const { return suffix_; }
+  std::int64_t now_utime() const { return now; }
+  template <class Msg, class Handler>
+  int subscribe(const std::string& channel, Handler handle, int /*queue*/) {
+    if constexpr (std::is_same_v<Msg, pose_estimate_t>) on_pose = handle;
+    if constexpr (std::is_same_v<Msg, landmark_event_t>) on_event = handle;
+    if constexpr (std::is_same_v<Msg, lmap_events_t>) on_events = handle;
+    if constexpr (std::is_same_v<Msg, lmap_snapshot_t>) on_snapshot = handle;
+    channels.push_back(channel);
+    return 1;
+  }
+  template <class Msg>
+  void publish(const std::string& channel, const Msg& m) {
+    seen.push_back(channel + " " + std::to_string(m.frame));
+  }
+  void publish(const std::string& channel, const resync_request_t& m) {  // (no frame: the robot asked)
+    seen.push_back(channel + " robot " + std::to_string(m.robot_id));
+  }
+  void stamp_auth(node_status_t*) {}
+  void refuse(const std::string& why) { refused.push_back(why); }
+  void say(const std::string& what, log::Priority) { said.push_back(what); }
+  void on_decode_error(std::function<void()>) {}
+
+  std::int64_t now = 1'000'000'000;
+  std::vector<std::string> seen, refused, said, channels;
+  std::function<void(const pose_estimate_t&, const std::string&)> on_pose;
+  std::function<void(const landmark_event_t&, const std::string&)> on_event;
+  std::function<void(const lmap_events_t&, const std::string&)> on_events;
+  std::function<void(const lmap_snapshot_t&, const std::string&)> on_snapshot;
+
+ private:
+  std::string suffix_;
+};
+
+// GIVEN robot 1 alone, GLOBAL_MOVING repeated at most once a second
+// THEN GLOBAL_MAP of a frame goes out at the message that finishes the frame (the
+// POSE, or the event a held POSE waited for), followed by GLOBAL_MOVING when its lists
+// changed or the last went out a second ago or more; a notice goes out at once,
+// before the map; the timer adds a map only after a quiet period.
+TEST(MainNodePorts, TheMapOfAFrameGoesOutWhenTheFrameIsFinished) {
+  GlobalMapOptions o = team_of_three();
+  o.moving_repeat_s = 1.0;
+  MainNode node(o);
+  FakeShell shell;
+  MainPorts<FakeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  const std::vector<std::string> inputs = {"LMAP_EVENT", "LMAP_EVENTS", "LMAP_SNAPSHOT", channels::any_pose()};
+  EXPECT_EQ(shell.channels, inputs);
+  constexpr std::int64_t ms = 1000;
+  const std::int64_t t0 = shell.now;
+  auto at = [&](std::int64_t t) { shell.now = t0 + t; };
+  auto sent = [&] {
+    std::vector<std::string> s;
+    s.swap(shell.seen);
+    return s;
+  };
+  using V = std::vector<std::string>;
+
+  shell.on_pose(pose(1, 0, 1), "POSE_1");
+  EXPECT_EQ(sent(), V{}) << "held for event 1";
+  shell.on_event(add(1, 1, 3, 0, 1.0, 2.0, 0.01), "LMAP_EVENT");
+  EXPECT_EQ(sent(), (V{"GLOBAL_MAP 0", "GLOBAL_MOVING 0"})) << "the first moving set is always due";
+
+  at(100 * ms);
+  shell.on_pose(pose(1, 1, 1), "POSE_1");
+  EXPECT_EQ(sent(), V{"GLOBAL_MAP 1"}) << "nothing announced: finished by the POSE; moving set unchanged";
+
+  at(200 * ms);
+  shell.on_pose(pose(1, 2, 2), "POSE_1");
+  EXPECT_EQ(sent(), V{});
+  shell.on_event(test::event_msg(1, 2, landmark_event_t::MOVING, 3, 2), "LMAP_EVENT");
+  EXPECT_EQ(sent(), (V{"DYNAMIC_NOTICE 2", "GLOBAL_MAP 2", "GLOBAL_MOVING 2"})) << "3 moving: the lists changed";
+
+  at(1100 * ms);
+  shell.on_pose(pose(1, 3, 2), "POSE_1");
+  EXPECT_EQ(sent(), V{"GLOBAL_MAP 3"}) << "0.9 s since the last moving set";
+  at(1200 * ms);
+  shell.on_pose(pose(1, 4, 2), "POSE_1");
+  EXPECT_EQ(sent(), (V{"GLOBAL_MAP 4", "GLOBAL_MOVING 4"})) << "1.0 s since the last: repeated";
+
+  const std::int64_t period = 100 * ms;  // main.publish_rate_hz 10
+  at(1250 * ms);
+  ports.publish_map_if_quiet(period);
+  EXPECT_EQ(sent(), V{}) << "a map went out 50 ms ago";
+  at(1300 * ms);
+  ports.publish_map_if_quiet(period);
+  EXPECT_EQ(sent(), V{"GLOBAL_MAP 4"}) << "a quiet period: the timer's map, of the newest finished frame";
+
+  shell.on_pose(pose(1, 4, 2), "POSE_1");
+  EXPECT_EQ(sent(), V{}) << "a repeated POSE finishes nothing";
+  EXPECT_TRUE(shell.refused.empty());
+  const MainCounters& c = node.counters();
+  EXPECT_EQ(c.maps_published, 6);
+  EXPECT_EQ(c.map_chunks, 6);
+  EXPECT_EQ(c.moving_sets, 3);
+  EXPECT_EQ(c.notices_sent, 1);
+  EXPECT_EQ(c.stale_poses, 1);
+}
+
+}  // namespace
+}  // namespace elaslam
