@@ -66,7 +66,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   }
   alert_.reserve(kAlertBytes);
   prepare_snapshot_chunks();
-  candidates_.candidates.resize(kMaxCandidates);  // num_candidates says how many count
+  candidates_.candidates.resize(contract::kMaxCandidates);  // num_candidates says how many count
 }
 
 // Snapshot chunks, sized from the generated code, a pool for the largest map: every
@@ -334,7 +334,7 @@ void RobotNode::fill_candidates(std::int64_t now_utime) {
   for (int slot = 0; slot < f.num_landmarks(); ++slot) {
     const int id = f.id_at(slot);
     if (lm[id].status != LandmarkStatus::kCandidate) continue;
-    if (n == kMaxCandidates) {
+    if (n == contract::kMaxCandidates) {
       ++omitted;
       continue;
     }
