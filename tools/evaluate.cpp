@@ -39,6 +39,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/cov.hpp"
 #include "elaslam/common/quantile.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
@@ -131,9 +132,7 @@ void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   read_map(g, &m.landmarks, &m.moving);
   for (int i = 0; i < contract::bounded(g.num_landmarks, static_cast<int>(g.landmarks.size())); ++i) {
     const auto& l = g.landmarks[i];
-    Eigen::Matrix2d C;
-    C << l.cov[0][0], l.cov[0][1], l.cov[1][0], l.cov[1][1];
-    m.full.push_back({l.id, {l.x, l.y}, C});
+    m.full.push_back({l.id, {l.x, l.y}, read_cov(l.cov)});
   }
   // The first GLOBAL_MAP stamped k is the one main_robot sends when every robot has
   // finished frame k; later ones stamped k (the periodic publication) may already

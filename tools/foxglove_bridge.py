@@ -73,8 +73,9 @@ MAX_LANDMARK_ID = 1 << 16    # ids beyond are refused (memory bound)
 WORLD_BOUND_M = 1e5          # positions beyond are refused
 SIGMA = 3.0                  # ellipses at 3 sigma, as the viewer draws them
 FAULT_INCONSISTENT = 8       # node_status_t.FAULT_INCONSISTENT
-# Channel groups the bridge reads (tools/lcm_groups.sh): 0 team-wide (STATUS_*,
-# DYNAMIC_NOTICE), 2 GLOBAL_MAP, 3 observers (GROUND_TRUTH, CANDIDATES_<r>), 4 POSE_<r>.
+# Channel groups the bridge reads (channels.hpp's channel_group; the ctest channel_tables
+# checks them against its handlers' channels): 0 team-wide (STATUS_*, DYNAMIC_NOTICE),
+# 2 GLOBAL_MAP, 3 observers (GROUND_TRUTH, CANDIDATES_<r>), 4 POSE_<r>.
 GROUPS = (0, 2, 3, 4)
 ROBOT_COLOURS = [(0.12, 0.47, 0.71), (1.0, 0.50, 0.05), (0.17, 0.63, 0.17), (0.58, 0.40, 0.74),
                  (0.55, 0.34, 0.29), (0.89, 0.47, 0.76), (0.50, 0.50, 0.50), (0.74, 0.74, 0.13)]

@@ -144,7 +144,7 @@ if [ "$GROUPED" -eq 0 ]; then
 else  # one player per group, started together (each sleeps through the others' events)
   PLAYERS=()
   for ch in RUN_INFO GROUND_TRUTH "${R[@]/#/SENSOR_}"; do
-    lcm-logplayer -s "$SPEED" -e "^$ch\$" --lcm-url="$(lcm_group_url "$(lcm_group_of_input "$ch")")" "$LOG" \
+    lcm-logplayer -s "$SPEED" -e "^$ch\$" --lcm-url="$(lcm_group_url "$(lcm_group_of "$ch")")" "$LOG" \
       >"$OUT/logs/logplayer_$ch.log" 2>&1 &
     PLAYERS+=($!)
   done

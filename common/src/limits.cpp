@@ -8,6 +8,7 @@
 
 #include "elaslam/common/config.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/cov.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -167,9 +168,7 @@ std::string check_cov2(const Eigen::Matrix2d& c, const MessageLimits& l, const c
 }
 
 std::string check_cov2(const double (&c)[2][2], const MessageLimits& l, const char* field) {
-  Eigen::Matrix2d m;
-  m << c[0][0], c[0][1], c[1][0], c[1][1];
-  return check_cov2(m, l, field);
+  return check_cov2(read_cov(c), l, field);
 }
 
 std::string check_pose(const pose_estimate_t& p, const MessageLimits& l, Refusal* reason) {

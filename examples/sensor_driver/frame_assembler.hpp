@@ -21,7 +21,7 @@ struct AssemblerOptions {
   int robot_id = 1;
   double rate_hz = 10.0;                // F: frames per second the robot_node is configured for
   int max_landmark_id = 1024;           // ids at or above are dropped (robot.filter.max_landmark_id)
-  int max_observations = 64;            // per frame; the nearest kept (sensor_frame_t holds 64)
+  int max_observations = 64;            // per frame; the nearest kept (robot.filter.max_observations)
   double max_range_m = 1e4;
   // The odometer's noise model (sensor_frame_t): variances per metre / radian moved.
   double odom_var_trans_per_m = 0.0025;

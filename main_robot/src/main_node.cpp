@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/cov.hpp"
 
 namespace elaslam {
 namespace {
@@ -17,12 +18,6 @@ void grow_moving(global_map_t* m, int n) {
   contract::set_count(&m->moving_ids, &m->num_moving, n);
   m->moving_frames.resize(static_cast<std::size_t>(n));
   m->moving_by.resize(static_cast<std::size_t>(n));
-}
-
-Eigen::Matrix2d to_matrix(const double (&c)[2][2]) {
-  Eigen::Matrix2d m;
-  m << c[0][0], c[0][1], c[1][0], c[1][1];
-  return m;
 }
 
 }  // namespace
@@ -283,7 +278,7 @@ bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
   e.kind = m.kind;
   e.landmark_id = m.landmark_id;
   e.position = {m.x, m.y};
-  e.cov = to_matrix(m.cov);
+  e.cov = read_cov(m.cov);
   switch (map_.apply(e, &pending_)) {
     case EventResult::kApplied: ++counters_.events; break;
     case EventResult::kAppliedAfterGap:
@@ -350,7 +345,7 @@ bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
   snap_moving_frames_.clear();
   for (int k = 0; k < m.num_landmarks; ++k) {
     const landmark_estimate_t& l = m.landmarks[static_cast<std::size_t>(k)];
-    snap_lms_.push_back({l.id, RobotEstimate{true, {l.x, l.y}, to_matrix(l.cov), m.frame}});
+    snap_lms_.push_back({l.id, RobotEstimate{true, {l.x, l.y}, read_cov(l.cov), m.frame}});
   }
   for (int k = 0; k < m.num_moving; ++k) {
     snap_moving_.push_back(m.moving_ids[static_cast<std::size_t>(k)]);
@@ -433,8 +428,7 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   }
   // Where the robot is, no static landmark can be (off while main.body_radius_m is 0).
   const Eigen::Vector2d position(m.x, m.y);
-  Eigen::Matrix2d position_cov;
-  position_cov << m.cov[0][0], m.cov[0][1], m.cov[1][0], m.cov[1][1];
+  const Eigen::Matrix2d position_cov = read_cov(m.cov).topLeftCorner<2, 2>();
   counters_.occupied += map_.occupy(m.robot_id, m.frame, position, position_cov, &pending_);
   // The POSE goes out before its frame's events: the frame is finished when events
   // up to its event_seq are applied. Held until then; an older held POSE is let go
@@ -578,8 +572,7 @@ int MainNode::make_map_chunks(std::int64_t now_utime, int frame, int exclude_rob
       l.id = id;
       l.x = p.x();
       l.y = p.y();
-      for (int r = 0; r < 2; ++r)
-        for (int q = 0; q < 2; ++q) l.cov[r][q] = C(r, q);
+      write_cov(l.cov, C);
       l.contributors = static_cast<std::int16_t>(g.contributors() & ~excluded);
       l.status = global_landmark_t::STATIC;
       l.status_frame = g.status_frame;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/cov.hpp"
 
 namespace elaslam {
 namespace {
@@ -38,17 +39,6 @@ void grow_moving(lmap_snapshot_t* m, int n) {
   m->moving_frames.resize(static_cast<std::size_t>(n));
 }
 
-void set_cov2(double (&dst)[2][2], const Eigen::Matrix2d& C) {
-  for (int r = 0; r < 2; ++r)
-    for (int c = 0; c < 2; ++c) dst[r][c] = C(r, c);
-}
-
-Eigen::Matrix2d get_cov2(const double (&src)[2][2]) {
-  Eigen::Matrix2d C;
-  C << src[0][0], src[0][1], src[1][0], src[1][1];
-  return C;
-}
-
 }  // namespace
 
 RobotNode::RobotNode(const RobotOptions& options, int robot_id)
@@ -66,7 +56,7 @@ RobotNode::RobotNode(const RobotOptions& options, int robot_id)
   }
   alert_.reserve(kAlertBytes);
   prepare_snapshot_chunks();
-  candidates_.candidates.resize(kMaxCandidates);  // num_candidates says how many count
+  candidates_.candidates.resize(contract::kMaxCandidates);  // num_candidates says how many count
 }
 
 // Snapshot chunks, sized from the generated code, a pool for the largest map: every
@@ -267,8 +257,7 @@ void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, con
   pose_.x = p.x;
   pose_.y = p.y;
   pose_.theta = p.theta;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) pose_.cov[r][c] = C(r, c);
+  write_cov(pose_.cov, C);
   pose_.processing_us = static_cast<int32_t>(std::min<std::int64_t>(us, INT32_MAX));
   pose_.mean_diag_p = robot_.map_mean_diag();
   pose_.num_obs = static_cast<int16_t>(s.num_obs);
@@ -294,7 +283,7 @@ void RobotNode::fill_events(std::int64_t now_utime) {
     m.landmark_id = e.landmark_id;
     m.x = e.position.x();
     m.y = e.position.y();
-    set_cov2(m.cov, e.cov);
+    write_cov(m.cov, e.cov);
     events_.push_back(m);
   }
   counters_.events_sent += static_cast<std::int64_t>(events_.size());
@@ -334,7 +323,7 @@ void RobotNode::fill_candidates(std::int64_t now_utime) {
   for (int slot = 0; slot < f.num_landmarks(); ++slot) {
     const int id = f.id_at(slot);
     if (lm[id].status != LandmarkStatus::kCandidate) continue;
-    if (n == kMaxCandidates) {
+    if (n == contract::kMaxCandidates) {
       ++omitted;
       continue;
     }
@@ -343,7 +332,7 @@ void RobotNode::fill_candidates(std::int64_t now_utime) {
     const Eigen::Vector2d p = f.landmark(id);
     l.x = p.x();
     l.y = p.y();
-    set_cov2(l.cov, f.landmark_cov(id));
+    write_cov(l.cov, f.landmark_cov(id));
   }
   if (n + omitted == 0 && candidates_.num_candidates + candidates_.num_omitted == 0) return;
   candidates_.utime = now_utime;
@@ -391,7 +380,7 @@ int RobotNode::make_snapshot(std::int64_t now_utime) {
       const Eigen::Vector2d p = e.archived ? e.position : f.landmark(id);
       l.x = p.x();
       l.y = p.y();
-      set_cov2(l.cov, e.archived ? e.cov : f.landmark_cov(id));
+      write_cov(l.cov, e.archived ? e.cov : f.landmark_cov(id));
     }
     grow_moving(&c, sp.count_b);
     for (int i = 0; i < sp.count_b; ++i) {
@@ -618,7 +607,7 @@ bool RobotNode::on_team_map(const global_map_t& msg, std::string* why) {
     const global_landmark_t& l = msg.landmarks[static_cast<std::size_t>(k)];
     TeamPending& p = team_pending_[static_cast<std::size_t>(l.id)];
     if (!p.valid) ++team_pending_count_;
-    p = {true, msg.frame, Eigen::Vector2d(l.x, l.y), get_cov2(l.cov)};
+    p = {true, msg.frame, Eigen::Vector2d(l.x, l.y), read_cov(l.cov)};
   }
   ++counters_.team_map_chunks;
   apply_team_estimates();

@@ -19,7 +19,7 @@ void to_message(const SensorFrame& f, std::int64_t utime, elaslam::sensor_frame_
   m.odom_var_trans_per_m = f.odometry_noise.var_trans_per_m;
   m.odom_var_rot_per_rad = f.odometry_noise.var_rot_per_rad;
   m.odom_var_rot_per_m = f.odometry_noise.var_rot_per_m;
-  contract::set_count(&m.obs, &m.num_obs, f.num_obs);  // <= 64 by construction (Sensor::observe)
+  contract::set_count(&m.obs, &m.num_obs, f.num_obs);  // <= scenario.sensor.max_observations (Sensor::observe)
   for (int i = 0; i < f.num_obs; ++i) {
     const Observation& z = f.obs[static_cast<std::size_t>(i)];
     range_bearing_t& o = m.obs[static_cast<std::size_t>(i)];

@@ -123,7 +123,7 @@ void SimNode::publish_status(int frame) {
   m.frames_dropped = publish_errors_;  // the simulator loses a frame only if publish fails
   m.rejected_inputs = waiter_ ? waiter_->rejected() : 0;
   m.decode_errors = waiter_ ? waiter_->decode_errors() : 0;
-  // Observations beyond sensor_frame_t's 64 were left out in the last kAlertFrames frames.
+  // Observations beyond scenario.sensor.max_observations were left out in the last kAlertFrames frames.
   if (truncated_frame_ >= 0 && frame - truncated_frame_ < kAlertFrames) m.fault_flags |= node_status_t::FAULT_CAPACITY;
   shell_.stamp_auth(&m);
   m.processing_us_p50 = static_cast<std::int32_t>(stats_.processing.quantile(0.50));
@@ -178,9 +178,9 @@ bool SimNode::publish_frame(int k, const FrameSchedule& schedule) {
   return true;
 }
 
-// More landmarks in view than a sensor frame carries: the nearest 64 go out, the rest
-// are left out. Said at once (then at most once per kAlertFrames frames) and flagged
-// in STATUS_SIM, not only in the summary line.
+// More landmarks in view than a sensor frame carries (scenario.sensor.max_observations):
+// the nearest go out, the rest are left out. Said at once (then at most once per
+// kAlertFrames frames) and flagged in STATUS_SIM, not only in the summary line.
 void SimNode::note_truncation(int k) {
   const std::int64_t n = world_.counters().truncated_obs;
   if (n == truncated_seen_) return;

@@ -113,9 +113,9 @@ struct ChannelClass {
 
 // Channel names of channels.hpp without a suffix; anything else is "other".
 ChannelClass classify(const std::string& ch) {
-  if (int r = channels::robot_of(ch, "SENSOR_"); r > 0) return {Kind::kSensor, r, "sensor_frame_t"};
-  if (int r = channels::robot_of(ch, "POSE_"); r > 0) return {Kind::kPose, r, "pose_estimate_t"};
-  if (int r = channels::robot_of(ch, "STATUS_ROBOT_"); r > 0) return {Kind::kStatusRobot, r, "node_status_t"};
+  if (int r = channels::robot_of(ch, channels::kSensorPrefix); r > 0) return {Kind::kSensor, r, "sensor_frame_t"};
+  if (int r = channels::robot_of(ch, channels::kPosePrefix); r > 0) return {Kind::kPose, r, "pose_estimate_t"};
+  if (int r = channels::robot_of(ch, channels::kStatusRobotPrefix); r > 0) return {Kind::kStatusRobot, r, "node_status_t"};
   if (int r = channels::robot_of(ch, channels::kTeamMapPrefix); r > 0) return {Kind::kOther, r, "global_map_t"};
   if (int r = channels::robot_of(ch, channels::kCandidatesPrefix); r > 0) return {Kind::kOther, r, "candidate_list_t"};
   if (ch == channels::status_main() || ch == channels::status_sim()) return {Kind::kStatus, -1, "node_status_t"};
@@ -279,7 +279,7 @@ RunInfoSummary run_info_summary(const Reader& r) {
 // The frames of the run: GROUND_TRUTH's, else every robot's SENSOR's, else POSE's.
 void frames_of_run(const Reader& r, LogSummary* s) {
   std::vector<int> frames = r.truth_frames;
-  s->frames_source = "GROUND_TRUTH";
+  s->frames_source = channels::ground_truth();
   if (frames.empty()) {
     s->frames_source = "SENSOR";
     for (const auto& [id, d] : r.robots) frames.insert(frames.end(), d.sensor_frames.begin(), d.sensor_frames.end());
@@ -491,8 +491,8 @@ void print_robots(std::ostream& out, const LogSummary& s) {
     const std::string sensor =
         a.sensor_recorded ? missing_text("SENSOR", a.missing_sensor_ranges) : std::string("SENSOR not recorded");
     if (!r.outputs_recorded()) {
-      std::snprintf(line, sizeof line, "  %5d  no POSE_%d or STATUS_ROBOT_%d in the log (robot outputs not recorded); ",
-                    r.robot_id, r.robot_id, r.robot_id);
+      std::snprintf(line, sizeof line, "  %5d  no %s or %s in the log (robot outputs not recorded); ", r.robot_id,
+                    channels::pose(r.robot_id).c_str(), channels::status_robot(r.robot_id).c_str());
       out << line << sensor << "\n";
       continue;
     }
@@ -502,11 +502,11 @@ void print_robots(std::ostream& out, const LogSummary& s) {
                   a.restarts, node.c_str());
     out << line << "         " << missing_text("POSE", a.missing_pose_ranges) << "; " << sensor << "\n";
     if (r.pose_undecodable > 0)
-      out << "         WARNING: " << r.pose_undecodable << " of " << r.pose_events << " POSE_" << r.robot_id
+      out << "         WARNING: " << r.pose_undecodable << " of " << r.pose_events << " " << channels::pose(r.robot_id)
           << " events do not decode; their frames count as without a POSE above\n";
     if (r.status_undecodable > 0)
-      out << "         WARNING: " << r.status_undecodable << " of " << r.status_events << " STATUS_ROBOT_"
-          << r.robot_id << " events do not decode\n";
+      out << "         WARNING: " << r.status_undecodable << " of " << r.status_events << " "
+          << channels::status_robot(r.robot_id) << " events do not decode\n";
   }
 }
 

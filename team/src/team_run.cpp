@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/cov.hpp"
 
 #include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/main_node.hpp"
@@ -230,10 +231,7 @@ NodeShell::Handler<pose_estimate_t> InProcessTeam::on_pose() {
     for (std::size_t i = 0; i < robots_.size(); ++i) {
       if (robots_[i].robot_id() != p.robot_id) continue;
       set_pose(i, p, &f_);
-      Eigen::Matrix3d C;
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) C(r, c) = p.cov[r][c];
-      out_.estimated[i].push_back({time_s_, {p.x, p.y, p.theta}, C});
+      out_.estimated[i].push_back({time_s_, {p.x, p.y, p.theta}, read_cov(p.cov)});
       if (i < f_.true_poses.size()) out_.truth[i].push_back({time_s_, f_.true_poses[i]});
     }
   };

@@ -3,6 +3,7 @@
 
 #include <random>
 
+#include "elaslam/common/cov.hpp"
 #include "elaslam/common/geometry.hpp"
 
 namespace elaslam {
@@ -22,6 +23,32 @@ TEST(Geometry, WrapAngleRange) {
     ASSERT_LT(w, kPi);
     ASSERT_NEAR(std::remainder(a - w, 2 * kPi), 0.0, 1e-9);
   }
+}
+
+// A message's covariance is row-major: cov[r][c] is C(r, c), copied exactly (an
+// asymmetric matrix stays asymmetric, so the receivers' checks see what was sent).
+TEST(Geometry, MessageCovariancesAreRowMajorExactCopies) {
+  const double m2[2][2] = {{0.25, 0.125}, {-0.5, 4.0}};
+  const Eigen::Matrix2d C2 = read_cov(m2);
+  EXPECT_EQ(C2(0, 0), 0.25);
+  EXPECT_EQ(C2(0, 1), 0.125);
+  EXPECT_EQ(C2(1, 0), -0.5);
+  EXPECT_EQ(C2(1, 1), 4.0);
+  double back2[2][2] = {};
+  write_cov(back2, C2);
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) EXPECT_EQ(back2[r][c], m2[r][c]) << r << c;
+
+  Eigen::Matrix3d C3;
+  C3 << 1, 2, 3, 4, 5, 6, 7, 8, 9.5;
+  double m3[3][3] = {};
+  write_cov(m3, C3);
+  EXPECT_EQ(m3[0][2], 3.0);
+  EXPECT_EQ(m3[2][0], 7.0);
+  EXPECT_EQ(m3[2][2], 9.5);
+  EXPECT_EQ(read_cov(m3), C3);
+  const Eigen::Matrix2d position = read_cov(m3).topLeftCorner<2, 2>();
+  EXPECT_EQ(position(1, 0), 4.0);
 }
 
 TEST(Geometry, ComposeInverseBetween) {

@@ -12,6 +12,7 @@
 
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/candidate_list_t.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
@@ -182,6 +183,17 @@ TEST(LcmTypes, SensorFramesAreSizedToTheirContent) {
   contract::set_count(&m.obs, &m.num_obs, contract::kMaxObsPerFrame);
   const int wire = m.getEncodedSize() + 8 + static_cast<int>(sizeof("SENSOR_1")) + 28;
   EXPECT_LE(wire, 1500);
+}
+
+// CANDIDATES_<r>: 52 bytes per candidate; a full list (contract::kMaxCandidates) fits
+// one snapshot-sized datagram.
+TEST(LcmTypes, CandidateListsFitOneDatagram) {
+  candidate_list_t m{};
+  const int empty = m.getEncodedSize();
+  contract::set_count(&m.candidates, &m.num_candidates, 1);
+  EXPECT_EQ(m.getEncodedSize(), empty + 52);
+  contract::set_count(&m.candidates, &m.num_candidates, contract::kMaxCandidates);
+  EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
 }
 
 // LMAP_EVENTS: a 32-byte header (fingerprint included) and 83 bytes per event, the

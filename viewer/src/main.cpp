@@ -32,7 +32,7 @@
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/config.hpp"
-#include "elaslam/main_robot/global_map.hpp"
+#include "elaslam/common/main_options.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"

@@ -56,6 +56,10 @@ constexpr int kMaxChunkBytes = 1200;
 /// (test_lcmtypes checks both). A frame with more events sends several.
 constexpr int kEventBatchHeaderBytes = 32, kEventBytes = 83;
 constexpr int kMaxBatchEvents = (kMaxChunkBytes - kEventBatchHeaderBytes) / kEventBytes;
+/// Candidates per candidate_list_t (CANDIDATES_<r>); a robot with more counts the rest
+/// in num_omitted. Each landmark_estimate_t encodes to 52 bytes, so a full list stays
+/// within kMaxChunkBytes, one datagram (test_lcmtypes checks it).
+constexpr int kMaxCandidates = 20;
 
 static_assert(std::is_same_v<decltype(global_landmark_t::contributors), std::int16_t> && kMaxRobots == 16,
               "one contributor bit per robot id");

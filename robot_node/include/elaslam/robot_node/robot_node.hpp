@@ -128,10 +128,9 @@ class RobotNode {
   /// Fill a snapshot now (e.g. on start-up or on request); returns its chunk count.
   int make_snapshot(std::int64_t now_utime);
   /// True when this frame also produced a CANDIDATES_<r> message (robot.node.
-  /// candidates_period_frames): the robot's candidates, at most kMaxCandidates.
+  /// candidates_period_frames): the robot's candidates, at most contract::kMaxCandidates.
   bool candidates_ready() const { return candidates_ready_; }
   const candidate_list_t& candidates_msg() const { return candidates_; }
-  static constexpr int kMaxCandidates = 20;  // 52 bytes each: one datagram
 
   /// The incarnation every outgoing message carries (landmark_event_t): the start-up
   /// wall clock [us] of a fresh start, kept from the state file on a resume
@@ -245,7 +244,7 @@ class RobotNode {
   int num_chunks_ = 0;
   bool snapshot_ready_ = false;
   bool candidates_ready_ = false;
-  candidate_list_t candidates_{};  // reserved for kMaxCandidates at construction
+  candidate_list_t candidates_{};  // reserved for contract::kMaxCandidates at construction
   int last_resync_frame_ = -1;
   int duplicate_until_frame_ = -1;            // STATUS shows FAULT_DUPLICATE_SENDER until then
   std::int64_t older_sender_ = 0;             // an older incarnation heard on the own channels
