@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The ELA gate's cost per frame against the number of mapped landmarks in view
-// (issues 16 and 18): ElaGate::judge_view, modes ela (eq 16 for every landmark, the
+// ElaGate::judge_view, modes ela (eq 16 for every landmark, the
 // worst set aside and the rest re-tested) and consensus (pair tests, the cliques
 // with their joint prior test, eq 16 re-tests), with every landmark static (one
 // pass) and with a quarter of them displaced (set-aside passes).

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// main_robot's cost per team frame against the team's size and the world's
-// (issue 18): every robot's frame brings its LMAP_EVENTs (UPDATEs of landmarks in
+// main_robot's cost per team frame against the team's size and the world's:
+// every robot's frame brings its LMAP_EVENTs (UPDATEs of landmarks in
 // its view) and its POSE; when all R poses of a frame are in, main_robot fills the
 // frame's GLOBAL_MAP (every static landmark, in datagram-sized chunks) and encodes
 // it as LCM would. The map holds N landmarks, each held by two robots (one when the

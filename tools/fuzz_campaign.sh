@@ -9,7 +9,7 @@
 #   tools/fuzz_campaign.sh [--executions N] [--chunk SECONDS] [--targets "..."]
 #                          [--max-len BYTES] [--build-dir DIR] [--ledger DIR] [--status]
 #
-# - --executions: the goal per target (default 10000000, issue 15).
+# - --executions: the goal per target (default 10000000).
 # - --chunk: seconds per fuzz.sh run (default 600). The next chunk goes to the target
 #   with the fewest executions so far, so all targets advance together.
 # - --max-len: bound on a mutated input (default 4096, libFuzzer's own default:

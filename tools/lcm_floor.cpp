@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // lcm_floor: LCM's own one-way latency on this machine at a given message rate, the
-// floor under the team's sensor-to-pose latency (issue 18; docs/benchmarks.md
+// floor under the team's sensor-to-pose latency (docs/benchmarks.md
 // "Latency and LCM's floor"). Two processes (this one forks): a receiver subscribes,
 // a sender publishes --count messages of --size bytes at --rate on udpm, each
 // carrying its send time (CLOCK_MONOTONIC, one clock for both); the receiver takes

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Cross-validation of the MRCLAM calibration (issue 16: calibration that generalises).
+"""Cross-validation of the MRCLAM calibration (calibration that generalises).
 
 config/mrclam.yaml's real-data parameters were fitted with mrclam_stats on all five
 robots of dataset6, the recording whose results are also reported. This tool fits

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""An MRCLAM recording without the robots' Vicon files, as a held-out check (issue 16).
+"""An MRCLAM recording without the robots' Vicon files, as a held-out check.
 
 Public copies of other MRCLAM recordings often lack RobotN_Groundtruth.dat (the largest
 files). Without them run_dataset cannot start: it places every robot at its ground-truth

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Plot issue 18's cost curves from Google Benchmark JSON files.
+"""Plot the cost curves from Google Benchmark JSON files.
 
     tools/plot_costs.py --ekf EKF.json --main MAIN.json [--out DIR]
 

@@ -221,7 +221,7 @@ void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<S
   won.push_back({"landmark error", [](const SweepResult& r) { return r.landmark_error; }});
   // Eq 18 scores each mode on the landmarks of its own map: a mover that ela deletes
   // drops out of its error while ekf is scored on its drifting movers. The same
-  // error over the truly static landmarks of each map, beside it (issue 16).
+  // error over the truly static landmarks of each map, beside it.
   const Metric static_only = [](const SweepResult& r) { return r.landmark_static; };
   table(out, "Table 1b: landmark error of the global map, truly static landmarks only [m]", g, jobs, res,
         static_only, 3);

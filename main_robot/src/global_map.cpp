@@ -275,7 +275,7 @@ EventResult GlobalMap::apply(const GlobalEvent& e, std::vector<Notice>* notices)
     RobotEstimate& est = g.by_robot[static_cast<std::size_t>(e.robot_id - 1)];
     // While it is MOVING (confirmed), an ADD or UPDATE may be of where it was before
     // it moved (sent before the robot had the notice): kept, but out of the fusion,
-    // also after a RETURN (issue 16, F4). The robot's next estimate counts again.
+    // also after a RETURN. The robot's next estimate counts again.
     const bool held_out =
         g.status == GlobalStatus::kMoving && !g.moving_unconfirmed && e.kind != landmark_event_t::RETURN;
     est = {!held_out, e.position, e.cov, e.frame};

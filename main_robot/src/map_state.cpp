@@ -163,7 +163,7 @@ bool GlobalMap::from_json(std::string_view text, std::string* why) {
     loaded.newest_frame_ = frame(j, "newest_frame", /*none=*/true);
     const json& rs = array_at(j, "robots");
     // One entry per robot id 1..kMaxTeamRobots; a file of a build with fewer robot
-    // ids (8 before issue 18) holds fewer, and the rest start fresh.
+    // ids (an older build had 8) holds fewer, and the rest start fresh.
     if (rs.empty() || rs.size() > static_cast<std::size_t>(kMaxTeamRobots))
       refuse("robots: expected 1 to " + std::to_string(kMaxTeamRobots) + " entries");
     for (std::size_t r = 0; r < rs.size(); ++r) {

@@ -173,9 +173,9 @@ void LMap::found_moving(int id, int frame, bool reanchored) {
 }
 
 // A notice is another robot's finding: this robot's stream has not said MOVING, so
-// its own later finding is still reported (issue 16, F3: a notice used to set
-// reported_moving, which silenced this robot's MOVING for good once another robot
-// had RETURNed the landmark at main).
+// its own later finding is still reported (were a notice to set reported_moving,
+// this robot's MOVING would be silenced for good once another robot had RETURNed
+// the landmark at main).
 void LMap::told_moving(int id, int frame, bool left_filter) {
   LMapEntry& e = at(id);
   become_moving(&e, frame, false);

@@ -286,7 +286,7 @@ json RobotStateAccess::save_lmap(const LMap& m) {
     json j = {{"id", id}, {"status", to_string(e.status)}, {"cov", to_json(e.cov)}};
     for (const auto& f : kEntryInts) j[f.name] = e.*f.field;
     for (const auto& f : kEntryBools) j[f.first] = e.*f.second;
-    if (e.archived) j["archived"] = true;  // absent: false (and in files of before issue 18)
+    if (e.archived) j["archived"] = true;  // absent: false (and in files of older builds)
     if (e.checked) j["checked"] = true;    // absent: false (and in files of before 2026-12-04)
     for (const auto& f : kEntryVecs) j[f.name] = to_json(e.*f.field);
     entries.push_back(std::move(j));

@@ -83,7 +83,7 @@ TEST(GlobalMap, MovingRemovesNotifiesOnceAndReturnLetsBack) {
   m.apply(ev(3, 1, landmark_event_t::UPDATE, 5, 2, 2), &notices);
   EXPECT_EQ(m.entry(5).status, GlobalStatus::kMoving);
   // RETURN lets it back, with the RETURN's estimate only: the UPDATE sent while it
-  // was MOVING may be of where it was before (issue 16, F4: it used to be fused).
+  // was MOVING may be of where it was before, so it is not fused.
   m.apply(ev(1, 3, landmark_event_t::RETURN, 5, 3, 3, 0.01, 20), &notices);
   EXPECT_EQ(m.entry(5).status, GlobalStatus::kStatic);
   EXPECT_EQ(m.entry(5).status_frame, 20);
@@ -322,7 +322,7 @@ TEST(GlobalMap, PersistenceKeepsALandmarkNoRobotHoldsAndAnUnconfirmedMovingEntry
   EXPECT_NE(why.find("fused cov"), std::string::npos) << why;
 }
 
-// A state file of a build with 8 robot ids (before issue 18) loads: its robots'
+// A state file of an older build with 8 robot ids loads: its robots'
 // streams continue, the others start fresh.
 TEST(GlobalMap, StateOfEightRobotIdsLoads) {
   GlobalMap m(options());

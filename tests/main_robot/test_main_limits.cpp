@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Messages and state files that decode and look valid but are absurd (issue 15):
+// Messages and state files that decode and look valid but are absurd:
 // main_robot refuses them, counts each per reason, and keeps the map as it was.
 #include <gtest/gtest.h>
 

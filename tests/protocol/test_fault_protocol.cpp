@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// The rules that make the team's messages survive loss, restarts and duplicates
-// (issue 14): chunking, chunk loss and reordering at main_robot, incarnations,
+// The rules that make the team's messages survive loss, restarts and duplicates:
+// chunking, chunk loss and reordering at main_robot, incarnations,
 // a second sender with one robot id, resync requests, and notices repaired from
 // GLOBAL_MAP. Robot nodes and main_robot are driven directly with messages, in a
 // simulated 50 %-dynamism world, so each rule is seen on real maps.

@@ -21,7 +21,7 @@ using test::view_of;
 
 const double kThreshold = chi2_quantile(0.99, 2);
 
-// The joint prior test of a clique (issue 16): the innovations of one frame share
+// The joint prior test of a clique: the innovations of one frame share
 // the pose's error, so the clique's d2 uses their joint covariance H P H^T + W. On a
 // robot whose pose uncertainty dominates (0.1 m), the sum of the single d2s fired
 // 7.4 % of the time against chi2(0.99, 12); the joint d2 fires at the nominal 1 %.

@@ -78,9 +78,8 @@ TEST(ElaGate, StaticLandmarksFlaggedAtAboutTheGateRate) {
 // The same with a map built under realistic heading uncertainty (3 deg at mapping
 // time, then some driving): the landmarks' errors are then strongly correlated with
 // the heading's (a map built with a heading error is rotated by it), and eq 16's and
-// the pair test's covariances must carry that correlation. Without it (before issue
-// 16's F2) the multi-landmark test fired at 0.5-0.7 %, not 1 %: slow movers caught
-// later.
+// the pair test's covariances must carry that correlation. Without it the
+// multi-landmark test fires at 0.5-0.7 %, not 1 %: slow movers caught later.
 TEST(ElaGate, StaticLandmarksFlaggedAtTheGateRateUnderHeadingUncertainty) {
   const Pose2 pose{1.0, -0.5, -0.4};
   const auto lms = test::ring(6, 3.5);
@@ -281,7 +280,7 @@ TEST(ElaGateFrame, OneVerdictAndOneRecordPerLandmarkInViewEq16) {
   }
 }
 
-// Issue 16, F1: with two landmarks in view eq 16 cannot tell which one moved (the
+// With two landmarks in view eq 16 cannot tell which one moved (the
 // residuals are r and -r with one covariance); the prior innovation breaks the tie,
 // whichever comes first in the view. Before, the first was set aside: a static
 // landmark flagged, and the mover then failed its lone test too.

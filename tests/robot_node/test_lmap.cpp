@@ -132,9 +132,10 @@ TEST(LMap, ANoticeRaisesTheBarEvenForALandmarkNotHeld) {
   EXPECT_EQ(m[5].times_moving, 2);
 }
 
-// Issue 16, F3: a notice is another robot's finding. It must not silence this
-// robot's own MOVING report (a notice used to set reported_moving: once another robot
-// had RETURNed the landmark at main, this robot never reported it moving again).
+// A notice is another robot's finding. It must not silence this
+// robot's own MOVING report (were a notice to set reported_moving, once another
+// robot had RETURNed the landmark at main this robot would never report it moving
+// again).
 TEST(LMap, ANoticeDoesNotSilenceThisRobotsOwnMovingReport) {
   LMap m(8, rules());
   m.told_moving(4, 3, /*left_filter=*/false);  // never held, never reported by this robot

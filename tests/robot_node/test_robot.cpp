@@ -342,7 +342,7 @@ void static_paper_world(int first, int last, Tune tune, Each each) {
   }
 }
 
-// Issue 16: the candidate's drift test sums its whitened innovations over its
+// The candidate's drift test sums its whitened innovations over its
 // consistent sightings, and a candidate is refined by landmark-only (Schmidt)
 // updates, under which the innovations need not be white (they share the pose's
 // error): the sum's d2 need not be chi-square. Measured instead: the paper's robots
@@ -659,7 +659,7 @@ TEST_F(RobotPaths, EveryTestedObservationKeepsItsNumbers) {
 namespace elaslam {
 namespace {
 
-// The consistency monitor (issue 16): a robot whose odometer lies (a 0.5 m jump it
+// The consistency monitor: a robot whose odometer lies (a 0.5 m jump it
 // did not drive, with the confidence of a normal increment) keeps correcting with
 // innovations far beyond their covariance (eq 16 cancels a position error, so the
 // landmarks are accepted). The monitor finds the filter inconsistent within its

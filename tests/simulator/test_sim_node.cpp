@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The simulator process's library (run_simulator) on the in-process transport:
 // more landmarks in view than a sensor frame carries is said at once (a FAULT line,
-// rate-limited) and flagged in STATUS_SIM, not only in the summary line (issue 15).
+// rate-limited) and flagged in STATUS_SIM, not only in the summary line.
 #include <gtest/gtest.h>
 
 #include <atomic>

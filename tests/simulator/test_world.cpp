@@ -305,7 +305,7 @@ TEST(SimWorld, GroundTruthMessage) {
   return m->decode(buf.data(), 0, static_cast<int>(buf.size()));
 }
 
-// The large world (config/large.yaml, issue 18): 16 robots and 1,024 landmarks fit
+// The large world (config/large.yaml): 16 robots and 1,024 landmarks fit
 // one GROUND_TRUTH, which survives LCM's encoding whole; filling it again in place
 // keeps the arrays sized to the world.
 TEST(SimWorld, GroundTruthOfTheLargeWorldRoundTrips) {

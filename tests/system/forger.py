@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
 """An attacker on the team's LCM network without any team member's key (system test
-`system_forger`, tests/system/forger.sh; issue 15). Until SIGTERM / SIGINT or
+`system_forger`, tests/system/forger.sh). Until SIGTERM / SIGINT or
 --duration, every --period seconds it sends:
 
   - LMAP_EVENT  ADD of a landmark at (100, 100) with a tiny covariance, from robot

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The adapter from recorded messages to the metrics (team/frame_data.hpp) refuses
-// what a node would refuse (issue 15): evaluate once reported a latency p50 of
-// -4.7 s from POSEs with a forged source_utime.
+// what a node would refuse: POSEs with a forged source_utime would otherwise give a
+// latency p50 of -4.7 s.
 #include <gtest/gtest.h>
 
 #include <cmath>

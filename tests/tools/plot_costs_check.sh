@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# tools/plot_costs.py on short runs of bench_ekf and bench_main (issue 18's cost
+# tools/plot_costs.py on short runs of bench_ekf and bench_main (the cost
 # curves, docs/benchmarks.md): both PNGs written; a file without the benchmarks and
 # a missing file are refused with exit 1 naming them. Timings are not checked.
 #   tests/tools/plot_costs_check.sh BUILD_DIR

@@ -305,8 +305,8 @@ TEST_F(Auth, AJumpWithinTheBoundSlidesTheWindow) {
   EXPECT_EQ(open(main, m[170]), Verdict::kReplayed);  // now below the window
 }
 
-// One signed datagram with a far counter (2^64 - 9) used to make every later message of
-// its sender a replay: now it is held, the real stream goes on, and a real jump (a long
+// One signed datagram with a far counter (2^64 - 9) must not make every later message
+// of its sender a replay: it is held, the real stream goes on, and a real jump (a long
 // partition) is taken at the sender's next message.
 TEST_F(Auth, AFarCounterIsHeldAndNeverSilencesItsSender) {
   const auto payload = encoded(event(1));

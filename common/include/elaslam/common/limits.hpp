@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// What a message (or a state file) may say and still be believed (issue 15): the
+// What a message (or a state file) may say and still be believed: the
 // plausibility bounds every receiver applies after the contract's structural checks
 // (contract.hpp), and the reasons a message is refused, counted per reason in
 // STATUS (node_status_t.refused). One options struct, `limits:` in the robot and

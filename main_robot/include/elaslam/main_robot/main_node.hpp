@@ -282,8 +282,8 @@ class MainPorts {
   }
   /// The timer's GLOBAL_MAP (main.publish_rate_hz): only when no map went out in the
   /// last `period_us`. While the team's frames finish, each finished frame publishes
-  /// its map and the timer adds none (it used to add a second one every period: twice
-  /// the map traffic at 10 Hz, docs/benchmarks.md "Scale"); when they stall (a robot
+  /// its map and the timer adds none (a second one every period would double the map
+  /// traffic at 10 Hz, docs/benchmarks.md "Scale"); when they stall (a robot
   /// down, POSEs lost) the timer keeps the map going out.
   void publish_map_if_quiet(std::int64_t period_us) {
     if (last_map_utime_ != kNever && shell_.now_utime() - last_map_utime_ < period_us) return;

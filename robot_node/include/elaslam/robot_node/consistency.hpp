@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The filter's consistency monitor (issue 16: a robot that is lost says so and
+// The filter's consistency monitor (a robot that is lost says so and
 // recovers). A Kalman filter's sequential innovations are independent with known
 // covariances, so the sum of their normalised squares (NIS, d2 each with 2 dof) over
 // a window of frames is chi-square with twice the number of corrections as degrees

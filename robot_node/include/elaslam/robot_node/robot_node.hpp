@@ -293,7 +293,7 @@ struct RobotQueues {
 /// A template on the shell only so that this library builds without the transport
 /// (the no-allocation test compiles its sources alone); Shell is NodeShell.
 ///
-/// Where a frame's time goes (issue 18), per processed frame, wall-clock [us]:
+/// Where a frame's time goes, per processed frame, wall-clock [us]:
 ///   receive: the SENSOR's publish stamp (its utime) to this handler: the sender's
 ///            encode and send, the network, the wake-up and scheduling of this
 ///            process, LCM's receive thread and queue, decode and the MAC check.

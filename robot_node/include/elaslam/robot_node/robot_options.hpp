@@ -118,7 +118,7 @@ struct RobotOptions {
   int candidates_period_frames = 1;
   /// A frame's events go to main_robot in LMAP_EVENTS messages (lmap_events_t, up to
   /// contract::kMaxBatchEvents each) rather than one LMAP_EVENT per event: one
-  /// datagram where there were ~10, the same events in the same order (issue 18).
+  /// datagram where there were ~10, the same events in the same order.
   bool batch_events = true;
   int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
   /// A robot whose first frame is not frame 0 (started late, or restarted without
@@ -130,7 +130,7 @@ struct RobotOptions {
   /// after every frame), and at exit.
   double state_save_interval_s = 0.5;   // [s]
 
-  // What a message may say (issue 15, docs/security.md).
+  // What a message may say (docs/security.md).
   MessageLimits limits;
   /// The most the robot can move in one frame, with margin: an odometer increment
   /// over k frames beyond k times these is refused as a glitch or forgery (not the

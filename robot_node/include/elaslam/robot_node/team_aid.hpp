@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// The team's map back to a robot without double counting (issue 16; the argument is
+// The team's map back to a robot without double counting (the argument is
 // in docs/decisions.md, "The team helps its members").
 //
 // main_robot sends each robot r the map of the other robots: per landmark, the

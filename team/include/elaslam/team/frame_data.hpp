@@ -58,7 +58,7 @@ class GlobalMapAssembly {
   int count_ = 0;
 };
 
-/// The receivers' checks for a recorded message (issue 15): what a node would have
+/// The receivers' checks for a recorded message: what a node would have
 /// refused is not evaluated either. "" when it holds, else the problem (`reason`
 /// its kind). A POSE's source_utime must not be after `received_us` (more than
 /// kClockSlackUs): a forged stamp in the future made a negative latency.
