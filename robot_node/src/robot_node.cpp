@@ -159,20 +159,18 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   candidates_ready_ = false;
   events_.clear();
   num_batches_ = 0;
+  if (const Verdict v = admit(msg, why); v != Verdict::kProcessed) return v;
+  run_frame(msg, now_utime);
+  // Held inputs take effect after this frame's outputs (as in the in-process run).
+  release_held_notices();
+  apply_team_estimates();
+  return Verdict::kProcessed;
+}
+
+RobotNode::Verdict RobotNode::admit(const sensor_frame_t& msg, std::string* why) {
   Refusal reason = Refusal::kMalformed;
   std::string problem = validate(msg, &reason);
-  // Two observations of one landmark in a frame: the contract allows one.
-  for (int k = 0; problem.empty() && k < msg.num_obs; ++k) {
-    auto& seen = id_seen_[static_cast<std::size_t>(msg.obs[k].landmark_id)];
-    if (seen) problem = contract::got("landmark observed twice in one frame", msg.obs[k].landmark_id), reason = Refusal::kDuplicateId;
-    seen = 1;
-  }
-  // Clear the marks; a refused count may exceed the array (the obs are variable-length).
-  const int marked = contract::bounded(msg.num_obs, static_cast<int>(std::min<std::size_t>(msg.obs.size(), static_cast<std::size_t>(options_.max_observations))));
-  for (int k = 0; k < marked; ++k) {
-    const int id = msg.obs[static_cast<std::size_t>(k)].landmark_id;
-    if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
-  }
+  if (problem.empty()) problem = check_duplicate_ids(msg, &reason);
   if (!problem.empty()) return refused(reason, problem, why), Verdict::kInvalid;
   // One frame processed so far, and this one does not continue it (older, or further
   // ahead than confirm_jump_frames): that first frame was not the stream's (a forged
@@ -198,7 +196,27 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     counters_.frames_gap += msg.frame - last_frame_ - 1;
     note_frames_lost(last_frame_ + 1, msg.frame - 1);
   }
+  return Verdict::kProcessed;
+}
 
+// A valid frame's sightings (ids checked against max_landmark_id by validate).
+std::string RobotNode::check_duplicate_ids(const sensor_frame_t& msg, Refusal* reason) {
+  std::string problem;
+  for (int k = 0; problem.empty() && k < msg.num_obs; ++k) {
+    auto& seen = id_seen_[static_cast<std::size_t>(msg.obs[k].landmark_id)];
+    if (seen) problem = contract::got("landmark observed twice in one frame", msg.obs[k].landmark_id), *reason = Refusal::kDuplicateId;
+    seen = 1;
+  }
+  // Clear the marks for the next frame.
+  const int marked = contract::bounded(msg.num_obs, static_cast<int>(std::min<std::size_t>(msg.obs.size(), static_cast<std::size_t>(options_.max_observations))));
+  for (int k = 0; k < marked; ++k) {
+    const int id = msg.obs[static_cast<std::size_t>(k)].landmark_id;
+    if (id >= 0 && id < options_.ekf.max_landmark_id) id_seen_[static_cast<std::size_t>(id)] = 0;
+  }
+  return problem;
+}
+
+void RobotNode::run_frame(const sensor_frame_t& msg, std::int64_t now_utime) {
   const auto t0 = std::chrono::steady_clock::now();
   input_.frame = msg.frame;
   input_.utime = msg.utime;
@@ -229,8 +247,9 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count();
   processing_.add(us);
   fill_pose(msg, now_utime, s, us);
-  // Notices held for this frame or an earlier one take effect now, after
-  // this frame's outputs, in arrival order (as in the in-process run).
+}
+
+void RobotNode::release_held_notices() {
   std::size_t kept = 0;
   for (std::size_t i = 0; i < held_.size(); ++i) {
     if (held_[i].frame <= last_frame_) {
@@ -240,8 +259,6 @@ RobotNode::Verdict RobotNode::on_sensor(const sensor_frame_t& msg, std::int64_t 
     }
   }
   held_.resize(kept);
-  apply_team_estimates();
-  return Verdict::kProcessed;
 }
 
 void RobotNode::fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s,

@@ -183,6 +183,18 @@ class RobotNode {
  private:
   friend struct RobotStateAccess;  // the state file (robot_state.cpp): saves and restores the members below
 
+  /// A SENSOR frame's admission: the contract, one sighting per landmark, the order
+  /// (duplicates, older frames, a stray first frame), the frame window and the
+  /// odometry bound, gaps noted. kProcessed: the frame is to be processed; else the
+  /// verdict (counted, `why` says why).
+  Verdict admit(const sensor_frame_t& msg, std::string* why);
+  /// "" unless a landmark is sighted twice in the frame (the contract allows one).
+  std::string check_duplicate_ids(const sensor_frame_t& msg, Refusal* reason);
+  /// An admitted frame through the Robot, and its outputs (events, snapshot,
+  /// candidates, POSE).
+  void run_frame(const sensor_frame_t& msg, std::int64_t now_utime);
+  /// Notices held for this frame or an earlier one take effect, in arrival order.
+  void release_held_notices();
   void fill_pose(const sensor_frame_t& msg, std::int64_t now_utime, const FrameSummary& s, std::int64_t us);
   void fill_events(std::int64_t now_utime);
   void apply_notice(const dynamic_notice_t& msg);
