@@ -272,4 +272,13 @@ inline EkfOptions small_options(bool joseph) {
   return o;
 }
 
+/// Largest difference of mean and covariance between two filters holding the same
+/// landmarks in the same slots (HUGE_VAL when they do not: another size or order).
+inline double difference(const EkfSlam& a, const EkfSlam& b) {
+  if (a.state_dim() != b.state_dim()) return HUGE_VAL;
+  for (int slot = 0; slot < a.num_landmarks(); ++slot)
+    if (a.id_at(slot) != b.id_at(slot)) return HUGE_VAL;
+  return std::max((a.mean() - b.mean()).cwiseAbs().maxCoeff(), (a.covariance() - b.covariance()).cwiseAbs().maxCoeff());
+}
+
 }  // namespace elaslam::test

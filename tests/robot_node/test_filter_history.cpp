@@ -13,18 +13,10 @@
 namespace elaslam {
 namespace {
 
+using test::difference;
 using test::RandomWorld;
 using test::kOdoNoise;
 using test::small_options;
-
-// Largest difference of mean and covariance between two filters holding the same
-// landmarks in the same slots.
-double difference(const EkfSlam& a, const EkfSlam& b) {
-  if (a.state_dim() != b.state_dim()) return HUGE_VAL;
-  for (int slot = 0; slot < a.num_landmarks(); ++slot)
-    if (a.id_at(slot) != b.id_at(slot)) return HUGE_VAL;
-  return std::max((a.mean() - b.mean()).cwiseAbs().maxCoeff(), (a.covariance() - b.covariance()).cwiseAbs().maxCoeff());
-}
 
 // Three filters driven through the same frames: `current` (with the history) and
 // `trusted` hold the candidate as the robot does and as a filter that trusted it

@@ -17,12 +17,8 @@ using test::kOdoNoise;
 using test::RandomWorld;
 using test::small_options;
 
-bool same(const EkfSlam& a, const EkfSlam& b) {
-  if (a.state_dim() != b.state_dim()) return false;
-  for (int slot = 0; slot < a.num_landmarks(); ++slot)
-    if (a.id_at(slot) != b.id_at(slot)) return false;
-  return a.mean() == b.mean() && a.covariance() == b.covariance();
-}
+// Bit-identical: the same landmarks in the same slots, the same mean and covariance.
+bool same(const EkfSlam& a, const EkfSlam& b) { return test::difference(a, b) == 0.0; }
 
 // Frames of a random world through `pair`: predict, correct landmarks 0-3 (added at
 // frame 0), landmark 4 refined alone from frame 2, removed at frame 6.

@@ -32,7 +32,7 @@ class FilterPair {
   FilterPair(const EkfOptions& options, bool aided, int history_frames, int history_ops);
 
   // ---- operations on both (the own filter's result returned) -----------------------
-  // `faults` (may be null where noted) counts the operations a filter refused.
+  // `faults` (never null) counts the operations a filter refused.
   /// Both filters start at `odometer` with covariance P0; the histories start over.
   void reset(const Pose2& odometer, const Eigen::Matrix3d& P0);
   /// A prediction; a refusal by the own filter is counted too.
