@@ -4,6 +4,7 @@
 // run_dataset). Header-only: the programs link CLI11, the library does not.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -15,24 +16,23 @@
 namespace elaslam::mrclam {
 
 struct DatasetOverrides {
-  double rate = 0.0, start = 0.0, duration = 0.0;
-  std::string robots;  // e.g. "1,2,3,4,5"
-  // Set by add_options; an option given on the command line overrides the config.
-  CLI::Option* rate_option = nullptr;
-  CLI::Option* start_option = nullptr;
-  CLI::Option* duration_option = nullptr;
+  // Set only when given on the command line; the parser's callbacks fill them, so
+  // nothing here refers to the parser once it is gone.
+  std::optional<double> rate, start, duration;
+  std::string robots;  // e.g. "1,2,3,4,5"; empty when not given
 };
 
 /// --rate, --start, --duration and --robots, each checked against mrclam::limits.
 inline void add_options(CLI::App& app, DatasetOverrides* d) {
-  d->rate_option = app.add_option("--rate", d->rate, "frames per second (default dataset.rate_hz)")
-                       ->check(cli::range(limits::kRateMinHz, limits::kRateMaxHz));
-  d->start_option =
-      app.add_option("--start", d->start, "[s] first frame after the common start (default dataset.start_s)")
-          ->check(cli::range(0.0, limits::kStartMaxS));
-  d->duration_option =
-      app.add_option("--duration", d->duration, "[s] length, 0 = to the common end (default dataset.duration_s)")
-          ->check(cli::range(0.0, limits::kDurationMaxS));
+  app.add_option_function<double>("--rate", [d](double v) { d->rate = v; },
+                                  "frames per second (default dataset.rate_hz)")
+      ->check(cli::range(limits::kRateMinHz, limits::kRateMaxHz));
+  app.add_option_function<double>("--start", [d](double v) { d->start = v; },
+                                  "[s] first frame after the common start (default dataset.start_s)")
+      ->check(cli::range(0.0, limits::kStartMaxS));
+  app.add_option_function<double>("--duration", [d](double v) { d->duration = v; },
+                                  "[s] length, 0 = to the common end (default dataset.duration_s)")
+      ->check(cli::range(0.0, limits::kDurationMaxS));
   app.add_option("--robots", d->robots, "robots to use, e.g. 1,2,3,4,5 (default dataset.robots)");
 }
 
@@ -41,9 +41,9 @@ inline void add_options(CLI::App& app, DatasetOverrides* d) {
 inline bool apply(const DatasetOverrides& d, Options* o, std::string* why) {
   Options out = *o;
   if (!d.robots.empty() && !parse_robot_list(d.robots, &out.robots, why)) return false;
-  if (d.rate_option != nullptr && d.rate_option->count() > 0) out.rate_hz = d.rate;
-  if (d.start_option != nullptr && d.start_option->count() > 0) out.start_s = d.start;
-  if (d.duration_option != nullptr && d.duration_option->count() > 0) out.duration_s = d.duration;
+  if (d.rate) out.rate_hz = *d.rate;
+  if (d.start) out.start_s = *d.start;
+  if (d.duration) out.duration_s = *d.duration;
   *o = std::move(out);
   return true;
 }
