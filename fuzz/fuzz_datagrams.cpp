@@ -51,7 +51,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/main_robot/main_node.hpp"
-#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
 #include "elaslam/simulator/messages.hpp"

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "elaslam/common/channels.hpp"
-#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/robot_state.hpp"
 #include "fuzz_options.hpp"

@@ -5,7 +5,7 @@
 // the installed default (common/cli.hpp).
 // Subscribes SENSOR_<R>, DYNAMIC_NOTICE; publishes POSE_<R>, LMAP_EVENTS (or LMAP_EVENT),
 // LMAP_SNAPSHOT, STATUS_ROBOT_<R>. A thin shell: RobotNode on the node shell
-// (RobotPorts, robot_node.hpp), exactly as the in-process team run runs it.
+// (RobotPorts, robot_ports.hpp), exactly as the in-process team run runs it.
 // With --state the node's whole state (robot_state.hpp) is saved atomically after
 // processed frames at most every node.state_save_interval_s and at exit, and
 // resumed at start; a corrupt file is moved aside to PATH.corrupt (StateKeeper,
@@ -19,7 +19,7 @@
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
 #include "elaslam/common/log.hpp"
-#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/state_keeper.hpp"
 #include "elaslam/transport/incarnation.hpp"
 #include "elaslam/transport/node_shell.hpp"

@@ -99,7 +99,7 @@ Eigen::Matrix2d cov2(const json& o, const char* what) {
 }
 
 // One robot's record: its stream as the file has it (message bounds; the file's own:
-// map_state_out_of_bounds). Keys of files of before 2026-12-03 are optional.
+// map_state_out_of_bounds). Keys that older files lack are optional.
 void parse_robot(const json& r, RobotStream* s) {
   s->last_seq = integer(r, "last_seq", 0, kMaxSeq);
   s->last_frame = frame(r, "last_frame", /*none=*/true);
@@ -142,7 +142,7 @@ void parse_landmark(const json& l, int id, const MessageLimits& lim, GlobalEntry
     est.cov = cov2(e, "cov");
     check_estimate(est.position, est.cov, lim, by, "position", "cov");
   }
-  // Optional (files of before 2026-12-03 lack them).
+  // Optional (older files lack them).
   const auto flag = [&](const char* key) {
     if (!l.contains(key)) return false;
     if (!l.at(key).is_boolean()) refuse(where + ": " + key + " is not a boolean");

@@ -209,30 +209,30 @@ json RobotStateAccess::save_node(const RobotNode& n) {
   json counters = json::object();
   for (const auto& c : kCounters) counters[c.first] = n.counters_.*c.second;
   counters["refused"] = n.counters_.refused.n;  // per reason: their sum is rejected_inputs
+  const DeferredInputs& d = n.deferred_;
   json held = json::array();
-  for (const dynamic_notice_t& m : n.held_)
-    held.push_back({{"utime", m.utime}, {"frame", m.frame}, {"seq", m.seq}, {"landmark_id", m.landmark_id},
-                    {"detected_by", m.detected_by}});
-  json had = json::array();  // [id, frame] of the newest notice had per landmark (GLOBAL_MAP repair)
-  for (std::size_t id = 0; id < n.notice_frame_.size(); ++id)
-    if (n.notice_frame_[id] >= 0) had.push_back({static_cast<int>(id), n.notice_frame_[id]});
-  json out = {{"last_frame", n.last_frame_}, {"seq", n.seq_}, {"counters", counters}, {"held_notices", held},
+  for (const MovingReport& m : d.held_)
+    held.push_back({{"frame", m.frame}, {"landmark_id", m.landmark_id}, {"detected_by", m.detected_by}});
+  json had = json::array();  // [id, frame] of the newest report had per landmark (GLOBAL_MAP repair)
+  for (std::size_t id = 0; id < d.report_frame_.size(); ++id)
+    if (d.report_frame_[id] >= 0) had.push_back({static_cast<int>(id), d.report_frame_[id]});
+  json out = {{"last_frame", n.last_frame()}, {"seq", n.messages_.seq_}, {"counters", counters}, {"held_notices", held},
               {"notice_frames", had}};
   // The last frames of the faults STATUS shows for kAlertFrames: optional keys
-  // (absent in files of before 2026-12-04, whose resumed node showed neither).
+  // (absent in older files, whose resumed node showed neither).
   if (n.inconsistent_frame_ >= 0) out["inconsistent_frame"] = n.inconsistent_frame_;
   if (n.full_frame_ >= 0) out["full_frame"] = n.full_frame_;
-  // The newest team map applied and its estimates still held for a later frame
-  // (robot.team_map.fuse): optional, absent in files of before 2026-12-04.
+  // The newest team map taken and its estimates still held for a later frame
+  // (robot.team_map.fuse): optional, absent in older files.
   if (n.options_.team_map_fuse) {
     json pending = json::array();
-    for (std::size_t id = 0; id < n.team_pending_.size(); ++id) {
-      const auto& p = n.team_pending_[id];
+    for (std::size_t id = 0; id < d.team_pending_.size(); ++id) {
+      const auto& p = d.team_pending_[id];
       if (p.valid)
         pending.push_back({{"id", static_cast<int>(id)}, {"frame", p.frame}, {"position", to_json(p.position)},
                            {"cov", to_json(p.cov)}});
     }
-    out["team_map"] = {{"incarnation", n.team_map_incarnation_}, {"version", n.team_map_version_}, {"pending", std::move(pending)}};
+    out["team_map"] = {{"incarnation", d.team_map_incarnation_}, {"version", d.team_map_version_}, {"pending", std::move(pending)}};
   }
   return out;
 }
@@ -287,7 +287,7 @@ json RobotStateAccess::save_lmap(const LMap& m) {
     for (const auto& f : kEntryInts) j[f.name] = e.*f.field;
     for (const auto& f : kEntryBools) j[f.first] = e.*f.second;
     if (e.archived) j["archived"] = true;  // absent: false (and in files of older builds)
-    if (e.checked) j["checked"] = true;    // absent: false (and in files of before 2026-12-04)
+    if (e.checked) j["checked"] = true;    // absent: false (and in older files)
     for (const auto& f : kEntryVecs) j[f.name] = to_json(e.*f.field);
     entries.push_back(std::move(j));
   }
@@ -302,14 +302,14 @@ json RobotStateAccess::save(const RobotNode& n) {
                 {"last_odometer", json::array({r.last_odometer_.x, r.last_odometer_.y, r.last_odometer_.theta})},
                 {"last_utime", r.last_utime_}};
   // What the robot saw lately of its own trouble (a lost robot: Robot::apply_team_map)
-  // and the consistency monitor's window: optional keys (absent in files of before
-  // 2026-12-03: the window starts empty).
+  // and the consistency monitor's window: optional keys (absent in older files: the
+  // window starts empty).
   if (r.trouble_frame_ >= 0) robot["trouble_frame"] = r.trouble_frame_;
   json window = json::array();
   for (const auto& [nis, dof] : r.monitor_.window()) window.push_back(json::array({nis, dof}));
   if (!window.empty()) robot["consistency_window"] = std::move(window);
   // The aided filter and what the team channel fused into it (robot.team_map.fuse):
-  // optional, absent in files of before 2026-12-04.
+  // optional, absent in older files.
   if (r.filters_.aided_) {
     json channel = json::array();
     for (int id = 0; id < r.team_.max_landmark_id(); ++id)
@@ -322,13 +322,13 @@ json RobotStateAccess::save(const RobotNode& n) {
     if (r.filters_.aided_history_.enabled()) robot["aided"]["history"] = save_history(r.filters_.aided_history_);
   }
   // The filter history (robot.ela.candidate_history_frames): optional, absent in files
-  // of before 2026-12-04 (the history then starts over from the filter).
+  // of older versions (the history then starts over from the filter).
   if (r.filters_.own_history_.enabled()) robot["history"] = save_history(r.filters_.own_history_);
   return {{"robot_id", n.robot_id_},
           {"mode", to_string(o.mode)},
           {"capacity", o.ekf.capacity},
           {"max_landmark_id", o.ekf.max_landmark_id},
-          {"incarnation", n.incarnation_},
+          {"incarnation", n.incarnation()},
           {"node", save_node(n)},
           {"robot", robot},
           {"filter", save_filter(r.filters_.own_)},
@@ -354,13 +354,15 @@ void RobotStateAccess::check_header(const json& s, const RobotNode& n) {
 
 void RobotStateAccess::load_node(const json& s, RobotNode* n) {
   const json& node = need(s, "state", "node");
-  n->incarnation_ = whole(need(s, "state", "incarnation"), "state.incarnation", 0, kMaxIncarnation);
-  n->last_frame_ = static_cast<int>(whole(need(node, "node", "last_frame"), "node.last_frame", -1, kMaxFrame));
-  n->seq_ = whole(need(node, "node", "seq"), "node.seq", 0, kMaxCount);
+  n->messages_.incarnation_ = whole(need(s, "state", "incarnation"), "state.incarnation", 0, kMaxIncarnation);
+  const int last_frame = static_cast<int>(whole(need(node, "node", "last_frame"), "node.last_frame", -1, kMaxFrame));
+  n->admission_.last_frame_ = last_frame;
+  n->messages_.seq_ = whole(need(node, "node", "seq"), "node.seq", 0, kMaxCount);
+  DeferredInputs& d = n->deferred_;
   const json& counters = need(node, "node", "counters");
   for (const auto& c : kCounters)
     n->counters_.*c.second = whole(need(counters, "node.counters", c.first), std::string("node.counters.") + c.first, 0, kMaxCount);
-  // Optional (absent in files of before 2026-12-03, whose refusals then count from 0):
+  // Optional (absent in older files, whose refusals then count from 0):
   // rejected_inputs per reason, which must add up to it.
   if (counters.contains("refused")) {
     const json& by = array(counters.at("refused"), "node.counters.refused", kNumRefusals, kNumRefusals);
@@ -371,50 +373,49 @@ void RobotStateAccess::load_node(const json& s, RobotNode* n) {
     }
     if (sum != n->counters_.rejected_inputs) fail("node.counters.refused", "does not add up to rejected_inputs");
   }
-  const json& held = array(need(node, "node", "held_notices"), "node.held_notices", 0, n->held_.capacity());
+  // A held report's utime and seq, written by older files, are not needed: ignored.
+  const json& held = array(need(node, "node", "held_notices"), "node.held_notices", 0, d.held_.capacity());
   for (std::size_t k = 0; k < held.size(); ++k) {
     const std::string w = "node.held_notices[" + std::to_string(k) + "]";
-    dynamic_notice_t m{};
-    m.utime = whole(need(held[k], w, "utime"), w + ".utime", 0, kMaxIncarnation);
-    m.frame = static_cast<int32_t>(whole(need(held[k], w, "frame"), w + ".frame", n->last_frame_ + 1.0,
-                                         static_cast<double>(n->last_frame_) + n->options_.max_frame_gap));
-    m.seq = whole(need(held[k], w, "seq"), w + ".seq", 0, kMaxCount);
-    m.landmark_id = static_cast<int32_t>(whole(need(held[k], w, "landmark_id"), w + ".landmark_id", 0, n->options_.ekf.max_landmark_id - 1));
-    m.detected_by = static_cast<int16_t>(whole(need(held[k], w, "detected_by"), w + ".detected_by", 1, contract::kMaxRobots));
-    n->held_.push_back(m);
+    MovingReport m;
+    m.frame = static_cast<int>(whole(need(held[k], w, "frame"), w + ".frame", last_frame + 1.0,
+                                     static_cast<double>(last_frame) + n->options_.max_frame_gap));
+    m.landmark_id = static_cast<int>(whole(need(held[k], w, "landmark_id"), w + ".landmark_id", 0, n->options_.ekf.max_landmark_id - 1));
+    m.detected_by = static_cast<int>(whole(need(held[k], w, "detected_by"), w + ".detected_by", 1, contract::kMaxRobots));
+    d.held_.push_back(m);
   }
-  const json& had = array(need(node, "node", "notice_frames"), "node.notice_frames", 0, n->notice_frame_.size());
+  const json& had = array(need(node, "node", "notice_frames"), "node.notice_frames", 0, d.report_frame_.size());
   for (std::size_t k = 0; k < had.size(); ++k) {
     const std::string w = "node.notice_frames[" + std::to_string(k) + "]";
     const json& pair = array(had[k], w, 2, 2);
     const auto id = static_cast<std::size_t>(whole(pair[0], w + "[0]", 0, n->options_.ekf.max_landmark_id - 1));
-    n->notice_frame_[id] = static_cast<int>(whole(pair[1], w + "[1]", 0, kMaxFrame));
+    d.report_frame_[id] = static_cast<int>(whole(pair[1], w + "[1]", 0, kMaxFrame));
   }
   for (const auto& [key, frame] : {std::pair<const char*, int*>{"inconsistent_frame", &n->inconsistent_frame_},
                                    std::pair<const char*, int*>{"full_frame", &n->full_frame_}}) {
     *frame = -1;
     if (node.contains(key))
-      *frame = static_cast<int>(whole(node.at(key), std::string("node.") + key, 0, std::max(n->last_frame_, 0)));
+      *frame = static_cast<int>(whole(node.at(key), std::string("node.") + key, 0, std::max(last_frame, 0)));
   }
   if (n->options_.team_map_fuse && node.contains("team_map")) {
     const json& t = node.at("team_map");
-    n->team_map_incarnation_ = whole(need(t, "node.team_map", "incarnation"), "node.team_map.incarnation", 0, kMaxIncarnation);
-    n->team_map_version_ = whole(need(t, "node.team_map", "version"), "node.team_map.version", -1, kMaxCount);
-    const json& pending = array(need(t, "node.team_map", "pending"), "node.team_map.pending", 0, n->team_pending_.size());
+    d.team_map_incarnation_ = whole(need(t, "node.team_map", "incarnation"), "node.team_map.incarnation", 0, kMaxIncarnation);
+    d.team_map_version_ = whole(need(t, "node.team_map", "version"), "node.team_map.version", -1, kMaxCount);
+    const json& pending = array(need(t, "node.team_map", "pending"), "node.team_map.pending", 0, d.team_pending_.size());
     for (std::size_t k = 0; k < pending.size(); ++k) {
       const std::string w = "node.team_map.pending[" + std::to_string(k) + "]";
       const json& e = pending[k];
       const auto id = static_cast<std::size_t>(whole(need(e, w, "id"), w + ".id", 0, n->options_.ekf.max_landmark_id - 1));
-      auto& p = n->team_pending_[id];
+      auto& p = d.team_pending_[id];
       if (p.valid) fail(w + ".id", std::to_string(id) + " appears twice");
       // A team map's estimates are applied after the robot's frame that follows the
       // map's: those held are of this frame or a later one.
-      p.frame = static_cast<int>(whole(need(e, w, "frame"), w + ".frame", std::max(n->last_frame_, 0),
-                                       std::max(n->last_frame_, 0) + n->options_.max_frame_gap));
+      p.frame = static_cast<int>(whole(need(e, w, "frame"), w + ".frame", std::max(last_frame, 0),
+                                       std::max(last_frame, 0) + n->options_.max_frame_gap));
       p.position = vec2(need(e, w, "position"), w + ".position", n->options_.limits.world_bound);
       p.cov = cov2(need(e, w, "cov"), w + ".cov", n->options_.limits);
       p.valid = true;
-      ++n->team_pending_count_;
+      ++d.team_pending_count_;
     }
   }
 }
@@ -519,7 +520,7 @@ void RobotStateAccess::load_filter(const json& s, Robot* r) {
   if (!r->filters_.aided_) return;  // (a file of a node with robot.team_map.fuse on: its aided filter is left out)
   const json& robot = need(s, "state", "robot");
   if (!robot.contains("aided")) {
-    // Absent in files of before 2026-12-04 (or of a node with the team map off):
+    // Absent in older files (or of a node with the team map off):
     // the aided filter restarts as the own filter, the team's information to be
     // fused again from the next team map.
     r->filters_.aided_->restore(x, P, slot_ids);
@@ -713,7 +714,7 @@ void RobotStateAccess::check_consistency(const Robot& r) {
 void RobotStateAccess::load(const json& s, RobotNode* scratch) {
   check_header(s, *scratch);
   load_node(s, scratch);
-  load_robot(s, &scratch->robot_, scratch->last_frame_);
+  load_robot(s, &scratch->robot_, scratch->last_frame());
   load_filter(s, &scratch->robot_);
   load_histories(s, &scratch->robot_);
   load_lmap(s, &scratch->robot_);

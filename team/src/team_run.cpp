@@ -14,7 +14,7 @@
 
 #include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/main_node.hpp"
-#include "elaslam/robot_node/robot_node.hpp"
+#include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/state_keeper.hpp"
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/world.hpp"
