@@ -50,7 +50,7 @@
 #include "../tests/support/test_keys.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/main_robot/global_map.hpp"
-#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/main_ports.hpp"
 #include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/robot_state.hpp"

@@ -13,7 +13,7 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/main_robot/global_map.hpp"
-#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/main_ports.hpp"
 #include "fuzz_options.hpp"
 #include "node_harness.hpp"
 

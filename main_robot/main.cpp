@@ -4,7 +4,7 @@
 // The config: --config, else $ELASLAM_CONFIG, else /etc/elaslam/elaslam.yaml, else
 // the installed default (common/cli.hpp).
 // Subscribes LMAP_EVENT(S), LMAP_SNAPSHOT, POSE_<r>; publishes GLOBAL_MAP, DYNAMIC_NOTICE,
-// STATUS_MAIN. A thin shell: MainNode on the node shell (MainPorts, main_node.hpp),
+// STATUS_MAIN. A thin shell: MainNode on the node shell (MainPorts, main_ports.hpp),
 // exactly as the in-process team run runs it. The map is saved to --state, sealed and
 // atomically (map_state.hpp), on change at a bounded rate and at shutdown, and
 // reloaded at start; a file it refuses is moved aside to PATH.corrupt and main starts
@@ -17,7 +17,7 @@
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/log.hpp"
-#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/main_ports.hpp"
 #include "elaslam/main_robot/map_state.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/incarnation.hpp"

@@ -13,7 +13,7 @@
 #include "elaslam/common/cov.hpp"
 
 #include "elaslam/common/channels.hpp"
-#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/main_ports.hpp"
 #include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/state_keeper.hpp"
 #include "elaslam/simulator/messages.hpp"

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "../support/messages.hpp"
-#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/main_ports.hpp"
 
 namespace elaslam {
 namespace {

@@ -14,7 +14,7 @@
 #include "../support/messages.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/global_map_t.hpp"
-#include "elaslam/main_robot/main_node.hpp"
+#include "elaslam/main_robot/main_ports.hpp"
 #include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/simulator/lockstep.hpp"
 #include "elaslam/simulator/messages.hpp"
