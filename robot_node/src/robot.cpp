@@ -390,7 +390,7 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   ++s->num_moving;
 }
 
-// The bounded filter (docs/decisions.md, "Bounded filter"): a robot in a world
+// The bounded filter (docs/adr/0036-bounded-filter.md): a robot in a world
 // larger than its filter keeps the landmarks near it. When an add finds every slot
 // taken, the held landmark farthest from the robot goes, if it is beyond
 // sensor_range and was not seen this frame (it cannot be in view: nothing the
@@ -538,8 +538,8 @@ TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
   // covariances, at the same probability). A robot whose aided filter the team's
   // estimates kept right, or whose two filters disagree with each other, is not
   // moved: then it is likelier the team's own maps that drifted together (a turn
-  // bias every odometer shares turns every own map the same way; docs/decisions.md,
-  // "A map that agrees with itself").
+  // bias every odometer shares turns every own map the same way;
+  // docs/adr/0029-gauge-test.md).
   GaugeTest own;
   if (options_.team_map_gauge_test) own = gauge_test(filters_.own(), estimates, n);
   if (own.fires) {
