@@ -490,7 +490,7 @@ void ElaGate::judge_consensus(const EkfSlam& ekf) {
 // gate (drift_gate_probability); failing it is an out-of-ELA verdict like any
 // other, and the drift test is then the test that decided. (The ELA residual of
 // eq 16 in place of the innovation cancels the robot's pose error, but also hides
-// a drift shared with co-moving neighbours; measured worse, docs/decisions.md.)
+// a drift shared with co-moving neighbours; measured worse, docs/adr/0012-drift-test.md.)
 void ElaGate::judge_drift(LMap* lmap) {
   for (std::size_t k = 0; k < view_.size(); ++k) {
     if (!verdicts_[k].inside || prior_[k].status != EkfStatus::kOk) continue;

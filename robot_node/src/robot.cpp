@@ -390,7 +390,7 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   ++s->num_moving;
 }
 
-// The bounded filter (docs/decisions.md, "Bounded filter"): a robot in a world
+// The bounded filter (docs/adr/0036-bounded-filter.md): a robot in a world
 // larger than its filter keeps the landmarks near it. When an add finds every slot
 // taken, the held landmark farthest from the robot goes, if it is beyond
 // sensor_range and was not seen this frame (it cannot be in view: nothing the

@@ -72,8 +72,8 @@ TeamVerdict Robot::apply_team_map(const TeamEstimate* estimates, int n) {
   // covariances, at the same probability). A robot whose aided filter the team's
   // estimates kept right, or whose two filters disagree with each other, is not
   // moved: then it is likelier the team's own maps that drifted together (a turn
-  // bias every odometer shares turns every own map the same way; docs/decisions.md,
-  // "A map that agrees with itself").
+  // bias every odometer shares turns every own map the same way;
+  // docs/adr/0029-gauge-test.md).
   GaugeTest own;
   if (options_.team_map_gauge_test) own = gauge_test(filters_.own(), estimates, n);
   if (own.fires) {

@@ -89,7 +89,7 @@ Outcome run(std::uint64_t seed, const OdometryCalibration& error, const Calibrat
   return out;
 }
 
-// The rule of docs/decisions.md ("The odometer's calibration in the filter"), not
+// The rule of docs/adr/0024-odometry-calibration.md, not
 // fitted to this test: scales 1 +- 0.1, bias 0 +- 0.02 rad/s, random walks 1e-3 and
 // 1e-4 per sqrt(s).
 CalibrationOptions the_rule() {

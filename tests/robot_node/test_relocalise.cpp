@@ -327,7 +327,7 @@ TEST(DriftedGate, TheOwnFilterHasDriftedBeyondItsOwnPoseCovariance) {
 
 // The verdict is what the own filter's gate then obeys: in the paper's simulated team
 // with the team map the filters never drift apart (no frame flagged), on dataset6
-// they do (tests/team RealSlice; docs/decisions.md "No gate on a drifted filter").
+// they do (tests/team RealSlice; docs/adr/0031-no-verdict-on-a-drifted-filter.md).
 
 }  // namespace
 }  // namespace elaslam

@@ -732,7 +732,7 @@ TEST(Consistency, TheNodeRaisesFaultInconsistentAndAlertsOnce) {
 // robots x 300 frames, a 50-frame window at 0.9999: no frame found inconsistent
 // (measured: 0 of 4,500). (With movers it fires: 2.8 % of frames at 50 %
 // dynamism, 44 % at 80 %, the movers' innovations being accepted before they are
-// found; so config/paper.yaml leaves it off, docs/decisions.md.)
+// found; so config/paper.yaml leaves it off, docs/adr/0017-consistency-monitor.md.)
 TEST(Consistency, InAStaticWorldTheMonitorStaysQuiet) {
   long frames = 0, inconsistent = 0;
   const auto tune = [](TeamConfig* c) {

@@ -3,7 +3,7 @@
 // as an uninterrupted one; every kind of damaged or foreign file is refused with a
 // message naming the problem and leaves the node as it was; the atomic save never
 // follows a symbolic link and leaves the old file intact when it fails; and a robot
-// that starts late gets an honest prior (dead_reckoning_cov, docs/decisions.md).
+// that starts late gets an honest prior (dead_reckoning_cov, docs/adr/0023-late-start-prior.md).
 #include <gtest/gtest.h>
 
 #include <signal.h>

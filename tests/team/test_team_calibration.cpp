@@ -68,8 +68,8 @@ const TeamConfig& paper() {
   return c;
 }
 
-// The priors by the rule of docs/decisions.md ("The odometer's calibration in the
-// filter"), not fitted to this test: scales 1 +- 0.1, random walk 1e-3 / sqrt(s).
+// The priors by the rule of docs/adr/0024-odometry-calibration.md, not fitted to this test:
+// scales 1 +- 0.1, random walk 1e-3 / sqrt(s).
 // The bias stays frozen at 0 here: the paper's robots turn at a constant rate, so a
 // turn scale and a turn-rate bias are the same thing to them (only s_w dtheta + b dt
 // is observable).

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// The team's map back to its robots (robot.team_map, team_aid.hpp; docs/decisions.md
-// "The team helps its members"): no double counting, shown by the NEES of the
+// The team's map back to its robots (robot.team_map, team_aid.hpp; docs/adr/0025-team-map-two-filters.md):
+// no double counting, shown by the NEES of the
 // channel filter in a linear world and of the robots' poses in the simulated team,
 // and better poses.
 #include <gtest/gtest.h>
@@ -465,7 +465,7 @@ TEST(TeamMap, AidedPosesAreConsistentAndBetterInAStaticWorld) {
   const PoseStats aided = pose_stats(true, 0.0, seeds);
   std::printf("static world, %ld samples: own NEES %.3f error %.4f m; aided NEES %.3f error %.4f m\n", own.samples,
               own.nees, own.error, aided.nees, aided.error);
-  // Measured (docs/decisions.md): own 2.37, aided 3.49; fusing each team map whole
+  // Measured (docs/experiments/team-map.md): own 2.37, aided 3.49; fusing each team map whole
   // (no channel filter) gives 4.66 on these seeds. 3 is nominal; the aided filters'
   // excess comes from the team map's landmarks fused as independent (main keeps
   // marginals only).

@@ -99,7 +99,7 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
   return false;
 }
 
-/// Channel groups (team.channel_groups, docs/decisions.md "Channel groups"): every
+/// Channel groups (team.channel_groups, docs/adr/0037-channel-groups.md): every
 /// group has a UDP port of its own, the base port + its number, so that a process is
 /// woken only by the groups it reads. By reader:
 /// - kGroupTeam: DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO and

@@ -30,12 +30,12 @@ struct GlobalMapOptions {
   /// file skips 2^24: its first message is held, the next confirms the jump).
   std::int64_t max_seq_jump = 100000;
   /// Every this many frames, each robot gets the map without its own information
-  /// (TEAM_MAP_<r>, for robot.team_map.fuse; docs/decisions.md). 0: never.
+  /// (TEAM_MAP_<r>, for robot.team_map.fuse; docs/adr/0025-team-map-two-filters.md). 0: never.
   int team_map_period_frames = 0;
   /// GLOBAL_MOVING goes out with a GLOBAL_MAP when its moving lists differ from the
   /// last ones sent, or when those went out at least this long ago (a lost one is
   /// repaired within it); 0: with every GLOBAL_MAP. Process and in-process alike
-  /// (MainNode::moving_set_due); docs/decisions.md "GLOBAL_MOVING".
+  /// (MainNode::moving_set_due); docs/adr/0038-global-moving.md.
   double moving_repeat_s = 1.0;  // [s]
   /// A robot's body radius [m]: a STATIC landmark found where a robot is is taken as
   /// moving (GlobalMap::occupy). 0: off (the simulator's robots have no body).
@@ -44,8 +44,8 @@ struct GlobalMapOptions {
   /// others': a robot whose estimates disagree with the other robots' fusion beyond
   /// the chi-square quantile (2 dof) of this probability on more than half (and at
   /// least kTeamCheckMinShared) of the landmarks they share is left out of the other
-  /// robots' team maps for that round (GlobalMap::check_team; docs/decisions.md "One
-  /// robot's map does not pull the team"). 0: off (config/mrclam.yaml: 0.9999).
+  /// robots' team maps for that round (GlobalMap::check_team; docs/adr/0047-team-check.md). 0:
+  /// off (config/mrclam.yaml: 0.9999).
   double team_map_check_probability = 0.0;
 };
 void parse(config::Reader& r, GlobalMapOptions* o);

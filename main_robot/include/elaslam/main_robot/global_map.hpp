@@ -205,8 +205,8 @@ class GlobalMap {
   /// resolving that distance (sqrt(trace(cov + fused_cov) / 2) < body_radius_m), is
   /// deleted as moving, found by that robot at `frame` (a notice goes out). MRCLAM's
   /// robots carry barcodes: another robot standing still is mapped as a landmark, and
-  /// steers poses once it drives off (docs/decisions.md "A landmark where a robot
-  /// is"). Returns how many; 0 while body_radius_m is 0 (off). No allocation beyond
+  /// steers poses once it drives off (docs/adr/0046-body-radius.md). Returns how many; 0 while
+  /// body_radius_m is 0 (off). No allocation beyond
   /// `notices`.
   int occupy(int robot_id, int frame, const Eigen::Vector2d& position, const Eigen::Matrix2d& cov,
              std::vector<Notice>* notices);

@@ -72,7 +72,7 @@ struct EkfOptions {
   /// (false: rank 2 per update, rank 2k per frame of k) or the Joseph form
   /// (true: rank 4 per update, twice the arithmetic). Every gain is the optimal one
   /// for P with the earlier steps in, so the two agree to rounding (tests
-  /// EkfKnownAnswer, EkfBatch); docs/decisions.md. update_landmark_only, whose gain
+  /// EkfKnownAnswer, EkfBatch); docs/adr/0033-symmetric-covariance-form.md. update_landmark_only, whose gain
   /// is deliberately not optimal, always uses the Joseph form.
   bool joseph = false;
   CalibrationOptions calibration;  // the odometer's calibration states (frozen by default)

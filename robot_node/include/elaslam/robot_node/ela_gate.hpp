@@ -73,7 +73,7 @@ double pair_d2(const EkfSlam& ekf, const InView& i, const InView& j);
 /// of any prediction it makes, (M_j + R^T P_jj R)^-1 (its observation's noise and
 /// its map uncertainty, in the robot frame); zero when that is not positive
 /// definite. It depends on j alone, which makes the exact residual covariance of
-/// every landmark in view O(n^2) for the whole view (docs/decisions.md).
+/// every landmark in view O(n^2) for the whole view (docs/adr/0034-eq16-neighbour-weights.md).
 Eigen::Matrix2d neighbour_weight(const EkfSlam& ekf, const InView& j);
 
 /// Eq 16: the ELA of view[i] as the fusion of the predictions of it from every

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The filter's last few frames of operations, so that a candidate's sightings can
-// correct the robot once it is confirmed (docs/decisions.md, "Confirmation without
-// loss"). A candidate is held in the filter as an inert state: its sightings
+// correct the robot once it is confirmed (docs/adr/0007-candidate-history.md). A candidate is
+// held in the filter as an inert state: its sightings
 // correct only itself (a Schmidt "consider" update) until it has been seen
 // consistently enough to be trusted. Then its earlier sightings would have corrected
 // the pose too, had the robot known. FilterHistory keeps a copy of the filter as it

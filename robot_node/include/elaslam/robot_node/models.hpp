@@ -69,7 +69,7 @@ Eigen::Matrix3d gap_odometry_covariance(const Pose2& increment, int steps, const
 /// `steps` times on a straight path (the lever arm of a heading error is largest
 /// there), the x, y block then made isotropic with its largest eigenvalue (the
 /// direction of travel is unknown) and the cross terms dropped. The prior of a
-/// robot whose first frame is not frame 0 (docs/decisions.md, "late start").
+/// robot whose first frame is not frame 0 (docs/adr/0023-late-start-prior.md).
 /// steps is capped at kMaxDeadReckoningSteps. Allocates nothing.
 constexpr int kMaxDeadReckoningSteps = 100000;
 Eigen::Matrix3d dead_reckoning_cov(const Eigen::Matrix3d& P0, int steps, double step_m, double turn_rad,

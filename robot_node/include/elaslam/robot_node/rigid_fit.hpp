@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The one rigid motion of the plane that best carries a robot's landmark estimates
-// onto the team's (docs/decisions.md, "A map that agrees with itself"). A robot that drove
+// onto the team's (docs/adr/0029-gauge-test.md). A robot that drove
 // through a stretch without landmarks on a biased odometer maps everything it sees
 // afterwards from a rotated, shifted pose: its map and pose are a rigid copy of the
 // truth, consistent in themselves, and no observation of its own can show it (a

@@ -44,7 +44,7 @@ struct RobotOptions {
   /// Frames of filter history kept (FilterHistory, modes ela and consensus; 0: off):
   /// when a candidate is confirmed, its sightings of the last N frames correct the
   /// robot and the map as they would have had it been trusted from the start
-  /// (docs/decisions.md, "Confirmation without loss").
+  /// (docs/adr/0007-candidate-history.md).
   int candidate_history_frames = 0;
   /// Drift test of STATIC landmarks: their whitened innovations summed with this
   /// forgetting factor (0: off); the sum's chi-square test failing counts as an
@@ -71,7 +71,7 @@ struct RobotOptions {
   /// counting. The aided filter gives the robot's pose (POSE); the own filter, which
   /// holds the robot's own data only, gives its events and snapshots, and the ELA
   /// gate and the lifecycle judge against it (so that what the robot reports never
-  /// depends on what the team sent: docs/decisions.md).
+  /// depends on what the team sent: docs/adr/0031-no-verdict-on-a-drifted-filter.md).
   bool team_map_fuse = false;
   double team_map_min_gain = 0.05;  // TeamChannel: fuse an increment when tr(P_ll dY) >= this
   /// A team estimate is fused only when it agrees with the aided filter's estimate
@@ -123,7 +123,7 @@ struct RobotOptions {
   int max_frame_gap = 50;               // a larger forward jump in frame numbers is refused (bad input)
   /// A robot whose first frame is not frame 0 (started late, or restarted without
   /// a state file) takes the odometer's dead reckoning over that many frames of
-  /// this motion as its prior (dead_reckoning_cov, docs/decisions.md).
+  /// this motion as its prior (dead_reckoning_cov, docs/adr/0023-late-start-prior.md).
   double late_start_step_m = 0.15;      // [m]   the most a robot moves per frame
   double late_start_turn = deg2rad(1.5);  // [rad] its turn per frame
   /// The robot_node process saves its state file (--state) at most this often (0:

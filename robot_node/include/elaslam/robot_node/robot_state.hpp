@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // A robot node's state file: everything a RobotNode needs to continue after a
 // restart as if it had never stopped (robot_node --state PATH; docs/deployment.md,
-// docs/decisions.md "robot state file"): the filter (mean, covariance, slot layout),
+// docs/adr/0021-robot-state-file.md): the filter (mean, covariance, slot layout),
 // the L-map (every LMapEntry field), the Robot's frame bookkeeping (last frame, last
 // odometer reading and frame time), and the node's last frame, event seq, counters, held notices
 // and incarnation. Per-frame scratch (ElaGate, ConsensusSolver, the last frame's

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The team's map back to a robot without double counting (the argument is
-// in docs/decisions.md, "The team helps its members").
+// in docs/adr/0025-team-map-two-filters.md).
 //
 // main_robot sends each robot r the map of the other robots: per landmark, the
 // information fusion of every robot's own estimate but r's (TEAM_MAP_<r>). Those

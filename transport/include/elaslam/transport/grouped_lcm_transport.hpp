@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// LCM with channel groups (team.channel_groups; docs/decisions.md "Channel groups").
+// LCM with channel groups (team.channel_groups; docs/adr/0037-channel-groups.md).
 // One udpm:// LCM instance per group of channels (channels.hpp, channel_group), each on
 // its own port: the base URL's port + the group's number. LCM 1.3.1 binds its receive
 // socket to INADDR_ANY:port, so groups must differ in port, not in multicast address,
