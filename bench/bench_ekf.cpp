@@ -20,6 +20,7 @@
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
 #include "../robot_node/src/ekf_kernels.hpp"
+#include "../tests/support/dense_augment.hpp"
 #pragma GCC diagnostic pop
 
 namespace elaslam {
@@ -71,18 +72,7 @@ class DenseEkf {
     P_ = P0;
   }
   void add(const RangeBearing& y) {
-    const Eigen::Index n = X_.size();
-    Eigen::Matrix<double, 2, 3> G_x;
-    Eigen::Matrix2d G_z;
-    const Eigen::Vector2d l = inverse_observe(pose(), y, &G_x, &G_z);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n + 2, n), Jz = Eigen::MatrixXd::Zero(n + 2, 2);
-    J.topRows(n).setIdentity();
-    J.block(n, 0, 2, 3) = G_x;
-    Jz.bottomRows<2>() = G_z;
-    Eigen::VectorXd X(n + 2);
-    X << X_, l;
-    X_ = X;
-    P_ = (J * P_ * J.transpose() + Jz * W_ * Jz.transpose()).eval();
+    test::dense_augment(y, W_, &X_, &P_);
     // Workspace for the frame, sized once (allocation is not what we measure).
     const Eigen::Index m = X_.size();
     F_ = Eigen::MatrixXd::Identity(m, m);

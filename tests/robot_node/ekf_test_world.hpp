@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "../support/dense_augment.hpp"
 
 namespace elaslam::test {
 
@@ -104,18 +105,7 @@ class DenseEkf {
     correct(H, z - X_.segment<2>(off), H * P_ * H.transpose() + R, R);
   }
   void add(int id, const RangeBearing& y) {
-    const Eigen::Index n = X_.size();
-    Eigen::Matrix<double, 2, 3> G_x;
-    Eigen::Matrix2d G_z;
-    const Vec2 l = inverse_observe(pose(), y, &G_x, &G_z);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n + 2, n), Jz = Eigen::MatrixXd::Zero(n + 2, 2);
-    J.topRows(n).setIdentity();
-    J.block(n, 0, 2, 3) = G_x;
-    Jz.bottomRows<2>() = G_z;
-    Eigen::VectorXd X(n + 2);
-    X << X_, l;
-    X_ = X;
-    P_ = (J * P_ * J.transpose() + Jz * W_ * Jz.transpose()).eval();
+    dense_augment(y, W_, &X_, &P_);
     ids_.push_back(id);
   }
   void remove(int id) {
