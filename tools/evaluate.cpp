@@ -59,11 +59,12 @@ int parse_args(int argc, char** argv, Args* a) {
   // in the simulator's ranges.
   app.add_option("--mode", a->fallbacks.mode, "mode to record when the robots' STATUS does not say");
   app.add_option("--dynamism", a->fallbacks.dynamism, "dynamism [%] to record when the log has no RUN_INFO "
-                                            "(default: from the ground truth's moving flags)")
+                                                      "(default: from the ground truth's moving flags)")
       ->check(cli::range(0.0, lim::kDynamismMaxPercent));
   app.add_option("--speed", a->fallbacks.speed, "landmark speed [m/s] to record when the log has no RUN_INFO")
       ->check(cli::range(0.0, lim::kLandmarkSpeedMaxMps));
-  app.add_option("--seed", a->fallbacks.seed, "seed to record when the log has no RUN_INFO")->check(cli::range(0, lim::kSeedMax));
+  app.add_option("--seed", a->fallbacks.seed, "seed to record when the log has no RUN_INFO")
+      ->check(cli::range(0, lim::kSeedMax));
   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
   if (!a->baseline.empty() && a->config.empty()) {
     std::fprintf(stderr, "evaluate: --baseline needs --config (the team's config file)\n");

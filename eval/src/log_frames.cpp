@@ -79,7 +79,8 @@ void add_pose(std::size_t i, int k, const PoseRecord& p, FrameData* f, Assembled
   x->r.truth[i].push_back({f->time_s, f->true_poses[i]});
 }
 
-void print_frames(std::ostream& out, const std::vector<RobotFrameAccount>& accounts, long dropped, long missing_from_log) {
+void print_frames(std::ostream& out, const std::vector<RobotFrameAccount>& accounts, long dropped,
+                  long missing_from_log) {
   out << "  frames dropped: " << dropped << " (frames a robot did not process after it started)\n";
   for (const auto& acct : accounts) {
     if (acct.not_started > 0)
@@ -94,7 +95,7 @@ void print_frames(std::ostream& out, const std::vector<RobotFrameAccount>& accou
   }
   if (missing_from_log > 0)
     out << "  (POSEs missing from the log are the recorder's loss: lcm-logger drops messages when more "
-                 "than 30 wait in its queue, as in the burst of landmark events a few frames into a run)\n";
+           "than 30 wait in its queue, as in the burst of landmark events a few frames into a run)\n";
 }
 
 }  // namespace
@@ -325,7 +326,8 @@ void add_log_figures(const LogData& d, const AssembledRun& x, nlohmann::json* j)
   (*j)["capacity_faults"] = d.capacity_faults;  // STATUS channels that raised FAULT_CAPACITY
   for (const auto& [ch, counts] : d.refused)
     for (int k = 0; k < kNumRefusals; ++k)
-      if (counts[static_cast<std::size_t>(k)] > 0) (*j)["refused_by_nodes"][ch][to_string(static_cast<Refusal>(k))] = counts[static_cast<std::size_t>(k)];
+      if (const std::int64_t n = counts[static_cast<std::size_t>(k)]; n > 0)
+        (*j)["refused_by_nodes"][ch][to_string(static_cast<Refusal>(k))] = n;
 }
 
 void print_log_report(std::ostream& out, const LogData& d, const AssembledRun& x, const RunInfo& info,
@@ -353,7 +355,8 @@ void print_log_report(std::ostream& out, const LogData& d, const AssembledRun& x
       out << "  invalid messages on " << ch << " (" << why << "), not evaluated: " << n << "\n";
   if (d.auth) {
     out << "  authentication (" << d.roster << ", mission " << transport::mission_text(d.auth->mission())
-              << "): " << d.auth->accepted() << " events verified, " << d.auth->refused() << " refused and not evaluated\n";
+              << "): " << d.auth->accepted() << " events verified, " << d.auth->refused()
+              << " refused and not evaluated\n";
     for (const auto& [ch, reasons] : d.auth->refused_by_channel())
       for (const auto& [why, n] : reasons) out << "    refused on " << ch << " (" << why << "): " << n << "\n";
   }

@@ -259,7 +259,8 @@ TEST(LogFrames, AReplayedRecordingsLatencyIsNotMeasured) {
 class LogFile : public ::testing::Test {
  protected:
   void SetUp() override {
-    path_ = (std::filesystem::temp_directory_path() / ("log_frames_" + std::to_string(::getpid()) + ".lcmlog")).string();
+    const std::string name = "log_frames_" + std::to_string(::getpid()) + ".lcmlog";
+    path_ = (std::filesystem::temp_directory_path() / name).string();
   }
   void TearDown() override { std::filesystem::remove(path_); }
   template <typename Msg>

@@ -114,7 +114,8 @@ TEST(Report, EveryOutputFileIsWritten) {
   const fs::path dir = fs::temp_directory_path() / ("report_" + std::to_string(::getpid()));
   const RunResult r = run_of(2);
   write_outputs(dir.string(), metrics_json(RunInfo{}, r), r);
-  for (const char* f : {"metrics.json", "frames.csv", "map.csv", "trajectories/robot1.tum", "trajectories/robot1_gt.tum"})
+  for (const char* f :
+       {"metrics.json", "frames.csv", "map.csv", "trajectories/robot1.tum", "trajectories/robot1_gt.tum"})
     EXPECT_TRUE(fs::exists(dir / f)) << f;
   std::ifstream frames(dir / "frames.csv");
   std::string line;
