@@ -60,7 +60,7 @@ def main() -> int:
     T = load_lcm_types(args.build_dir, __file__)
 
     # Every channel of common/include/elaslam/common/channels.hpp with its type (as
-    # team/src/log_summary.cpp classifies them).
+    # logs/src/log_summary.cpp classifies them).
     types = [(r"SENSOR_\d+", T.sensor_frame_t), (r"POSE_\d+", T.pose_estimate_t), (r"GROUND_TRUTH", T.ground_truth_t),
              (r"LMAP_EVENT", T.landmark_event_t), (r"LMAP_EVENTS", T.lmap_events_t), (r"LMAP_SNAPSHOT", T.lmap_snapshot_t),
              (r"LMAP_RESYNC", T.resync_request_t), (r"GLOBAL_MAP", T.global_map_t), (r"GLOBAL_MOVING", T.global_map_t),

@@ -46,7 +46,7 @@ from export_markers import MarkerMaker, GlobalMapMarkers  # noqa: E402
 
 LCM_MAGIC = 0xEDA1DA01
 EVENT_HEADER = struct.Struct(">IqqII")  # magic, event number, timestamp [us], channel and data lengths
-MAX_CHANNEL_BYTES = 1000  # liblcm's sanity bound, as team/src/log_reader.cpp
+MAX_CHANNEL_BYTES = 1000  # liblcm's sanity bound, as logs/src/log_reader.cpp
 ROS_DISTRO = "jazzy"      # the message definitions written into the bag (rosbags' typestore)
 
 
@@ -55,7 +55,7 @@ class BadInput(Exception):
 
 
 class LcmLog:
-    """The events of an LCM log, read as team/src/log_reader.cpp (log_info) reads them:
+    """The events of an LCM log, read as logs/src/log_reader.cpp (log_info) reads them:
     bytes between events are skipped and counted, a truncated last event ends the read."""
 
     def __init__(self, path):

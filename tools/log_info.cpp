@@ -16,8 +16,8 @@
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
-#include "elaslam/team/log_auth.hpp"
-#include "elaslam/team/log_summary.hpp"
+#include "elaslam/logs/log_auth.hpp"
+#include "elaslam/logs/log_summary.hpp"
 
 namespace {
 

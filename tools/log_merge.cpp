@@ -7,7 +7,7 @@
 // equal timestamps keep the order of the inputs on the command line; event numbers are
 // renumbered from 0. An input's truncated or corrupt tail ends that input (said, and
 // the merge goes on: a recorder killed mid-write loses only its last event); bytes
-// between events are skipped and counted (team/log_reader.hpp).
+// between events are skipped and counted (logs/log_reader.hpp).
 // Exit status: 0 merged; 2 bad arguments, an input that is not a readable LCM log, or
 // OUT exists without --force; 1 when OUT cannot be written.
 #include <cstdio>
@@ -23,7 +23,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/cli.hpp"
-#include "elaslam/team/log_reader.hpp"
+#include "elaslam/logs/log_reader.hpp"
 
 namespace {
 

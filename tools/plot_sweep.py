@@ -5,7 +5,7 @@
     tools/plot_sweep.py DIR [--out DIR2]
 
 DIR is a sweep output directory (runs.csv, frames.csv, maps/<mode>/ as written by
-tools/sweep_tables.cpp and team/src/report.cpp); the PNGs go to DIR2 (default DIR):
+tools/sweep_tables.cpp and eval/src/report.cpp); the PNGs go to DIR2 (default DIR):
 
   fig5_landmark_error.png   mean landmark error (eq 18) vs dynamism, a panel per speed
   fig6_robot_error.png      robot error (mean over robots) vs dynamism, a panel per speed
@@ -399,7 +399,7 @@ def read_tum(path):
 
 
 def read_map_dir(d):
-    _, rows = read_csv(os.path.join(d, "map.csv"), MAP_COLS, "written by sweep (team/src/report.cpp)")
+    _, rows = read_csv(os.path.join(d, "map.csv"), MAP_COLS, "written by sweep (eval/src/report.cpp)")
     trajs = {}
     tdir = os.path.join(d, "trajectories")
     if os.path.isdir(tdir):

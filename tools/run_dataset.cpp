@@ -27,8 +27,8 @@
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/dataset/cli_overrides.hpp"
+#include "elaslam/eval/report.hpp"
 #include "elaslam/team/dataset_run.hpp"
-#include "elaslam/team/report.hpp"
 
 namespace {
 

@@ -12,7 +12,8 @@
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
-#include "elaslam/team/report.hpp"
+#include "elaslam/eval/report.hpp"
+#include "elaslam/team/baseline.hpp"
 #include "elaslam/team/team_run.hpp"
 
 namespace {

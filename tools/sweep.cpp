@@ -23,7 +23,7 @@
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
-#include "elaslam/team/report.hpp"
+#include "elaslam/eval/report.hpp"
 #include "elaslam/team/team_run.hpp"
 #include "sweep_tables.hpp"
 

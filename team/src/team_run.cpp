@@ -13,12 +13,12 @@
 #include "elaslam/common/cov.hpp"
 
 #include "elaslam/common/channels.hpp"
+#include "elaslam/eval/frame_data.hpp"
 #include "elaslam/main_robot/main_ports.hpp"
 #include "elaslam/robot_node/robot_ports.hpp"
 #include "elaslam/robot_node/state_keeper.hpp"
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/world.hpp"
-#include "elaslam/team/frame_data.hpp"
 #include "elaslam/transport/inprocess_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 

@@ -8,9 +8,9 @@
 
 #include "../robot_node/scene.hpp"
 #include "elaslam/common/version.hpp"
+#include "elaslam/eval/report.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
-#include "elaslam/team/report.hpp"
 #include "elaslam/team/team_run.hpp"
 
 namespace elaslam {

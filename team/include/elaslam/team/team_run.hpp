@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "elaslam/eval/run_result.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/simulator/world.hpp"
-#include "elaslam/team/metrics.hpp"
 #include "elaslam/team/team_config.hpp"
 
 namespace elaslam {
@@ -34,39 +34,6 @@ struct RunOverrides {
 /// (sim::check_scenario: e.g. a speed too high for the rate); throws
 /// std::invalid_argument naming the field on a bad value.
 TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o);
-
-struct TrajectoryPoint {
-  double time_s = 0.0;
-  Pose2 pose;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();  // the estimate's covariance (POSE; zero for truth)
-};
-
-struct RunResult {
-  RunMetrics metrics;
-  std::vector<FrameMetrics> frames;
-  std::vector<int> robot_ids;
-  std::vector<std::vector<TrajectoryPoint>> estimated;  // by robot index
-  std::vector<std::vector<TrajectoryPoint>> truth;      // by robot index
-  // Final global map (id, estimate, covariance) and moving ids, for plots.
-  struct MapLandmark {
-    int id;
-    Eigen::Vector2d p;
-    Eigen::Matrix2d cov;
-  };
-  std::vector<MapLandmark> final_map;
-  std::vector<int> final_moving;
-  std::vector<Eigen::Vector2d> final_truth;  // true landmark positions at the last frame
-  std::vector<std::uint8_t> truly_moving;
-  std::vector<std::uint8_t> truth_present;  // ids with ground truth (empty: all of final_truth)
-  long long bus_messages = 0;  // messages published on the in-process transport
-  // Observations that corrected a robot's pose (all robots), by landmark id.
-  std::vector<long> corrections_by_landmark;
-  // Landmarks main took as moving because a robot was where they were (main.body_radius_m).
-  long long occupied = 0;
-  // Rounds of team maps each robot (by robot index) was left out of, its map refused
-  // by the others' (main.team_map_check_probability, GlobalMap::check_team).
-  std::vector<long long> team_map_left_out;
-};
 
 /// Where the frames come from: the simulator or a recorded dataset. Frames are
 /// asked for in order, k = 0, 1, 2, ...; robot i of the sensor list is robot_id(i).

@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
-// The adapter from recorded messages to the metrics (team/frame_data.hpp) refuses
+// The adapter from recorded messages to the metrics (eval/frame_data.hpp) refuses
 // what a node would refuse: POSEs with a forged source_utime would otherwise give a
 // latency p50 of -4.7 s.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "elaslam/team/frame_data.hpp"
+#include "elaslam/eval/frame_data.hpp"
 
 namespace elaslam {
 namespace {

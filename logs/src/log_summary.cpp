@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // log_summary.hpp: the summary of a recorded LCM log.
-#include "elaslam/team/log_summary.hpp"
+#include "elaslam/logs/log_summary.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -20,12 +20,12 @@
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
+#include "elaslam/logs/log_auth.hpp"
+#include "elaslam/logs/log_reader.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
-#include "elaslam/team/log_auth.hpp"
-#include "elaslam/team/log_reader.hpp"
 
 namespace elaslam {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "elaslam/team/metrics.hpp"
+#include "elaslam/eval/metrics.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "elaslam/team/log_reader.hpp"
+#include "elaslam/logs/log_reader.hpp"
 
 #include <algorithm>
 #include <filesystem>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // frame_accounting.hpp: every frame of a run, per robot, accounted for.
-#include "elaslam/team/frame_accounting.hpp"
+#include "elaslam/logs/frame_accounting.hpp"
 
 #include <algorithm>
 #include <limits>

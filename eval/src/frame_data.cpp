@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "elaslam/team/frame_data.hpp"
+#include "elaslam/eval/frame_data.hpp"
 
 #include <cmath>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "elaslam/team/report.hpp"
+#include "elaslam/eval/report.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -244,19 +244,6 @@ void print_summary(std::ostream& out, const RunInfo& info, const RunResult& r) {
         << " frames to detect\n";
   out << "  frame time: p50 " << m.frame_us_p50 << " us, p99 " << m.frame_us_p99 << " us, max " << m.frame_us_max
       << " us\n";
-}
-
-nlohmann::json run_baseline(const TeamConfig& config, const std::string& config_path, const std::string& mode,
-                            const RunInfo& info, const RunResult& r, std::ostream* out) {
-  RunOverrides o;
-  o.mode = Mode::kEkf;
-  parse_mode(mode, &*o.mode);  // the programs accept only known modes
-  const TeamConfig bc = apply_overrides(config, o);
-  const RunResult base = run_team(bc);
-  const RunInfo base_info{mode, info.dynamism_percent, info.speed_mps, info.seed, config_path, bc.effective_yaml,
-                          info.command_line};
-  if (out) print_comparison(*out, info, r, base_info, base, "in process");
-  return baseline_json(base_info, base, "in process, same scenario and seed");
 }
 
 }  // namespace elaslam

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "elaslam/team/frame_accounting.hpp"
+#include "elaslam/logs/frame_accounting.hpp"
 
 namespace elaslam {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "elaslam/team/log_auth.hpp"
+#include "elaslam/logs/log_auth.hpp"
 
 #include <memory>
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // From the team's messages to the metrics' FrameData (metrics.hpp): the one adapter
-// shared by the in-process run (team_run.cpp) and the evaluation of a recording
-// (tools/evaluate.cpp), so both read the messages the same way by construction.
+// shared by the in-process run (team/team_run.cpp) and the evaluation of a recording
+// (log_frames.hpp), so both read the messages the same way by construction.
 // Every loop is bounded by the contract's capacities (a recording is not trusted).
 #pragma once
 
@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "elaslam/common/limits.hpp"
+#include "elaslam/eval/metrics.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
-#include "elaslam/team/metrics.hpp"
 
 namespace elaslam {
 

@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "elaslam/team/log_reader.hpp"
+#include "elaslam/logs/log_reader.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 
 namespace elaslam {

@@ -3,7 +3,7 @@
 // verifies loses its trailer and is decoded as recorded; forged, altered, replayed,
 // unauthenticated, misattributed and other missions' events are refused and counted
 // per channel and reason; channels that are not the team's pass untouched.
-#include "elaslam/team/log_auth.hpp"
+#include "elaslam/logs/log_auth.hpp"
 
 #include <gtest/gtest.h>
 

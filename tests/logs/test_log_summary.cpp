@@ -24,11 +24,11 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/ground_truth_t.hpp"
+#include "elaslam/logs/log_summary.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
-#include "elaslam/team/log_summary.hpp"
 
 namespace elaslam {
 namespace {

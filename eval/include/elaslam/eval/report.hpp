@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Output files of a run: metrics.json, frames.csv, trajectories/robot<R>.tum and
-// robot<R>_gt.tum, and a short summary table. Shared by run_scenario and evaluate.
+// robot<R>_gt.tum, and a short summary table. Shared by run_scenario, run_dataset,
+// sweep and evaluate.
 #pragma once
 
 #include <iosfwd>
@@ -8,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "elaslam/team/team_run.hpp"
+#include "elaslam/eval/run_result.hpp"
 
 namespace elaslam {
 
@@ -55,11 +56,5 @@ void print_comparison(std::ostream& out, const RunInfo& info, const RunResult& r
 /// The baseline's figures for metrics.json ("baseline"): its metrics_json without
 /// the config and command line (the same as the run's but for the mode), plus `how`.
 nlohmann::json baseline_json(const RunInfo& base_info, const RunResult& base, const std::string& how);
-
-/// The baseline of a run, in process: `config` (the run's scenario and seed, read
-/// from `config_path`) with the robots' mode `mode`, run now; printed beside the run
-/// to `out` (nullptr: not printed). Returns its baseline_json for metrics.json.
-nlohmann::json run_baseline(const TeamConfig& config, const std::string& config_path, const std::string& mode,
-                            const RunInfo& info, const RunResult& r, std::ostream* out);
 
 }  // namespace elaslam
