@@ -14,14 +14,13 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 PY="$ROOT/.venv/bin/python"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=60
-# shellcheck source=tests/system/wait_for.sh
-. "$ROOT/tests/system/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
   BUILD="$2" OUT="$3" KEYS="$4"
   B="$BUILD/bin"
-  PIDS=()
-  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  kill_pids_at_exit
   K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
   "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
   "$B/main_robot" "${K[@]}" --key-file "$KEYS/main.key" > "$OUT/main_robot.log" 2>&1 & PIDS+=($!)
@@ -46,18 +45,13 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEY
   wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame ($((FRAMES - 1)))" \
     "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame $((FRAMES - 1)) GLOBAL_MAP ||
     rc=1
-  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
-  for p in "${PIDS[@]}"; do wait "$p" || true; done
-  PIDS=()
+  stop_pids || true
   exit $rc
 fi
 
 BUILD="$(cd "${1:?usage: auth_duplicate.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "auth_duplicate: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "auth_duplicate: skipped (no ip netns)"; exit 77; }
-[ -x "$PY" ] || { echo "auth_duplicate: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "auth_duplicate: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+needs_netns auth_duplicate --venv
+make_out auth_duplicate
 "$BUILD/bin/keys" team "$OUT/keys" --robots 1,2,3 > /dev/null
 fail() { echo "auth_duplicate: $*"; for f in "$OUT"/*.log; do echo "== $f"; tail -n 4 "$f"; done; exit 1; }
 "$ROOT/tools/netns_run.sh" --port 7723 -- "$0" --inner "$BUILD" "$OUT" "$OUT/keys" > "$OUT/inner.txt" 2>&1 ||

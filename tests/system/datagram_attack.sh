@@ -17,6 +17,8 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 CONFIG="$ROOT/config/paper.yaml"
 ARGS=(--dynamism 50 --speed 0.5 --seed 5 --frames 80)
 
@@ -48,10 +50,8 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEY
 fi
 
 BUILD="$(cd "${1:?usage: datagram_attack.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "datagrams: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "datagrams: skipped (no ip netns)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "datagrams: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+needs_netns datagrams
+make_out datagrams
 fail() { echo "datagrams: $*"; exit 1; }
 ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
 

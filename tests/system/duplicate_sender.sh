@@ -23,14 +23,13 @@ CONFIG="$ROOT/config/paper.yaml"
 DUP_FRAME=${DUP_FRAME:-30}
 WITHIN=${WITHIN:-30}
 PY="$ROOT/.venv/bin/python"
-# shellcheck source=tests/system/wait_for.sh
-. "$ROOT/tests/system/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   BUILD="$2" OUT="$3"
   mkdir -p "$OUT/logs"
-  PIDS=()
-  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  kill_pids_at_exit
   robot() { "$BUILD/bin/robot_node" --config "$CONFIG" --robot "$1" > "$OUT/logs/$2.log" 2>&1 & PIDS+=($!); }
   lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
   "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
@@ -58,12 +57,9 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
 fi
 
 BUILD="$(cd "${1:?usage: duplicate_sender.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "duplicate_sender: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "duplicate_sender: skipped (no ip netns)"; exit 77; }
+needs_netns duplicate_sender --venv
 command -v lcm-logger > /dev/null || { echo "duplicate_sender: skipped (no lcm-logger)"; exit 77; }
-[ -x "$PY" ] || { echo "duplicate_sender: skipped (no Python venv: tools/setup.sh)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "duplicate_sender: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+make_out duplicate_sender
 "$ROOT/tools/netns_run.sh" --port 7714 -- "$0" --inner "$BUILD" "$OUT" > "$OUT/run.txt" 2>&1 ||
   { cat "$OUT/run.txt"; tail -n 3 "$OUT"/logs/*.log; exit 1; }
 

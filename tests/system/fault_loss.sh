@@ -20,13 +20,13 @@
 #   tests/system/fault_loss.sh BUILD_DIR
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 BUILD="$(cd "${1:?usage: fault_loss.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "fault_loss: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "fault_loss: skipped (no ip netns)"; exit 77; }
+needs_netns fault_loss
 command -v nft >/dev/null || { echo "fault_loss: skipped (no nft: Debian package nftables)"; exit 77; }
 [ -x "$ROOT/.venv/bin/python" ] || { echo "fault_loss: skipped (no .venv; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-if [ -n "${KEEP_OUT:-}" ]; then echo "fault_loss: output in $OUT"; else trap 'rm -rf "$OUT"' EXIT; fi
+make_out fault_loss
 
 "$ROOT/tools/fault_test.sh" --build-dir "$BUILD" --out "$OUT" --port 7711 --seeds 1 --losses 20 --sensor-losses "" \
   --frames 100 \

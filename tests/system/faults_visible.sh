@@ -19,8 +19,8 @@ HERE="$ROOT/tests/system"
 PY="$ROOT/.venv/bin/python"
 CONFIG="$ROOT/config/paper.yaml"
 FRAMES=150
-# shellcheck source=tests/system/wait_for.sh
-. "$HERE/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$HERE/lib.sh"
 # Both robots have said that main_robot is silent (node.main_silent_s after their start).
 said_silent() { grep -q "FAULT: robot 1 has not heard main_robot" "$1/robot_1.log" &&
                 grep -q "FAULT: robot 2 has not heard main_robot" "$1/robot_2.log"; }
@@ -28,8 +28,7 @@ said_silent() { grep -q "FAULT: robot 1 has not heard main_robot" "$1/robot_1.lo
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
   BUILD="$2" OUT="$3" KEYS="$4"
   B="$BUILD/bin"
-  PIDS=()
-  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  kill_pids_at_exit
   K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
   "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
   "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_1.key" --robot 1 --state "$OUT/no/such/dir/robot1.json" \
@@ -64,11 +63,8 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEY
 fi
 
 BUILD="$(cd "${1:?usage: faults_visible.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "faults: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "faults: skipped (no ip netns)"; exit 77; }
-[ -x "$PY" ] || { echo "faults: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "faults: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+needs_netns faults --venv
+make_out faults
 fail() { echo "faults: $*"; for f in "$OUT"/*.log; do echo "== $f"; tail -n 6 "$f"; done; exit 1; }
 "$BUILD/bin/keys" team "$OUT/keys" --robots 1,2 > /dev/null
 "$ROOT/tools/netns_run.sh" --port 7726 -- "$0" --inner "$BUILD" "$OUT" "$OUT/keys" > "$OUT/inner.txt" 2>&1 ||

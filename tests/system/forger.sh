@@ -23,6 +23,8 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
 PY="$ROOT/.venv/bin/python"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 ARGS=(--dynamism 50 --speed 0.5 --seed 3)
 CONFIG="$ROOT/config/paper.yaml"
 
@@ -42,11 +44,8 @@ if [ "${1:-}" = "--inner" ]; then  # inside a namespace: --inner BUILD OUT [run_
 fi
 
 BUILD="$(cd "${1:?usage: forger.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "forger: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "forger: skipped (no ip netns)"; exit 77; }
-[ -x "$PY" ] || { echo "forger: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "forger: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+needs_netns forger --venv
+make_out forger
 ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
 KEYS="$OUT/keys"
 "$BUILD/bin/keys" team "$KEYS" --robots "$(IFS=,; echo "${ROBOTS[*]}")" > /dev/null

@@ -21,10 +21,11 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 BUILD="$(cd "${1:?usage: foxglove.sh BUILD_DIR}" && pwd)"
 LCM_PORT=7860
-[ "$(id -u)" -eq 0 ] || { echo "foxglove: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "foxglove: skipped (no ip netns)"; exit 77; }
+needs_netns foxglove
 PY="$ROOT/.venv/bin/python"
 [ -x "$PY" ] || "$ROOT/tools/setup.sh" --build-dir "$BUILD" >/dev/null 2>&1 || true
 if ! "$PY" -c 'import foxglove, websocket' 2>/dev/null; then
@@ -32,8 +33,7 @@ if ! "$PY" -c 'import foxglove, websocket' 2>/dev/null; then
   "$PY" -c 'import foxglove, websocket' 2>/dev/null ||
     { echo "foxglove: skipped (cannot install foxglove-sdk and websocket-client into $ROOT/.venv)"; exit 77; }
 fi
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "foxglove: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+make_out foxglove
 FPORT=$((20000 + RANDOM % 20000))
 
 "$ROOT/tools/run_team.sh" --build-dir "$BUILD" --out "$OUT/team" --frames 150 --no-baseline --no-progress \

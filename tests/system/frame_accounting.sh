@@ -14,14 +14,13 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 CONFIG="$ROOT/config/paper.yaml"
 PY="$ROOT/.venv/bin/python"
 CHECK="$ROOT/tests/system/lcm_check.py"
-# shellcheck source=tests/system/wait_for.sh
-. "$ROOT/tests/system/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   BUILD="$2" OUT="$3"
   mkdir -p "$OUT/logs"
-  PIDS=()
-  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  kill_pids_at_exit
   robot() { "$BUILD/bin/robot_node" --config "$CONFIG" --robot "$1" >> "$OUT/logs/robot_node_$1.log" 2>&1 & }
   lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
   "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
@@ -43,18 +42,13 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
   # main's timer (one lost datagram does not stall the wait).
   wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame (79)" \
     "$PY" "$CHECK" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame 79 GLOBAL_MAP || rc=1
-  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
-  for p in "${PIDS[@]}"; do wait "$p" || rc=1; done
-  PIDS=()
+  stop_pids || rc=1
   exit $rc
 fi
 
 BUILD="$(cd "${1:?usage: frame_accounting.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "frame_accounting: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "frame_accounting: skipped (no ip netns)"; exit 77; }
-[ -x "$PY" ] || { echo "frame_accounting: skipped (no .venv; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-trap 'rm -rf "$OUT"' EXIT
+needs_netns frame_accounting --venv
+make_out frame_accounting
 "$ROOT/tools/netns_run.sh" --port 7705 -- "$0" --inner "$BUILD" "$OUT" || { tail -n 3 "$OUT"/logs/*.log; exit 1; }
 "$BUILD/bin/evaluate" --log "$OUT/run.lcmlog" --out "$OUT/eval" > "$OUT/eval.txt"
 "$BUILD/bin/log_info" --json "$OUT/run.lcmlog" > "$OUT/log_info.json"

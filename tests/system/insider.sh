@@ -21,6 +21,8 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
 PY="$ROOT/.venv/bin/python"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 CONFIG="$ROOT/config/paper.yaml"
 ARGS=(--dynamism 50 --speed 0.5 --seed 4)
 
@@ -42,11 +44,8 @@ if [ "${1:-}" = "--inner" ]; then  # inside a namespace: --inner BUILD OUT KEYS 
 fi
 
 BUILD="$(cd "${1:?usage: insider.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "insider: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "insider: skipped (no ip netns)"; exit 77; }
-[ -x "$PY" ] || { echo "insider: skipped (no .venv with the Python lcm and PyNaCl; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "insider: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+needs_netns insider --venv
+make_out insider
 fail() { echo "insider: $*"; exit 1; }
 ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
 FRAMES=$(awk '/^scenario:/ {s = 1; next} /^[^ #]/ {s = 0} s && $1 == "frames:" {print $2; exit}' "$CONFIG")

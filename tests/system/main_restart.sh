@@ -37,8 +37,8 @@ PY="$ROOT/.venv/bin/python"
 KILL_FRAME=${KILL_FRAME:-60}   # of 150
 DOWN_FRAMES=${DOWN_FRAMES:-10}  # main_robot down while the team does this many frames (1 s at 10 Hz)
 TOL=0.05        # [m]
-# shellcheck source=tests/system/wait_for.sh
-. "$HERE/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$HERE/lib.sh"
 # The run's last frame: --frames N among the scenario arguments, else the config's.
 last_frame() {
   local n=""
@@ -104,8 +104,7 @@ fi
 if [ "${1:-}" = "--main-replay" ]; then
   BUILD="$2" LOG="$3" OUT="$4" LAST="$5"
   mkdir -p "$OUT/logs"
-  PIDS=()
-  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  kill_pids_at_exit
   lcm-logger -f -q -c 'GLOBAL_MAP' "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
   "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
   "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" wait-nodes 1 --timeout 20
@@ -116,9 +115,7 @@ if [ "${1:-}" = "--main-replay" ]; then
   rc=0
   wait_for 30 "the recording of main_robot's GLOBAL_MAP of the last frame ($LAST)" \
     "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame "$LAST" GLOBAL_MAP || rc=1
-  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
-  for p in "${PIDS[@]}"; do wait "$p" || rc=1; done
-  PIDS=()
+  stop_pids || rc=1
   tail -n 1 "$OUT/logs/main_robot.log"
   exit $rc
 fi
@@ -127,11 +124,8 @@ BUILD="$(cd "${1:?usage: main_restart.sh BUILD_DIR [scenario args]}" && pwd)"
 shift
 ARGS=("$@")
 [ ${#ARGS[@]} -gt 0 ] || ARGS=(--dynamism 50 --speed 0.5 --seed 3)
-[ "$(id -u)" -eq 0 ] || { echo "main_restart: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "main_restart: skipped (no ip netns)"; exit 77; }
-[ -x "$PY" ] || { echo "main_restart: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "main_restart: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+needs_netns main_restart --venv
+make_out main_restart
 ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
 FRAMES=$(($(last_frame "${ARGS[@]}") + 1))
 

@@ -19,8 +19,8 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
-# shellcheck source=tests/system/wait_for.sh
-. "$HERE/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$HERE/lib.sh"
 
 # --- step 2, inside the replay namespace: replay.sh --replay BUILD LOG OUT LAST_FRAME
 if [ "${1:-}" = "--replay" ]; then
@@ -29,8 +29,7 @@ if [ "${1:-}" = "--replay" ]; then
   PY="$ROOT/.venv/bin/python"
   ROBOTS=($("$BUILD/bin/simulator" --config "$CONFIG" --list-robots))
   mkdir -p "$OUT/logs"
-  PIDS=()
-  trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+  kill_pids_at_exit
   lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
   "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
   for r in "${ROBOTS[@]}"; do
@@ -51,9 +50,7 @@ if [ "${1:-}" = "--replay" ]; then
     "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" logged "$OUT/run.lcmlog" --frame "$LAST" GLOBAL_MAP ||
     exit 1
   rc=0
-  for p in "${PIDS[@]}"; do kill -INT "$p" 2>/dev/null || true; done
-  for p in "${PIDS[@]}"; do wait "$p" || rc=1; done
-  PIDS=()
+  stop_pids || rc=1
   [ "$rc" -eq 0 ] || { echo "replay: a node exited with an error"; tail -n 3 "$OUT"/logs/*.log; exit 1; }
   tail -q -n 1 "$OUT"/logs/robot_node_*.log "$OUT/logs/main_robot.log"
   exit 0
@@ -63,13 +60,10 @@ BUILD="$(cd "${1:?usage: replay.sh BUILD_DIR [scenario args]}" && pwd)"
 shift
 ARGS=("$@")
 [ ${#ARGS[@]} -gt 0 ] || ARGS=(--dynamism 50 --speed 0.5 --seed 3)
-[ "$(id -u)" -eq 0 ] || { echo "replay: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "replay: skipped (no ip netns)"; exit 77; }
 PY="$ROOT/.venv/bin/python"
-[ -x "$PY" ] || { echo "replay: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
+needs_netns replay --venv
 command -v lcm-logplayer >/dev/null || { echo "replay: skipped (no lcm-logplayer)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "replay: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+make_out replay
 
 "$ROOT/tools/netns_run.sh" --port 7694 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" \
   --out "$OUT/live" "${ARGS[@]}" > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }

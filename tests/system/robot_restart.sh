@@ -29,6 +29,8 @@
 #   [SEEDS="1 2 3"] [KILL_FRAME=60] [RATIO=2] tests/system/robot_restart.sh BUILD_DIR
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 CONFIG="$ROOT/config/paper.yaml"
 SEEDS=${SEEDS:-"1 2 3"}
 KILL_FRAME=${KILL_FRAME:-60}
@@ -80,11 +82,9 @@ if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT SEE
 fi
 
 BUILD="$(cd "${1:?usage: robot_restart.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "robot_restart: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "robot_restart: skipped (no ip netns)"; exit 77; }
+needs_netns robot_restart
 command -v lcm-logger > /dev/null || { echo "robot_restart: skipped (no lcm-logger)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "robot_restart: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+make_out robot_restart
 rc=0
 for seed in $SEEDS; do
   for variant in ref restart fresh; do

@@ -16,12 +16,12 @@
 #   tests/system/team_live.sh BUILD_DIR [--hosts | --team-map | --channel-groups]
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=tests/system/lib.sh
+. "$ROOT/tests/system/lib.sh"
 BUILD="$(cd "${1:?usage: team_live.sh BUILD_DIR [--hosts | --team-map | --channel-groups]}" && pwd)"
 HOSTS="${2:-}"
-OUT="$(mktemp -d)"
-trap 'rm -rf "$OUT"' EXIT
-[ "$(id -u)" -eq 0 ] || { echo "team_live: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "team_live: skipped (no ip netns)"; exit 77; }
+needs_netns team_live
+make_out team_live
 CONFIG="$ROOT/config/paper.yaml"
 if [ "$HOSTS" = --team-map ]; then
   CONFIG="$OUT/team_map.yaml"

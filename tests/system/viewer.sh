@@ -26,8 +26,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 HERE="$ROOT/tests/system"
 # shellcheck source=tools/viewer_url.sh
 . "$ROOT/tools/viewer_url.sh"
-# shellcheck source=tests/system/wait_for.sh
-. "$HERE/wait_for.sh"
+# shellcheck source=tests/system/lib.sh
+. "$HERE/lib.sh"
 # The viewer's /state.json (at URL $1) shows at least $2 robots with a pose and $3 landmarks.
 state_shows() {
   curl -sf "$1/state.json" | python3 -c 'import json, sys
@@ -75,14 +75,12 @@ if [ "${1:-}" = "--inside" ]; then
 fi
 
 BUILD="$(cd "${1:?usage: viewer.sh BUILD_DIR}" && pwd)"
-[ "$(id -u)" -eq 0 ] || { echo "viewer: skipped (needs root for network namespaces)"; exit 77; }
-ip netns list >/dev/null 2>&1 || { echo "viewer: skipped (no ip netns)"; exit 77; }
+needs_netns viewer
 PY="$ROOT/.venv/bin/python"
 [ -x "$PY" ] || { echo "viewer: skipped (no .venv with the Python lcm; tools/setup.sh makes it)"; exit 77; }
 command -v lcm-logplayer >/dev/null || { echo "viewer: skipped (no lcm-logplayer)"; exit 77; }
 command -v chromium >/dev/null || { echo "viewer: skipped (no chromium: tools/setup.sh --with-test-tools)"; exit 77; }
-OUT="$(mktemp -d)"
-[ -n "${KEEP_OUT:-}" ] && echo "viewer: output in $OUT" || trap 'rm -rf "$OUT"' EXIT
+make_out viewer
 
 "$ROOT/tools/netns_run.sh" --port 7730 -- "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" \
   --out "$OUT/live" --frames 80 > "$OUT/live.txt" 2>&1 || { cat "$OUT/live.txt"; exit 1; }
