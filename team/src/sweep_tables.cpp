@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sweep_tables.hpp"
+// The sweep's files: runs.csv, frames.csv and tables.md (sweep.hpp).
+#include "elaslam/team/sweep.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -155,15 +156,6 @@ SweepResult summarise(const RunResult& r) {
     s.frame_robot_error.push_back(n ? sum / n : NAN);
   }
   return s;
-}
-
-std::vector<SweepJob> make_jobs(const SweepGrid& g, int seed_base) {
-  std::vector<SweepJob> jobs;
-  for (Mode m : g.modes)
-    for (double d : g.dynamism)
-      for (double v : g.speed)
-        for (int r = 0; r < g.runs; ++r) jobs.push_back({m, d, v, r, seed_base + r});
-  return jobs;
 }
 
 void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<SweepJob>& jobs,
