@@ -45,20 +45,6 @@ GlobalMapOptions load_options(const std::string& path) {
   return o;
 }
 
-void final_line(const MainNode& node) {
-  const auto& c = node.counters();
-  std::fprintf(stderr, "main_robot: events=%lld snapshots=%lld duplicates=%lld gaps=%lld rejected=%lld "
-               "decode_errors=%lld notices=%lld static=%d moving=%d version=%lld maps=%lld map_chunks=%lld "
-               "moving_sets=%lld stale_poses=%lld runs_started=%lld occupied=%lld team_map_left_out=%lld "
-               "state_damaged=%lld\n",
-               (long long)c.events, (long long)c.snapshots, (long long)c.duplicates, (long long)c.gaps,
-               (long long)c.rejected_inputs, (long long)c.decode_errors, (long long)c.notices_sent,
-               node.map().count(GlobalStatus::kStatic), node.map().count(GlobalStatus::kMoving),
-               (long long)node.map().version(), (long long)c.maps_published, (long long)c.map_chunks,
-               (long long)c.moving_sets, (long long)c.stale_poses, (long long)c.runs_started,
-               (long long)c.occupied, (long long)node.map().rounds_left_out(), (long long)c.state_damaged);
-}
-
 int run(const Args& a) {
   GlobalMapOptions o;
   cli::ConfigChoice cfg;
@@ -128,7 +114,7 @@ int run(const Args& a) {
   ports.publish_map();
   ports.publish_status();
   if (!a.state.empty()) save_state();
-  final_line(node);
+  std::fputs(final_summary(node).c_str(), stderr);
   return 0;
 }
 

@@ -65,37 +65,6 @@ bool load(const Args& a, cli::ConfigChoice* cfg, RobotOptions* o, std::string* e
   return true;
 }
 
-void final_line(const RobotNode& node, const FrameStages& st) {
-  const auto& c = node.counters();
-  std::fprintf(stderr,
-               "robot_node %d: frames=%lld gaps=%lld duplicates=%lld out_of_order=%lld rejected=%lld "
-               "decode_errors=%lld filter_faults=%lld events=%lld notices_applied=%lld notices_stale=%lld landmarks=%d "
-               "evictions=%lld restored=%lld frame_us p50=%lld p99=%lld max=%lld\n",
-               node.robot_id(), (long long)c.frames, (long long)c.frames_gap, (long long)c.frames_duplicate,
-               (long long)c.frames_out_of_order, (long long)c.rejected_inputs, (long long)c.decode_errors,
-               (long long)c.filter_faults, (long long)c.events_sent, (long long)c.notices_applied,
-               (long long)c.notices_stale, node.robot().filter().num_landmarks(), (long long)c.evictions, (long long)c.restored,
-               (long long)node.processing().quantile(0.5),
-               (long long)node.processing().quantile(0.99), (long long)node.processing().max());
-  // Where the frames' time went (FrameStages; receive needs the sender's clock).
-  const auto q = [](const DurationHistogram& h) {
-    return std::to_string(h.quantile(0.5)) + "/" + std::to_string(h.quantile(0.99)) + "/" + std::to_string(h.max());
-  };
-  std::fprintf(stderr, "robot_node %d: stages_us p50/p99/max receive=%s frame=%s outputs=%s pose=%s\n",
-               node.robot_id(), q(st.receive).c_str(), q(st.frame).c_str(), q(st.outputs).c_str(),
-               q(st.pose).c_str());
-  if (node.robot().options().team_map_fuse) {  // robot.team_map: what the other robots' map did
-    const TeamCounters& t = node.robot().team_counters();
-    std::fprintf(stderr,
-                 "robot_node %d: team_map chunks=%lld stale=%lld offered=%lld fused=%lld gated=%lld refused=%lld "
-                 "mean_nis=%.2f lost=%lld relocalised=%lld\n",
-                 node.robot_id(), (long long)c.team_map_chunks, (long long)c.team_map_stale, (long long)t.offered,
-                 (long long)t.fused, (long long)t.gated, (long long)t.refused,
-                 t.fused > 0 ? t.nis_sum / static_cast<double>(t.fused) : 0.0, (long long)t.lost,
-                 (long long)t.relocalised);
-  }
-}
-
 int run(const Args& a) {
   cli::ConfigChoice cfg;
   RobotOptions o;
@@ -139,7 +108,7 @@ int run(const Args& a) {
   const bool transport_failed = shell.spin(100) == transport::NodeShell::Exit::kTransportError;
   if (!a.state.empty()) save_state(a.state, node, auth.mission);  // SIGINT / SIGTERM (and a failed transport): the latest state
   if (!transport_failed) ports.publish_status();
-  final_line(node, ports.stages());
+  std::fputs(final_summary(node, ports.stages()).c_str(), stderr);
   return transport_failed ? 1 : 0;
 }
 

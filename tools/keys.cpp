@@ -12,15 +12,9 @@
 //                                         and a new mission
 // A secret key file is 64 hexadecimal characters and a newline, mode 0600, written to
 // a temporary file that is then linked to FILE: an existing FILE (or a symbolic link
-// there) is never overwritten or followed (exit 1). Exit 2 on bad arguments.
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <array>
-#include <cerrno>
+// there) is never overwritten or followed (exit 1). Exit 2 on bad arguments. The
+// files are made by transport/key_files.hpp.
 #include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -28,7 +22,7 @@
 #include <sodium.h>
 
 #include "elaslam/common/cli.hpp"
-#include "elaslam/common/contract.hpp"
+#include "elaslam/transport/key_files.hpp"
 #include "elaslam/transport/keys.hpp"
 
 namespace {
@@ -37,62 +31,12 @@ using namespace elaslam;
 using transport::PublicKey;
 using transport::SigningKey;
 
-/// Write `text` to a new file at `path` (mode 0600, or `mode`), never replacing anything there.
-bool write_new_file(const std::string& path, const std::string& text, std::string* why, mode_t mode = 0600) {
-  const std::size_t slash = path.rfind('/');
-  const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-  std::string tmp = dir + "/.elaslam-key-XXXXXX";
-  const mode_t old = umask(077);
-  const int fd = mkstemp(tmp.data());
-  umask(old);
-  if (fd < 0) {
-    *why = "cannot create a file in " + dir + ": " + std::strerror(errno);
-    return false;
-  }
-  const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size()) &&
-                       fchmod(fd, mode) == 0 && fsync(fd) == 0;
-  const int err = errno;
-  ::close(fd);
-  // link(2) fails when anything (a file, a symbolic link) is at `path`: nothing is replaced or followed.
-  const bool linked = written && ::link(tmp.c_str(), path.c_str()) == 0;
-  const int link_err = errno;
-  ::unlink(tmp.c_str());
-  if (!written) {
-    *why = std::string("cannot write ") + tmp + ": " + std::strerror(err);
-    return false;
-  }
-  if (!linked) {
-    *why = path + ": " + (link_err == EEXIST ? "exists (a key is never overwritten)" : std::strerror(link_err));
-    return false;
-  }
-  return true;
-}
-
-/// A new key at `path`; its public key in *pub.
-bool new_key(const std::string& path, PublicKey* pub, std::string* why) {
-  std::array<std::uint8_t, transport::kKeyBytes> seed{};
-  randombytes_buf(seed.data(), seed.size());
-  std::string text = transport::to_hex(seed.data(), seed.size()) + "\n";
-  const SigningKey key(seed);
-  sodium_memzero(seed.data(), seed.size());
-  const bool ok = write_new_file(path, text, why);
-  sodium_memzero(text.data(), text.size());
-  *pub = key.public_key();
-  return ok;
-}
-
 std::string hex(const PublicKey& k) { return transport::to_hex(k.data(), k.size()); }
-
-std::string new_mission() {
-  std::uint64_t m = 0;
-  while (m == 0) randombytes_buf(&m, sizeof m);
-  return transport::mission_text(m);
-}
 
 int cmd_new(const std::string& path) {
   PublicKey pub{};
   std::string why;
-  if (!new_key(path, &pub, &why)) {
+  if (!transport::make_key_file(path, &pub, &why)) {
     std::fprintf(stderr, "keys: %s\n", why.c_str());
     return 1;
   }
@@ -112,33 +56,13 @@ int cmd_public(const std::string& path) {
 }
 
 int cmd_team(const std::string& dir, const std::vector<int>& robots, bool tool, const std::string& roster) {
-  std::vector<std::int16_t> senders{transport::kSenderMain, transport::kSenderSimulator};
-  for (int r : robots) {
-    if (r < 1 || r > contract::kMaxRobots) {
-      std::fprintf(stderr, "keys: --robots: %d is not a robot id (1..%d)\n", r, contract::kMaxRobots);
-      return 2;
-    }
-    senders.push_back(static_cast<std::int16_t>(r));
+  std::vector<std::int16_t> senders;
+  std::string why, yaml;
+  if (!transport::team_senders(robots, tool, &senders, &why)) {
+    std::fprintf(stderr, "keys: --robots: %s\n", why.c_str());
+    return 2;
   }
-  if (tool) senders.push_back(transport::kSenderTool);
-  if (::mkdir(dir.c_str(), 0700) != 0 && errno != EEXIST) {
-    std::fprintf(stderr, "keys: cannot create %s: %s\n", dir.c_str(), std::strerror(errno));
-    return 1;
-  }
-  std::string yaml = "team:\n  mission: \"" + new_mission() + "\"\n  public_keys:\n";
-  for (const std::int16_t s : senders) {
-    const std::string name = transport::sender_name(s);
-    PublicKey pub{};
-    std::string why;
-    if (!new_key(dir + "/" + name + ".key", &pub, &why)) {
-      std::fprintf(stderr, "keys: %s\n", why.c_str());
-      return 1;
-    }
-    yaml += "    " + name + ": \"" + hex(pub) + "\"\n";
-  }
-  std::string why;
-  // The roster is public: readable by every service (whose dynamic users cannot read the keys).
-  if (!write_new_file(roster.empty() ? dir + "/team.yaml" : roster, yaml, &why, 0644)) {
+  if (!transport::make_team_keys(dir, senders, roster.empty() ? dir + "/team.yaml" : roster, &yaml, &why)) {
     std::fprintf(stderr, "keys: %s\n", why.c_str());
     return 1;
   }
@@ -170,7 +94,7 @@ int keys_main(int argc, char** argv) {
   if (const int rc = cli::parse(app, argc, argv); rc >= 0) return rc;
   if (n->parsed()) return cmd_new(path);
   if (p->parsed()) return cmd_public(path);
-  if (m->parsed()) return std::printf("%s\n", new_mission().c_str()) > 0 ? 0 : 1;
+  if (m->parsed()) return std::printf("%s\n", transport::new_mission().c_str()) > 0 ? 0 : 1;
   return cmd_team(dir, robots, tool, roster);
 }
 

@@ -12,7 +12,7 @@
 //   lcm_floor [--rate HZ] [--count N] [--size BYTES] [--lcm-url URL]
 // Prints one line: rate, size, messages received / sent, one-way p50 / p90 / p99 /
 // max [us]. Exit status: 0, 1 when nothing arrived or LCM failed, 2 for a bad
-// command line.
+// command line. The payload and the figures are common/latency_floor.hpp's.
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -22,7 +22,6 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <string>
 #include <vector>
 
@@ -30,12 +29,12 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "elaslam/common/cli.hpp"
-#include "elaslam/common/contract.hpp"
+#include "elaslam/common/latency_floor.hpp"
 
 namespace {
 
 constexpr const char* kChannel = "ELASLAM_LCM_FLOOR";
-constexpr int kWarmup = 20;  // first messages not counted (sockets, caches, LCM's queues)
+using elaslam::latency_floor::kWarmup;
 
 std::int64_t mono_ns() {
   timespec t{};
@@ -50,29 +49,10 @@ struct Options {
   std::string url;
 };
 
-// The payload: [seq, int64][send time, int64 ns][zeros up to the size].
 struct Receiver {
-  std::vector<std::int64_t> delays_ns;
-  std::int64_t last_seq = -1;
-  int received = 0;
-  void on_message(const lcm::ReceiveBuffer* rb, const std::string&) {
-    const std::int64_t now = mono_ns();
-    if (rb->data_size < 16 || rb->data_size > elaslam::contract::kMaxMessageBytes) return;  // a cut datagram: -1
-    std::int64_t seq = 0, sent = 0;
-    std::memcpy(&seq, rb->data, 8);
-    std::memcpy(&sent, static_cast<const char*>(rb->data) + 8, 8);
-    last_seq = std::max(last_seq, seq);
-    if (seq < kWarmup) return;
-    ++received;
-    delays_ns.push_back(now - sent);
-  }
+  elaslam::latency_floor::Delays d;
+  void on_message(const lcm::ReceiveBuffer* rb, const std::string&) { d.on_message(rb->data, rb->data_size, mono_ns()); }
 };
-
-double quantile_us(std::vector<std::int64_t>& v, double q) {
-  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return static_cast<double>(v[k]) / 1000.0;
-}
 
 int receive(const Options& o, int ready_fd) {
   lcm::LCM lc(o.url);
@@ -80,8 +60,7 @@ int receive(const Options& o, int ready_fd) {
     std::fprintf(stderr, "lcm_floor: LCM did not start on '%s'\n", o.url.c_str());
     return 1;
   }
-  Receiver r;
-  r.delays_ns.reserve(static_cast<std::size_t>(o.count));
+  Receiver r{elaslam::latency_floor::Delays(o.count)};
   lc.subscribe(kChannel, &Receiver::on_message, &r)->setQueueCapacity(0);
   const char one = 1;
   if (::write(ready_fd, &one, 1) != 1) return 1;
@@ -89,16 +68,12 @@ int receive(const Options& o, int ready_fd) {
   // Until the last message, or a second past when it was due.
   const std::int64_t total = kWarmup + o.count;
   const std::int64_t deadline = mono_ns() + static_cast<std::int64_t>((static_cast<double>(total) / o.rate + 2.0) * 1e9);
-  while (r.last_seq < total - 1 && mono_ns() < deadline) lc.handleTimeout(100);
-  if (r.delays_ns.empty()) {
+  while (r.d.last_seq() < total - 1 && mono_ns() < deadline) lc.handleTimeout(100);
+  if (r.d.empty()) {
     std::fprintf(stderr, "lcm_floor: no message arrived (multicast on this interface? see LCM.md)\n");
     return 1;
   }
-  std::vector<std::int64_t>& d = r.delays_ns;
-  const double p50 = quantile_us(d, 0.5), p90 = quantile_us(d, 0.9), p99 = quantile_us(d, 0.99),
-               max = static_cast<double>(*std::max_element(d.begin(), d.end())) / 1000.0;
-  std::printf("lcm_floor: %g Hz, %d B: %d of %d received, one-way p50 / p90 / p99 / max %.0f / %.0f / %.0f / %.0f us\n",
-              o.rate, o.size, r.received, o.count, p50, p90, p99, max);
+  std::fputs(elaslam::latency_floor::floor_line(o.rate, o.size, o.count, r.d).c_str(), stdout);
   return 0;
 }
 
@@ -118,9 +93,7 @@ int send(const Options& o) {
     next.tv_nsec = static_cast<long>(t % 1'000'000'000);
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR) {
     }
-    const std::int64_t now = mono_ns();
-    std::memcpy(buf.data(), &seq, 8);
-    std::memcpy(buf.data() + 8, &now, 8);
+    elaslam::latency_floor::write_payload(seq, mono_ns(), &buf);
     if (lc.publish(kChannel, buf.data(), static_cast<unsigned>(buf.size())) != 0) {
       std::fprintf(stderr, "lcm_floor: publish failed\n");
       return 1;

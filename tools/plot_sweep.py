@@ -5,7 +5,7 @@
     tools/plot_sweep.py DIR [--out DIR2]
 
 DIR is a sweep output directory (runs.csv, frames.csv, maps/<mode>/ as written by
-tools/sweep_tables.cpp and eval/src/report.cpp); the PNGs go to DIR2 (default DIR):
+team/src/sweep_tables.cpp and eval/src/report.cpp); the PNGs go to DIR2 (default DIR):
 
   fig5_landmark_error.png   mean landmark error (eq 18) vs dynamism, a panel per speed
   fig6_robot_error.png      robot error (mean over robots) vs dynamism, a panel per speed

@@ -5,74 +5,25 @@
 //         [--speed 0.1,0.3,0.5,0.7,0.9] [--runs 10] [--seed-base S] [--jobs J] --out DIR [--no-plots] [--check]
 // Run r of every cell and mode uses seed seed_base + r: every mode sees the same
 // worlds, so differences between modes are the methods', not the draws'. Results
-// are stored by job index, so the files are identical whatever J.
+// are stored by job index, so the files are identical whatever J. The grid, its
+// runs and its files are team/sweep.hpp's.
 #include <unistd.h>
 
-#include <atomic>
-#include <cmath>
-#include <exception>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
-#include <mutex>
-#include <sstream>
+#include <string>
 #include <thread>
 
 #include <CLI/CLI.hpp>
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/eval/report.hpp"
-#include "elaslam/team/team_run.hpp"
-#include "sweep_tables.hpp"
+#include "elaslam/team/sweep.hpp"
 
 namespace elaslam {
 namespace {
-
-/// A comma-separated list of numbers, each finite and in [lo, hi]; throws
-/// std::invalid_argument naming the option (`what`) and the item.
-std::vector<double> parse_list(const std::string& text, const char* what, double lo, double hi) {
-  std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    std::size_t pos = 0;
-    double x = 0.0;
-    try {
-      x = std::stod(item, &pos);
-    } catch (const std::out_of_range&) {  // beyond a double: as good as inf
-      x = HUGE_VAL;
-      pos = item.size();
-    } catch (const std::exception&) {
-      pos = 0;
-    }
-    const std::string where = std::string(what) + ": '" + item + "'";
-    if (pos == 0 || pos != item.size()) throw std::invalid_argument(where + " is not a number");
-    if (!std::isfinite(x)) throw std::invalid_argument(where + " is not a finite number");
-    if (!(x >= lo && x <= hi)) {
-      std::ostringstream range;
-      range << "[" << lo << ", " << hi << "]";
-      throw std::invalid_argument(where + " is out of range: expected a number in " + range.str());
-    }
-    v.push_back(x);
-  }
-  if (v.empty()) throw std::invalid_argument(std::string(what) + ": empty list");
-  return v;
-}
-
-std::vector<Mode> parse_modes(const std::string& text) {
-  std::vector<Mode> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    Mode m;
-    if (!parse_mode(item, &m)) throw std::invalid_argument("--modes: '" + item + "' is not ekf, gated, ela or consensus");
-    v.push_back(m);
-  }
-  if (v.empty()) throw std::invalid_argument("--modes: empty list");
-  return v;
-}
 
 void progress(std::size_t done, std::size_t total, double elapsed_s) {
   const double left = done ? elapsed_s / static_cast<double>(done) * static_cast<double>(total - done) : 0.0;
@@ -84,40 +35,6 @@ void progress(std::size_t done, std::size_t total, double elapsed_s) {
   } else if (done == total || (done * 10 / total) != ((done - 1) * 10 / total)) {
     std::fprintf(stderr, "sweep: %zu/%zu runs, %.0f s left\n", done, total, left);
   }
-}
-
-// Run every job on `jobs` threads; results land at their job's index.
-void run_all(const TeamConfig& base, const std::vector<SweepJob>& jobs, int threads, std::vector<SweepResult>* out) {
-  out->assign(jobs.size(), SweepResult{});
-  std::atomic<std::size_t> next{0}, done{0};
-  std::mutex report;
-  const auto t0 = std::chrono::steady_clock::now();
-  std::exception_ptr failure;  // the first exception of any worker, rethrown after the join
-  auto worker = [&] {
-    try {
-      for (std::size_t i = next++; i < jobs.size(); i = next++) {
-        const SweepJob& j = jobs[i];
-        RunOverrides o;
-        o.mode = j.mode;
-        o.dynamism_percent = j.dynamism;
-        o.landmark_speed_mps = j.speed;
-        o.seed = j.seed;
-        const RunResult r = run_team(apply_overrides(base, o));
-        (*out)[i] = summarise(r);
-        const std::size_t d = ++done;
-        std::lock_guard<std::mutex> lock(report);
-        progress(d, jobs.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      }
-    } catch (...) {  // escaping a thread would std::terminate the process
-      std::lock_guard<std::mutex> lock(report);
-      if (!failure) failure = std::current_exception();
-      next = jobs.size();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
 }
 
 struct Args {
@@ -146,22 +63,14 @@ int parse_args(int argc, char** argv, Args* a) {
   return cli::parse(app, argc, argv);
 }
 
-// One map like the paper's Fig 4: the middle cell's first run, in ela when the grid
-// has it, else in its first mode.
+// One map like the paper's Fig 4 (map_run says which run), with its output files.
 void write_map(const Args& a, const SweepGrid& grid, const TeamConfig& base, const std::string& command) {
-  Mode map_mode = grid.modes.front();
-  for (Mode m : grid.modes)
-    if (m == Mode::kEla) map_mode = m;
-  RunOverrides o;
-  o.mode = map_mode;
-  o.dynamism_percent = grid.dynamism[grid.dynamism.size() / 2];
-  o.landmark_speed_mps = grid.speed[grid.speed.size() / 2];
-  o.seed = a.seed_base;
+  const RunOverrides o = map_run(grid, a.seed_base);
   const TeamConfig c = apply_overrides(base, o);
   const RunResult r = run_team(c);
-  RunInfo info{to_string(map_mode), c.scenario.dynamism_percent, c.scenario.landmark_speed_mps, a.seed_base,
+  RunInfo info{to_string(*o.mode), c.scenario.dynamism_percent, c.scenario.landmark_speed_mps, a.seed_base,
                a.config_path, c.effective_yaml, command};
-  write_outputs(a.out_dir + "/maps/" + to_string(map_mode), metrics_json(info, r), r);
+  write_outputs(a.out_dir + "/maps/" + to_string(*o.mode), metrics_json(info, r), r);
 }
 
 void plot(const std::string& out_dir) {
@@ -180,35 +89,25 @@ int sweep_main(int argc, char** argv) {
   if (const int rc = parse_args(argc, argv, &a); rc >= 0) return rc;
   // A bad list, config or grid throws (std::invalid_argument, ConfigError): exit 2
   // with the reason, through guarded_main.
-  SweepGrid grid;
-  grid.modes = parse_modes(a.modes_text);
-  grid.dynamism = parse_list(a.dyn_text, "--dynamism", 0.0, sim::limits::kDynamismMaxPercent);
-  grid.speed = parse_list(a.speed_text, "--speed", 0.0, sim::limits::kLandmarkSpeedMaxMps);
-  grid.runs = a.runs;
+  SweepGrid grid = make_grid(a.modes_text, a.dyn_text, a.speed_text, a.runs);
   a.config_path = cli::find_config(a.config_path).path;
   TeamConfig base = load_team_config(a.config_path);
   base.oracle = a.oracle;
   grid.oracle = a.oracle;
-  for (double d : grid.dynamism)  // every cell's scenario must run (a speed too fast for the rate)
-    for (double v : grid.speed) {
-      RunOverrides o;
-      o.dynamism_percent = d;
-      o.landmark_speed_mps = v;
-      apply_overrides(base, o);
-    }
+  check_grid(base, grid);  // every cell's scenario must run (a speed too fast for the rate)
   if (a.check) {
     std::printf("sweep: %s: valid\n", a.config_path.c_str());
     return 0;
   }
-  grid.robot_ids.clear();
   for (const auto& r : base.scenario.robots) grid.robot_ids.push_back(r.id);
   const std::vector<SweepJob> job_list = make_jobs(grid, a.seed_base);
   std::fprintf(stderr, "sweep: %zu runs (%zu modes x %zu x %zu cells x %d runs) on %d threads\n", job_list.size(),
                grid.modes.size(), grid.dynamism.size(), grid.speed.size(), a.runs, a.jobs);
   const auto t0 = std::chrono::steady_clock::now();
+  const auto seconds = [&t0] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   std::vector<SweepResult> results;
-  run_all(base, job_list, a.jobs, &results);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  run_sweep(base, job_list, a.jobs, &results, [&](std::size_t d, std::size_t n) { progress(d, n, seconds()); });
+  const double wall = seconds();
   try {
     write_sweep(a.out_dir, grid, job_list, results);
     write_map(a, grid, base, cli::command_line(argc, argv));

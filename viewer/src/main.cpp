@@ -32,7 +32,6 @@
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/config.hpp"
-#include "elaslam/common/main_options.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/node_shell.hpp"
 #include "elaslam/transport/process.hpp"
@@ -51,19 +50,13 @@ using viewer::ViewState;
 /// The config's main: bounds the state checks messages against: -1 to go on, else 2
 /// after saying why.
 int read_view_limits(const std::string& config, std::string* config_path, ViewLimits* limits) {
-  GlobalMapOptions mo;
   try {
     *config_path = cli::find_config(config).path;
-    config::Document doc = config::Document::from_file(*config_path);
-    doc.section("main", [&](config::Reader& r) { parse(r, &mo); });
-    doc.allow_sections();
-    doc.finish();
+    *limits = viewer::load_view_limits(*config_path);
   } catch (const config::ConfigError& e) {
     std::fprintf(stderr, "viewer: %s\n", e.what());
     return cli::kExitBadInput;
   }
-  limits->max_landmark_id = mo.max_landmark_id;
-  limits->world_bound_m = mo.limits.world_bound;
   return -1;
 }
 
@@ -82,13 +75,10 @@ class StatePublisher {
     built_changes_ = state_.changes();
     built_at_ = now;
     const transport::ShellCounters c = shell_.counters();
-    char counters[256];
-    std::snprintf(counters, sizeof counters,
-                  "{\"messages\":%lld,\"bad_messages\":%lld,\"queue_drops\":%lld,\"clients\":%d,\"updates_per_s\":%g}",
-                  static_cast<long long>(c.inputs.received),
-                  static_cast<long long>(state_.bad_messages() + c.inputs.decode_errors + c.auth_refused),
-                  ports_.missed_poses(), http_.event_streams(), rate_hz_);
-    latest_.put(state_.to_json(ports_.now_s(), counters));
+    const long long bad = static_cast<long long>(state_.bad_messages() + c.inputs.decode_errors + c.auth_refused);
+    latest_.put(state_.to_json(ports_.now_s(), viewer::viewer_counters_json(static_cast<long long>(c.inputs.received),
+                                                                            bad, ports_.missed_poses(),
+                                                                            http_.event_streams(), rate_hz_)));
   }
 
  private:

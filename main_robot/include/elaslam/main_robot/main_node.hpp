@@ -191,4 +191,8 @@ class MainNode {
   std::vector<int> snap_moving_, snap_moving_frames_;
 };
 
+/// main_robot's summary line at exit (ending in a newline): every counter, the map's
+/// static and moving landmarks, its version and the team-map rounds left out.
+std::string final_summary(const MainNode& node);
+
 }  // namespace elaslam

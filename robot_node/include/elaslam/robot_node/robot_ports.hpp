@@ -55,6 +55,11 @@ struct FrameStages {
   DurationHistogram receive, frame, outputs, pose;
 };
 
+/// robot_node's summary at exit, lines each ending in a newline: its counters and
+/// frame time, where the frames' time went (p50/p99/max of each FrameStages part
+/// [us]), and with robot.team_map_fuse what the other robots' map did.
+std::string final_summary(const RobotNode& node, const FrameStages& stages);
+
 template <class Shell>
 class RobotPorts {
  public:

@@ -34,6 +34,16 @@ struct ViewLimits {
   double world_bound_m = 1.0e4;
 };
 
+/// The bounds of the config's main: section the state checks messages against
+/// (main.max_landmark_id, main.limits.world_bound_m). Throws config::ConfigError.
+ViewLimits load_view_limits(const std::string& config_path);
+
+/// The viewer's own counters for ViewState::to_json, as a JSON object: messages
+/// received, bad ones (refused, undecodable, unauthenticated), POSEs missed in queues,
+/// event streams open, states pushed per second.
+std::string viewer_counters_json(long long messages, long long bad_messages, long long queue_drops, int clients,
+                                 double updates_per_s);
+
 class ViewState {
  public:
   static constexpr int kMaxRobots = contract::kMaxRobots;

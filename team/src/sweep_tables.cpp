@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "sweep_tables.hpp"
+// The sweep's files: runs.csv, frames.csv and tables.md (sweep.hpp).
+#include "elaslam/team/sweep.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -157,58 +158,53 @@ SweepResult summarise(const RunResult& r) {
   return s;
 }
 
-std::vector<SweepJob> make_jobs(const SweepGrid& g, int seed_base) {
-  std::vector<SweepJob> jobs;
-  for (Mode m : g.modes)
-    for (double d : g.dynamism)
-      for (double v : g.speed)
-        for (int r = 0; r < g.runs; ++r) jobs.push_back({m, d, v, r, seed_base + r});
-  return jobs;
+namespace {
+
+namespace fs = std::filesystem;
+
+void write_runs_csv(const fs::path& path, const SweepGrid& g, const std::vector<SweepJob>& jobs,
+                    const std::vector<SweepResult>& res) {
+  std::ofstream out = open(path);
+  out << "mode,dynamism,speed,run,seed,landmark_error,landmark_rms,";
+  for (int id : g.robot_ids) out << "robot" << id << "_error,robot" << id << "_rms,robot" << id << "_uncertainty,";
+  out << "precision,recall,static_landmark_error,frames_to_detect,flagged\n";
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    const SweepJob& j = jobs[i];
+    const SweepResult& r = res[i];
+    out << to_string(j.mode) << ',' << g9(j.dynamism) << ',' << g9(j.speed) << ',' << j.run << ',' << j.seed << ','
+        << g9(r.landmark_error) << ',' << g9(r.landmark_rms) << ',';
+    for (std::size_t k = 0; k < r.robot_error.size(); ++k)
+      out << g9(r.robot_error[k]) << ',' << g9(r.robot_rms[k]) << ',' << g9(r.robot_uncertainty[k]) << ',';
+    out << g9(r.precision) << ',' << g9(r.recall) << ',' << g9(r.landmark_static) << ',' << g9(r.frames_to_detect)
+        << ',' << r.flagged << '\n';
+  }
 }
 
-void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<SweepJob>& jobs,
-                 const std::vector<SweepResult>& res) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error("cannot create " + dir + ": " + ec.message());
-  {
-    std::ofstream out = open(fs::path(dir) / "runs.csv");
-    out << "mode,dynamism,speed,run,seed,landmark_error,landmark_rms,";
-    for (int id : g.robot_ids) out << "robot" << id << "_error,robot" << id << "_rms,robot" << id << "_uncertainty,";
-    out << "precision,recall,static_landmark_error,frames_to_detect,flagged\n";
-    for (std::size_t i = 0; i < jobs.size(); ++i) {
-      const SweepJob& j = jobs[i];
-      const SweepResult& r = res[i];
-      out << to_string(j.mode) << ',' << g9(j.dynamism) << ',' << g9(j.speed) << ',' << j.run << ',' << j.seed << ','
-          << g9(r.landmark_error) << ',' << g9(r.landmark_rms) << ',';
-      for (std::size_t k = 0; k < r.robot_error.size(); ++k)
-        out << g9(r.robot_error[k]) << ',' << g9(r.robot_rms[k]) << ',' << g9(r.robot_uncertainty[k]) << ',';
-      out << g9(r.precision) << ',' << g9(r.recall) << ',' << g9(r.landmark_static) << ',' << g9(r.frames_to_detect)
-          << ',' << r.flagged << '\n';
-    }
-  }
-  {
-    // Mean over runs of the per-frame errors (Fig 7).
-    std::ofstream out = open(fs::path(dir) / "frames.csv");
-    out << "mode,dynamism,speed,frame,landmark_error,robot_error_mean\n";
-    for (std::size_t first = 0; first < jobs.size(); first += static_cast<std::size_t>(g.runs)) {
-      const std::size_t frames = res[first].frame_landmark_error.size();
-      for (std::size_t k = 0; k < frames; ++k) {
-        double lm = 0.0, rb = 0.0;
-        int nl = 0, nr = 0;
-        for (std::size_t i = first; i < first + static_cast<std::size_t>(g.runs); ++i) {
-          if (k < res[i].frame_landmark_error.size() && !std::isnan(res[i].frame_landmark_error[k]))
-            lm += res[i].frame_landmark_error[k], ++nl;
-          if (k < res[i].frame_robot_error.size() && !std::isnan(res[i].frame_robot_error[k]))
-            rb += res[i].frame_robot_error[k], ++nr;
-        }
-        out << to_string(jobs[first].mode) << ',' << g9(jobs[first].dynamism) << ',' << g9(jobs[first].speed) << ','
-            << k << ',' << (nl ? g9(lm / nl) : "nan") << ',' << (nr ? g9(rb / nr) : "nan") << '\n';
+// Mean over runs of the per-frame errors (Fig 7).
+void write_frames_csv(const fs::path& path, const SweepGrid& g, const std::vector<SweepJob>& jobs,
+                      const std::vector<SweepResult>& res) {
+  std::ofstream out = open(path);
+  out << "mode,dynamism,speed,frame,landmark_error,robot_error_mean\n";
+  for (std::size_t first = 0; first < jobs.size(); first += static_cast<std::size_t>(g.runs)) {
+    const std::size_t frames = res[first].frame_landmark_error.size();
+    for (std::size_t k = 0; k < frames; ++k) {
+      double lm = 0.0, rb = 0.0;
+      int nl = 0, nr = 0;
+      for (std::size_t i = first; i < first + static_cast<std::size_t>(g.runs); ++i) {
+        if (k < res[i].frame_landmark_error.size() && !std::isnan(res[i].frame_landmark_error[k]))
+          lm += res[i].frame_landmark_error[k], ++nl;
+        if (k < res[i].frame_robot_error.size() && !std::isnan(res[i].frame_robot_error[k]))
+          rb += res[i].frame_robot_error[k], ++nr;
       }
+      out << to_string(jobs[first].mode) << ',' << g9(jobs[first].dynamism) << ',' << g9(jobs[first].speed) << ','
+          << k << ',' << (nl ? g9(lm / nl) : "nan") << ',' << (nr ? g9(rb / nr) : "nan") << '\n';
     }
   }
-  std::ofstream out = open(fs::path(dir) / "tables.md");
+}
+
+void write_tables_md(const fs::path& path, const SweepGrid& g, const std::vector<SweepJob>& jobs,
+                     const std::vector<SweepResult>& res) {
+  std::ofstream out = open(path);
   out << "# Sweep results\n\nEntries: mean ± sample standard deviation over " << g.runs
       << " runs (seeds seed_base .. seed_base + runs - 1, the same for every mode and cell). "
          "Errors in metres (docs/design.md section 7: landmark error = eq 18, robot error = mean position error).\n\n";
@@ -243,6 +239,18 @@ void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<S
   table(out, "Moving-landmark detection recall", g, jobs, res, [](const SweepResult& r) { return r.recall; }, 2);
   cells_won(out, g, jobs, res, won);
   out << kPaperTables;
+}
+
+}  // namespace
+
+void write_sweep(const std::string& dir, const SweepGrid& g, const std::vector<SweepJob>& jobs,
+                 const std::vector<SweepResult>& res) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create " + dir + ": " + ec.message());
+  write_runs_csv(fs::path(dir) / "runs.csv", g, jobs, res);
+  write_frames_csv(fs::path(dir) / "frames.csv", g, jobs, res);
+  write_tables_md(fs::path(dir) / "tables.md", g, jobs, res);
 }
 
 }  // namespace elaslam
