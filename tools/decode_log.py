@@ -20,14 +20,13 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import add_version, load_lcm_types, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+from elaslam_tool import doc_parser, load_lcm_types, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
 PROG = "decode_log"
 
 if __name__ == "__main__":
     run_in_venv()
 # ----------------------------------------------------------------------------------
-import argparse  # noqa: E402
 import collections  # noqa: E402
 import re  # noqa: E402
 
@@ -46,10 +45,7 @@ def describe_run_info(m):
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(prog="decode_log.py", description=__doc__.split("\n\n")[0],
-                                 epilog="\n\n".join(__doc__.split("\n\n")[2:]),
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_version(ap)
+    ap = doc_parser("decode_log.py", __doc__)
     ap.add_argument("log", help="an LCM log (lcm-logger, tools/run_team.sh: runs/team_<time>/run.lcmlog)")
     ap.add_argument("--build-dir", help="the build directory whose lcmgen/python has the message types")
     args = _parse(ap)

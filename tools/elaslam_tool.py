@@ -14,11 +14,12 @@ bin/elaslam-<tool>, in ../share/elaslam/tools:
     import os, sys
     _here = os.path.dirname(os.path.realpath(__file__))
     sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-    from elaslam_tool import need, parse_args, run_in_venv, add_version
+    from elaslam_tool import need, parse_args, run_in_venv, add_version, doc_parser
 
 Tools that read recordings load the generated message types with
 load_lcm_types(build_dir, __file__).
 """
+import argparse
 import importlib
 import os
 import sys
@@ -51,6 +52,16 @@ def add_version(ap):
     """--version on an argparse parser."""
     ap.add_argument("--version", action="version", version=version_line(),
                     help="print the version and the source commit, then exit")
+
+
+def doc_parser(name, doc):
+    """The parser of a tool documented by its docstring `doc`: the first paragraph is the
+    description, the paragraphs after the second the epilog (kept as written); --version."""
+    paragraphs = doc.split("\n\n")
+    ap = argparse.ArgumentParser(prog=name, description=paragraphs[0], epilog="\n\n".join(paragraphs[2:]),
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_version(ap)
+    return ap
 
 
 def run_in_venv():

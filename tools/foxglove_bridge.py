@@ -48,7 +48,7 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import add_version, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+from elaslam_tool import doc_parser, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
 PROG = "foxglove_bridge"
 
@@ -473,10 +473,7 @@ def parse_robots(text):
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(prog="foxglove_bridge.py", description=__doc__.split("\n\n")[0],
-                                 epilog="\n\n".join(__doc__.split("\n\n")[2:]),
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_version(ap)
+    ap = doc_parser("foxglove_bridge.py", __doc__)
     ap.add_argument("--port", type=int, default=8765, help="WebSocket port (0: any free one; default 8765)")
     ap.add_argument("--bind", default="127.0.0.1", help="address to listen on (default 127.0.0.1: this machine only)")
     ap.add_argument("--lcm-url", default=os.environ.get("LCM_DEFAULT_URL", ""), help="LCM URL (default LCM_DEFAULT_URL)")

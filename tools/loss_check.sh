@@ -53,25 +53,21 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
+# The network of run_team.sh --hosts: the two hosts on a bridge.
+HERE="$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")"
+# shellcheck source=tools/netns_bridge.sh
+. "$HERE/netns_bridge.sh"
 ip netns add "$HUB"
-ip -n "$HUB" link add br0 type bridge
-ip -n "$HUB" link set br0 type bridge mcast_snooping 0
-ip -n "$HUB" link set br0 up
+bridge_hub "$HUB"
 i=1
 for n in "$TX" "$RX"; do
   ip netns add "$n"
-  ip link add "lc$$_$i" type veth peer name eth0 netns "$n"
-  ip link set "lc$$_$i" netns "$HUB" up
-  ip -n "$HUB" link set "lc$$_$i" master br0 up
-  ip -n "$n" link set lo up
-  ip -n "$n" addr add "10.78.0.$i/24" dev eth0
-  ip -n "$n" link set eth0 up multicast on
-  ip -n "$n" route add 224.0.0.0/4 dev eth0
+  bridge_host "$HUB" "$n" "lc$$_$i" "10.78.0.$i"
   i=$((i + 1))
 done
 # The rule every receiving host of run_team.sh --hosts --loss P gets (receiver 10.78.0.2).
 # shellcheck source=tools/loss_rule.sh
-. "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/loss_rule.sh"
+. "$HERE/loss_rule.sh"
 ip netns exec "$RX" sysctl -q -w net.ipv4.ipfrag_time=1
 install_loss_rule "$RX" 10.78.0.2 "$LOSS"
 

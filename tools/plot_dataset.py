@@ -18,12 +18,11 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import add_version, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+from elaslam_tool import doc_parser, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
 if __name__ == "__main__":
     run_in_venv()
 # ----------------------------------------------------------------------------------
-import argparse  # noqa: E402
 import csv  # noqa: E402
 import math  # noqa: E402
 
@@ -72,9 +71,7 @@ def ellipse(cxx, cxy, cyy, x, y, k=3.0, **kw):
 
 
 def main():
-    ap = argparse.ArgumentParser(prog="plot_dataset.py", description=__doc__.split("\n\n")[0],
-                                 epilog=__doc__.split("\n\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_version(ap)
+    ap = doc_parser("plot_dataset.py", __doc__)
     ap.add_argument("run_dir", help="a run_dataset (or run_scenario) output folder")
     ap.add_argument("--out", help="the PNG to write (default: RUN_DIR/paths.png)")
     a = _parse(ap)

@@ -28,12 +28,11 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path[:0] = [_here, os.path.join(_here, "..", "share", "elaslam", "tools")]
-from elaslam_tool import add_version, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
+from elaslam_tool import doc_parser, need as _need, parse_args as _parse, run_in_venv  # noqa: E402
 
 if __name__ == "__main__":
     run_in_venv()
 # ----------------------------------------------------------------------------------
-import argparse  # noqa: E402
 import csv  # noqa: E402
 import math  # noqa: E402
 import re  # noqa: E402
@@ -508,9 +507,7 @@ def fig4(sweep, out, written):
 
 
 def main():
-    ap = argparse.ArgumentParser(prog="plot_sweep.py", description=__doc__.split("\n\n")[0],
-                                 epilog=__doc__.split("\n\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_version(ap)
+    ap = doc_parser("plot_sweep.py", __doc__)
     ap.add_argument("dir", help="sweep output directory (runs.csv, frames.csv, maps/)")
     ap.add_argument("--out", help="directory for the PNGs (default: DIR)")
     args = _parse(ap)

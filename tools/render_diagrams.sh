@@ -37,23 +37,15 @@ printf '{"executablePath": "%s", "args": ["--no-sandbox", "--disable-gpu"]}\n' "
 
 # One line per diagram: SOURCE_FILE SVG_NAME SHA256, the block's source in WORK/SVG_NAME.mmd.
 python3 - "$ROOT" "$WORK" >"$WORK/diagrams" <<'PY'
-import glob, hashlib, os, re, sys
+import glob, os, sys
 root, work = sys.argv[1], sys.argv[2]
+sys.path.insert(0, os.path.join(root, "tools"))
+from mermaid_diagrams import diagrams, source_sha
 for page in sorted(glob.glob(os.path.join(root, "docs", "*.md"))):
-    lines = open(page, encoding="utf-8").read().split("\n")
-    i = 0
-    while i < len(lines):
-        if re.match(r"^\s*```mermaid\s*$", lines[i]):
-            j = i + 1
-            while j < len(lines) and not lines[j].strip().startswith("```"):
-                j += 1
-            source = "\n".join(lines[i + 1:j]) + "\n"
-            m = re.search(r"\]\((?:\.\./)?(?:docs/)?images/([\w.-]+\.svg)\)", "\n".join(lines[j + 1:j + 5]))
-            if m:
-                open(os.path.join(work, m.group(1) + ".mmd"), "w", encoding="utf-8").write(source)
-                print(os.path.relpath(page, root), m.group(1), hashlib.sha256(source.encode()).hexdigest())
-            i = j
-        i += 1
+    for source, svg, _ in diagrams(open(page, encoding="utf-8").read()):
+        if svg:
+            open(os.path.join(work, svg + ".mmd"), "w", encoding="utf-8").write(source)
+            print(os.path.relpath(page, root), svg, source_sha(source))
 PY
 [ -s "$WORK/diagrams" ] || { echo "render_diagrams: no diagram links to docs/images/*.svg" >&2; exit 1; }
 mkdir -p "$ROOT/docs/images"

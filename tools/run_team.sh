@@ -358,16 +358,12 @@ restart() {
 }
 
 # One namespace per "host", joined by the bridge in the hub namespace.
+# shellcheck source=tools/netns_bridge.sh
+. "$ROOT/tools/netns_bridge.sh"
 make_host() {
   local name="$1" index="$2" ns="elaslam_${$}_$1"
   ip netns add "$ns"; NETNS+=("$ns"); HOST_NS[$name]="$ns"; HOST_IP[$name]="10.77.0.$((index + 1))"
-  ip link add "v$$_$index" type veth peer name eth0 netns "$ns"
-  ip link set "v$$_$index" netns "$HUB" up
-  ip -n "$HUB" link set "v$$_$index" master br0 up
-  ip -n "$ns" link set lo up
-  ip -n "$ns" addr add "10.77.0.$((index + 1))/24" dev eth0
-  ip -n "$ns" link set eth0 up multicast on
-  ip -n "$ns" route add 224.0.0.0/4 dev eth0
+  bridge_host "$HUB" "$ns" "v$$_$index" "${HOST_IP[$name]}"
 }
 
 # add_loss HOST: drop LOSS % of the host's incoming UDP packets (tools/loss_rule.sh).
@@ -621,9 +617,7 @@ if [ "$HOSTS" -eq 1 ]; then
   [ -z "$FOX_PORT" ] || FOX_NS="/proc/$$/ns/net"    # the Foxglove bridge's WebSocket too
   HUB="elaslam_${$}_hub"
   ip netns add "$HUB"; NETNS+=("$HUB")
-  ip -n "$HUB" link add br0 type bridge
-  ip -n "$HUB" link set br0 type bridge mcast_snooping 0
-  ip -n "$HUB" link set br0 up
+  bridge_hub "$HUB"
   URL="udpm://239.255.76.67:${PORT}?ttl=1&recv_buf_size=8388608"
   idx=0
   for h in sim main "${ROBOTS[@]/#/robot}" log; do

@@ -166,15 +166,23 @@ std::string MainNode::take_alert() {
   return a;
 }
 
-bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
+template <class Msg>
+bool MainNode::admit(const Msg& m, bool snapshot, std::string* why) {
   Refusal reason = Refusal::kMalformed;
   if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why);
   if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
-    if (why) *why = "event of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
+    if (why)
+      *why = std::string(snapshot ? "snapshot" : "event") + " of an older incarnation of robot " +
+             std::to_string(m.robot_id) + " (replay or second sender)";
     return false;
   }
-  if (std::string p = check_seq(m.robot_id, m.seq, false, &reason); !p.empty()) return refused(reason, p, why);
+  if (std::string p = check_seq(m.robot_id, m.seq, snapshot, &reason); !p.empty()) return refused(reason, p, why);
   if (std::string p = check_frame(m.robot_id, m.frame, &reason); !p.empty()) return refused(reason, p, why);
+  return true;
+}
+
+bool MainNode::on_event(const landmark_event_t& m, std::string* why) {
+  if (!admit(m, false, why)) return false;
   GlobalEvent e;
   e.robot_id = m.robot_id;
   e.seq = m.seq;
@@ -213,14 +221,7 @@ bool MainNode::on_events(const lmap_events_t& m, std::string* why) {
 }
 
 bool MainNode::on_snapshot(const lmap_snapshot_t& m, std::string* why) {
-  Refusal reason = Refusal::kMalformed;
-  if (const std::string problem = validate(m, &reason); !problem.empty()) return refused(reason, problem, why);
-  if (!accept_incarnation(m.robot_id, m.incarnation, m.frame)) {
-    if (why) *why = "snapshot of an older incarnation of robot " + std::to_string(m.robot_id) + " (replay or second sender)";
-    return false;
-  }
-  if (std::string p = check_seq(m.robot_id, m.seq, true, &reason); !p.empty()) return refused(reason, p, why);
-  if (std::string p = check_frame(m.robot_id, m.frame, &reason); !p.empty()) return refused(reason, p, why);
+  if (!admit(m, true, why)) return false;
   snap_lms_.clear();
   snap_moving_.clear();
   snap_moving_frames_.clear();

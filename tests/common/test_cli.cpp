@@ -17,6 +17,7 @@
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/common/version.hpp"
+#include "../support/expect_has.hpp"
 
 namespace elaslam::cli {
 namespace {
@@ -119,8 +120,6 @@ Parsed parse_args(std::vector<std::string> args, Options* o) {
   testing::internal::GetCapturedStdout();
   return p;
 }
-
-#define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << "want: " << (part) << "\n got: " << (text)
 
 TEST(CliParse, ValidNumbersGoOn) {
   Options o;

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "elaslam/dataset/mrclam.hpp"
+#include "../support/expect_has.hpp"
 
 namespace elaslam::mrclam {
 namespace {
@@ -319,9 +320,9 @@ TEST(Mrclam, OptionsFromYamlWithOtherSections) {
     ADD_FAILURE() << "no ConfigError";
   } catch (const config::ConfigError& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("dataset.rate_hz"), std::string::npos) << m;
-    EXPECT_NE(m.find("dataset.robots"), std::string::npos) << m;
-    EXPECT_NE(m.find("dataset.extra"), std::string::npos) << m;
+    EXPECT_HAS(m, "dataset.rate_hz");
+    EXPECT_HAS(m, "dataset.robots");
+    EXPECT_HAS(m, "dataset.extra");
   }
   fs::remove(p);
   // The repository's config parses.
@@ -369,54 +370,50 @@ class MrclamMalformed : public ::testing::Test {
     }
     return "no DatasetError";
   }
+  /// The load's error after `row` is appended to `file`: it must name the file and the
+  /// row's line number.
+  std::string error_at(const std::string& file, const std::string& row) {
+    const int line = append(file, row);
+    const std::string m = error();
+    EXPECT_NE(m.find(file + ":" + std::to_string(line) + ":"), std::string::npos) << m;
+    return m;
+  }
   fs::path dir_;
 };
 
 TEST_F(MrclamMalformed, WrongColumnCount) {
-  const int line = append("Robot2_Odometry.dat", "1002.000 0.2 0.5 7");
-  const std::string m = error();
-  EXPECT_NE(m.find("Robot2_Odometry.dat:" + std::to_string(line) + ":"), std::string::npos) << m;
-  EXPECT_NE(m.find("column count"), std::string::npos) << m;
+  const std::string m = error_at("Robot2_Odometry.dat", "1002.000 0.2 0.5 7");
+  EXPECT_HAS(m, "column count");
 }
 
 TEST_F(MrclamMalformed, TextInANumber) {
-  const int line = append("Robot1_Measurement.dat", "1003.000 63 abc 0.1");
-  const std::string m = error();
-  EXPECT_NE(m.find("Robot1_Measurement.dat:" + std::to_string(line) + ":"), std::string::npos) << m;
-  EXPECT_NE(m.find("column 3 ('abc') is not a number"), std::string::npos) << m;
+  const std::string m = error_at("Robot1_Measurement.dat", "1003.000 63 abc 0.1");
+  EXPECT_HAS(m, "column 3 ('abc') is not a number");
 }
 
 TEST_F(MrclamMalformed, NotFinite) {
-  const int line = append("Robot1_Groundtruth.dat", "1003.000 nan 0.0 0.0");
-  const std::string m = error();
-  EXPECT_NE(m.find("Robot1_Groundtruth.dat:" + std::to_string(line) + ":"), std::string::npos) << m;
-  EXPECT_NE(m.find("not finite"), std::string::npos) << m;
+  const std::string m = error_at("Robot1_Groundtruth.dat", "1003.000 nan 0.0 0.0");
+  EXPECT_HAS(m, "not finite");
 }
 
 TEST_F(MrclamMalformed, TimeGoingBackwards) {
-  const int line = append("Robot1_Groundtruth.dat", "1001.500 0.0 0.0 0.0");
-  const std::string m = error();
-  EXPECT_NE(m.find("Robot1_Groundtruth.dat:" + std::to_string(line) + ":"), std::string::npos) << m;
-  EXPECT_NE(m.find("backwards"), std::string::npos) << m;
+  const std::string m = error_at("Robot1_Groundtruth.dat", "1001.500 0.0 0.0 0.0");
+  EXPECT_HAS(m, "backwards");
 }
 
 TEST_F(MrclamMalformed, MeasurementTimeGoingBackwards) {
-  const int line = append("Robot2_Measurement.dat", "1000.000 63 1.0 0.0");
-  const std::string m = error();
-  EXPECT_NE(m.find("Robot2_Measurement.dat:" + std::to_string(line) + ":"), std::string::npos) << m;
+  error_at("Robot2_Measurement.dat", "1000.000 63 1.0 0.0");
 }
 
 TEST_F(MrclamMalformed, NonIntegerBarcode) {
-  const int line = append("Barcodes.dat", "9 3.5");
-  const std::string m = error();
-  EXPECT_NE(m.find("Barcodes.dat:" + std::to_string(line) + ":"), std::string::npos) << m;
+  error_at("Barcodes.dat", "9 3.5");
 }
 
 TEST_F(MrclamMalformed, MissingFile) {
   fs::remove(dir_ / "Robot2_Groundtruth.dat");
   const std::string m = error();
-  EXPECT_NE(m.find("Robot2_Groundtruth.dat"), std::string::npos) << m;
-  EXPECT_NE(m.find("cannot open"), std::string::npos) << m;
+  EXPECT_HAS(m, "Robot2_Groundtruth.dat");
+  EXPECT_HAS(m, "cannot open");
 }
 
 // ---- the real dataset ------------------------------------------------------------------

@@ -11,10 +11,12 @@ tools/render_diagrams.sh) was rendered from the diagram's current source.
 Exit 0 when all hold; 1 listing what does not. Standard library only.
 """
 import glob
-import hashlib
 import os
 import re
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "tools"))
+from mermaid_diagrams import SVG_STAMP, diagrams, source_sha  # noqa: E402
 
 LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
 # A docs path named in prose or a code span: docs/x.md, docs/adr/0001-x.md, docs/experiments/
@@ -22,8 +24,6 @@ DOC_PATH = re.compile(r"(?<![\w/.-])(docs/[\w./-]*[\w/])")
 FENCE = re.compile(r"^\s*(```+|~~~+)")
 ADR_NAME = re.compile(r"^\d{4}-[a-z0-9][a-z0-9.-]*\.md$")
 # The SVG of a diagram carries the sha256 of the Mermaid source it was rendered from.
-SVG_STAMP = re.compile(r"<!-- mermaid-source-sha256: ([0-9a-f]{64}) -->")
-SVG_OF = re.compile(r"\]\((?:\.\./)?(?:docs/)?images/([\w.-]+\.svg)\)")
 
 
 def pages(root):
@@ -47,24 +47,6 @@ def prose(text):
         yield n, line
 
 
-def mermaid_blocks(text):
-    """(source, line after the block) of each ```mermaid block."""
-    lines = text.split("\n")
-    i = 0
-    while i < len(lines):
-        if re.match(r"^\s*```mermaid\s*$", lines[i]):
-            j = i + 1
-            while j < len(lines) and not lines[j].strip().startswith("```"):
-                j += 1
-            yield "\n".join(lines[i + 1:j]) + "\n", j + 1
-            i = j
-        i += 1
-
-
-def mermaid_sha(source):
-    return hashlib.sha256(source.encode("utf-8")).hexdigest()
-
-
 def check(root):
     errors = []
     for page in pages(root):
@@ -85,20 +67,18 @@ def check(root):
                     continue
                 if not os.path.exists(os.path.join(root, path)):
                     errors.append(f"{rel}:{n}: names {path}: no such file")
-        for source, after in mermaid_blocks(text):
+        for source, name, after in diagrams(text):
             # The SVG linked right after the block must be of this source.
-            rest = "\n".join(text.split("\n")[after - 1:after + 4])
-            m = SVG_OF.search(rest)
-            if not m:
+            if not name:
                 continue
-            svg = os.path.join(root, "docs", "images", m.group(1))
+            svg = os.path.join(root, "docs", "images", name)
             if not os.path.isfile(svg):
                 continue  # reported above as a broken link
             stamp = SVG_STAMP.search(open(svg, encoding="utf-8").read())
             if not stamp:
-                errors.append(f"{rel}:{after}: docs/images/{m.group(1)} has no mermaid-source-sha256 stamp")
-            elif stamp.group(1) != mermaid_sha(source):
-                errors.append(f"{rel}:{after}: docs/images/{m.group(1)} is stale: the Mermaid source changed; "
+                errors.append(f"{rel}:{after}: docs/images/{name} has no mermaid-source-sha256 stamp")
+            elif stamp.group(1) != source_sha(source):
+                errors.append(f"{rel}:{after}: docs/images/{name} is stale: the Mermaid source changed; "
                               "run tools/render_diagrams.sh")
     adr_dir = os.path.join(root, "docs", "adr")
     if os.path.isdir(adr_dir):

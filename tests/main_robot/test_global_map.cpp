@@ -8,6 +8,7 @@
 
 #include "../support/messages.hpp"
 #include "elaslam/main_robot/main_node.hpp"
+#include "global_event.hpp"
 
 namespace elaslam {
 namespace {
@@ -21,15 +22,7 @@ GlobalMapOptions options(Fusion f = Fusion::kInformation) {
 
 GlobalEvent ev(int robot, std::int64_t seq, int kind, int id, double x = 0, double y = 0, double var = 0.01,
                int frame = 0) {
-  GlobalEvent e;
-  e.robot_id = robot;
-  e.seq = seq;
-  e.kind = kind;
-  e.landmark_id = id;
-  e.position = {x, y};
-  e.cov = Eigen::Matrix2d::Identity() * var;
-  e.frame = frame;
-  return e;
+  return test::global_event(robot, seq, kind, id, {x, y}, Eigen::Matrix2d::Identity() * var, frame);
 }
 
 TEST(GlobalMap, InformationFusionMatchesClosedForm) {

@@ -18,6 +18,7 @@
 
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/main_robot/map_state.hpp"
+#include "global_event.hpp"
 
 // The largest single heap allocation since reset_largest_allocation()
 // (largest_allocation.cpp: a counting operator new).
@@ -37,15 +38,9 @@ GlobalMapOptions options() {
 }
 
 GlobalEvent ev(int robot, std::int64_t seq, int kind, int id, double x, double y, int frame) {
-  GlobalEvent e;
-  e.robot_id = robot;
-  e.seq = seq;
-  e.kind = kind;
-  e.landmark_id = id;
-  e.position = {x, y};
-  e.cov << 0.02, 0.003, 0.003, 0.01;
-  e.frame = frame;
-  return e;
+  Eigen::Matrix2d cov;
+  cov << 0.02, 0.003, 0.003, 0.01;
+  return test::global_event(robot, seq, kind, id, {x, y}, cov, frame);
 }
 
 // A map with a bit of everything: three robots with incarnations, fused and single

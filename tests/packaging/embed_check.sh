@@ -21,16 +21,11 @@ set -euo pipefail
 MODE="${1:?usage: embed_check.sh embed|superproject|fetchcontent BUILD_DIR INTREE_PROGRAM}"
 BUILD="$(cd "${2:?BUILD_DIR}" && pwd)"
 INTREE="${3:?INTREE_PROGRAM}"
-SRC="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=tests/packaging/lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 CMAKE="${CMAKE_COMMAND:-cmake}"
 EXAMPLE="$SRC/examples/embed_robot"
-TMP="$(mktemp -d "${TMPDIR:-/tmp}/elaslam-embed.XXXXXX")"
-trap 'rm -rf "$TMP"' EXIT
-
-fail() { echo "FAIL: $*" >&2; exit 1; }
-skip() { echo "skipped: $*"; exit 77; }
-note() { echo "-- $*"; }
-cache() { sed -n "s/^$1:[A-Z]*=//p" "$BUILD/CMakeCache.txt"; }
+scratch embed
 GENERATOR=()
 command -v ninja >/dev/null 2>&1 && GENERATOR=(-G Ninja)
 

@@ -19,16 +19,13 @@ set -euo pipefail
 MODE="${1:?usage: package_check.sh install|deb|units BUILD_DIR VERSION}"
 BUILD="$(cd "${2:?BUILD_DIR}" && pwd)"
 VERSION="${3:?VERSION}"
-SRC="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# shellcheck source=tests/packaging/lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 CMAKE="${CMAKE_COMMAND:-cmake}"
 CPACK="${CPACK_COMMAND:-cpack}"
-TMP="$(mktemp -d "${TMPDIR:-/tmp}/elaslam-pkg.XXXXXX")"
-trap 'rm -rf "$TMP"' EXIT
+scratch pkg
 
-fail() { echo "FAIL: $*" >&2; exit 1; }
-skip() { echo "skipped: $*"; exit 77; }
 need() { command -v "$1" >/dev/null 2>&1 || skip "$1 not found ($2; tools/setup.sh --with-test-tools installs it)"; }
-note() { echo "-- $*"; }
 
 # ---- the expected layout (docs/deployment.md), per package --------------------------
 # Optional parts follow what this build has: programs whose targets exist
@@ -91,7 +88,6 @@ expected_files() {
       echo "$p/$libdir/pkgconfig/elaslam.pc" ;;
   esac
 }
-cache() { sed -n "s/^$1:[A-Z]*=//p" "$BUILD/CMakeCache.txt"; }
 PACKAGES=(elaslam-common elaslam-robot elaslam-main-robot elaslam-simulator elaslam-tools elaslam-dev elaslam-spy)
 # The ELF programs of a tree and the build target each one comes from.
 elf_programs() { # ROOT_BIN

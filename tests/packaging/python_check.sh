@@ -18,12 +18,9 @@
 set -euo pipefail
 BUILD="$(cd "${1:?usage: python_check.sh BUILD_DIR VERSION}" && pwd)"
 VERSION="${2:?VERSION}"
-SRC="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-TMP="$(mktemp -d "${TMPDIR:-/tmp}/elaslam-py.XXXXXX")"
-trap 'rm -rf "$TMP"' EXIT
-fail() { echo "FAIL: $*" >&2; exit 1; }
-skip() { echo "skipped: $*"; exit 77; }
-note() { echo "-- $*"; }
+# shellcheck source=tests/packaging/lib.sh
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+scratch py
 
 PKG="$BUILD/python"
 [ -f "$PKG/pyproject.toml" ] && [ -f "$PKG/elaslam/__init__.py" ] || fail "$PKG: not built (cmake --build: elaslam_python_package)"

@@ -3,6 +3,8 @@
 // frames observed from known true poses.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -136,6 +138,19 @@ inline std::vector<InView> view_of(const EkfSlam& ekf, const Pose2& truth, const
     v.push_back(x);
   }
   return v;
+}
+
+/// The largest difference between two filters that hold landmarks 0..n-1, compared
+/// by id (their slots may differ): pose, landmark positions and every covariance block.
+inline double max_difference_by_id(const EkfSlam& a, const EkfSlam& b, int n) {
+  double d = std::max({std::fabs(a.pose().x - b.pose().x), std::fabs(a.pose().y - b.pose().y),
+                       std::fabs(a.pose().theta - b.pose().theta), (a.pose_cov() - b.pose_cov()).cwiseAbs().maxCoeff()});
+  for (int i = 0; i < n; ++i) {
+    d = std::max({d, (a.landmark(i) - b.landmark(i)).cwiseAbs().maxCoeff(),
+                  (a.pose_landmark_cov(i) - b.pose_landmark_cov(i)).cwiseAbs().maxCoeff()});
+    for (int j = 0; j < n; ++j) d = std::max(d, (a.landmark_cross_cov(i, j) - b.landmark_cross_cov(i, j)).cwiseAbs().maxCoeff());
+  }
+  return d;
 }
 
 /// A frame as robot `robot_id`'s SENSOR message (utime 1000 + frame).

@@ -21,6 +21,19 @@ using test::view_of;
 
 const double kThreshold = chi2_quantile(0.99, 2);
 
+// The consensus problem of a view: each landmark's prior innovation d2, and an edge
+// between every two whose pair test passes at 0.99.
+void add_view(ConsensusSolver* solver, const EkfSlam& ekf, const std::vector<InView>& view) {
+  const int n = static_cast<int>(view.size());
+  solver->reset(n);
+  for (int i = 0; i < n; ++i) {
+    solver->set_prior_d2(i, ekf.check(i, view[static_cast<std::size_t>(i)].z).d2);
+    for (int j = i + 1; j < n; ++j)
+      if (pair_d2(ekf, view[static_cast<std::size_t>(i)], view[static_cast<std::size_t>(j)]) <= kThreshold)
+        solver->add_edge(i, j);
+  }
+}
+
 // The joint prior test of a clique: the innovations of one frame share
 // the pose's error, so the clique's d2 uses their joint covariance H P H^T + W. On a
 // robot whose pose uncertainty dominates (0.1 m), the sum of the single d2s fired
@@ -99,13 +112,7 @@ TEST(Consensus, SixtyPercentMovingInDifferentDirectionsKeepsExactlyTheStaticOnes
   const auto view = view_of(ekf, pose, lms, &rng);
   // WHEN the consensus is solved
   ConsensusSolver solver(0.99);
-  solver.reset(10);
-  for (int i = 0; i < 10; ++i) {
-    solver.set_prior_d2(i, ekf.check(i, view[static_cast<std::size_t>(i)].z).d2);
-    for (int j = i + 1; j < 10; ++j)
-      if (pair_d2(ekf, view[static_cast<std::size_t>(i)], view[static_cast<std::size_t>(j)]) <= kThreshold)
-        solver.add_edge(i, j);
-  }
+  add_view(&solver, ekf, view);
   const std::uint64_t chosen = solver.solve();
   // THEN exactly the four static landmarks are kept
   EXPECT_EQ(chosen, (1u << 1) | (1u << 4) | (1u << 6) | (1u << 9));
@@ -121,13 +128,7 @@ TEST(Consensus, CoMovingGroupLargerThanStaticSetLosesOnThePrior) {
   for (int i : {0, 1, 2, 3}) lms[static_cast<std::size_t>(i)] += Eigen::Vector2d(0.8, 0.0);
   const auto view = view_of(ekf, pose, lms, nullptr);
   ConsensusSolver solver(0.99);
-  solver.reset(7);
-  for (int i = 0; i < 7; ++i) {
-    solver.set_prior_d2(i, ekf.check(i, view[static_cast<std::size_t>(i)].z).d2);
-    for (int j = i + 1; j < 7; ++j)
-      if (pair_d2(ekf, view[static_cast<std::size_t>(i)], view[static_cast<std::size_t>(j)]) <= kThreshold)
-        solver.add_edge(i, j);
-  }
+  add_view(&solver, ekf, view);
   // THEN the static set, which agrees with the predicted pose, wins
   EXPECT_EQ(solver.solve(), (1u << 4) | (1u << 5) | (1u << 6));
   EXPECT_GE(solver.cliques_visited(), 2);

@@ -46,39 +46,36 @@ struct Sampler {
 
 // ---- the checked functions, one per Jacobian ---------------------------------------
 
+// The analytic Jacobian `analytic` of f at x against central differences, named in
+// the failure.
+template <class F, class X, class J>
+void expect_jacobian(const char* name, const F& f, const X& x, const J& analytic, unsigned angle_outputs = 0u) {
+  const auto c = check_jacobian(f, x, analytic, angle_outputs);
+  EXPECT_TRUE(c.ok) << name << ": " << c.message;
+}
+
 void expect_motion_jacobians(const Pose2& pose, const Pose2& u) {
   Eigen::Matrix3d F_x, F_u;
   motion(pose, u, &F_x, &F_u);
-  const auto f_x = [&](const Vec3& r) { return to_vec(motion(to_pose(r), u)); };
-  const auto f_u = [&](const Vec3& v) { return to_vec(motion(pose, to_pose(v))); };
-  const auto cx = check_jacobian(f_x, to_vec(pose), F_x, kThetaOutput);
-  const auto cu = check_jacobian(f_u, to_vec(u), F_u, kThetaOutput);
-  EXPECT_TRUE(cx.ok) << "F_x: " << cx.message;
-  EXPECT_TRUE(cu.ok) << "F_u: " << cu.message;
+  expect_jacobian("F_x", [&](const Vec3& r) { return to_vec(motion(to_pose(r), u)); }, to_vec(pose), F_x, kThetaOutput);
+  expect_jacobian("F_u", [&](const Vec3& v) { return to_vec(motion(pose, to_pose(v))); }, to_vec(u), F_u, kThetaOutput);
 }
 
 void expect_observe_jacobians(const Pose2& pose, const Vec2& l) {
   Mat23 H_x;
   Eigen::Matrix2d H_l;
   observe(pose, l, &H_x, &H_l);
-  const auto f_x = [&](const Vec3& r) { return to_vec(observe(to_pose(r), l)); };
-  const auto f_l = [&](const Vec2& p) { return to_vec(observe(pose, p)); };
-  const auto cx = check_jacobian(f_x, to_vec(pose), H_x, kBearingOutput);
-  const auto cl = check_jacobian(f_l, l, H_l, kBearingOutput);
-  EXPECT_TRUE(cx.ok) << "H_x: " << cx.message;
-  EXPECT_TRUE(cl.ok) << "H_l: " << cl.message;
+  expect_jacobian("H_x", [&](const Vec3& r) { return to_vec(observe(to_pose(r), l)); }, to_vec(pose), H_x,
+                  kBearingOutput);
+  expect_jacobian("H_l", [&](const Vec2& p) { return to_vec(observe(pose, p)); }, l, H_l, kBearingOutput);
 }
 
 void expect_inverse_observe_jacobians(const Pose2& pose, const RangeBearing& z) {
   Mat23 G_x;
   Eigen::Matrix2d G_z;
   inverse_observe(pose, z, &G_x, &G_z);
-  const auto g_x = [&](const Vec3& r) { return inverse_observe(to_pose(r), z); };
-  const auto g_z = [&](const Vec2& y) { return inverse_observe(pose, to_rb(y)); };
-  const auto cx = check_jacobian(g_x, to_vec(pose), G_x);
-  const auto cz = check_jacobian(g_z, to_vec(z), G_z);
-  EXPECT_TRUE(cx.ok) << "G_x: " << cx.message;
-  EXPECT_TRUE(cz.ok) << "G_z: " << cz.message;
+  expect_jacobian("G_x", [&](const Vec3& r) { return inverse_observe(to_pose(r), z); }, to_vec(pose), G_x);
+  expect_jacobian("G_z", [&](const Vec2& y) { return inverse_observe(pose, to_rb(y)); }, to_vec(z), G_z);
 }
 
 // ---- the checker itself ---------------------------------------------------------------

@@ -93,13 +93,7 @@ TEST_F(RobotPaths, WithHistoryAConfirmedCandidateCorrectsAsIfMappedAtOnce) {
     const EkfSlam& b = ekf.filter();
     ASSERT_EQ(a.num_landmarks(), 6);
     ASSERT_EQ(b.num_landmarks(), 6);
-    double d = std::max({std::fabs(a.pose().x - b.pose().x), std::fabs(a.pose().y - b.pose().y),
-                         std::fabs(a.pose().theta - b.pose().theta), (a.pose_cov() - b.pose_cov()).cwiseAbs().maxCoeff()});
-    for (int i = 0; i < 6; ++i) {
-      d = std::max({d, (a.landmark(i) - b.landmark(i)).cwiseAbs().maxCoeff(),
-                    (a.pose_landmark_cov(i) - b.pose_landmark_cov(i)).cwiseAbs().maxCoeff()});
-      for (int j = 0; j < 6; ++j) d = std::max(d, (a.landmark_cross_cov(i, j) - b.landmark_cross_cov(i, j)).cwiseAbs().maxCoeff());
-    }
+    const double d = test::max_difference_by_id(a, b, 6);
     if (history > 0) {
       EXPECT_LT(d, 1e-12);
       EXPECT_EQ(ela.history().rebuilds(), 1);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "elaslam/common/geometry.hpp"
 #include "elaslam/simulator/messages.hpp"
 #include "elaslam/simulator/scenario.hpp"
 #include "elaslam/simulator/world.hpp"
@@ -63,5 +64,26 @@ struct Moments {
   }
   double var() const { return n > 1 ? m2 / static_cast<double>(n - 1) : 0.0; }
 };
+
+/// Runs `w` to frame frames - 1 and calls each(k, r, u_true, u_odo) for every robot r
+/// at every frame k >= 1: its true motion and the motion its odometer reported since
+/// frame k - 1, both in its body frame at k - 1.
+template <typename Each>
+void for_each_increment(World& w, int frames, Each each) {
+  std::vector<Pose2> odo, truth;
+  for (int r = 0; r < w.num_robots(); ++r) {
+    odo.push_back(w.sensor_frame(r).odometer);
+    truth.push_back(w.robot_pose(r));
+  }
+  for (int k = 1; k < frames; ++k) {
+    w.step();
+    for (int r = 0; r < w.num_robots(); ++r) {
+      const auto i = static_cast<std::size_t>(r);
+      each(k, r, between(truth[i], w.robot_pose(r)), between(odo[i], w.sensor_frame(r).odometer));
+      odo[i] = w.sensor_frame(r).odometer;
+      truth[i] = w.robot_pose(r);
+    }
+  }
+}
 
 }  // namespace elaslam::sim::test

@@ -187,25 +187,12 @@ TEST(SimMotion, OdometerIncrementsErrorsOverWholeRuns) {
     ScenarioOptions o = test::paper();
     o.seed = seed;
     World w(o);
-    std::vector<Pose2> odo, truth;
-    for (int r = 0; r < 3; ++r) {
-      odo.push_back(w.sensor_frame(r).odometer);
-      truth.push_back(w.robot_pose(r));
-    }
-    for (int k = 1; k < o.frames; ++k) {
-      w.step();
-      for (int r = 0; r < 3; ++r) {
-        const auto i = static_cast<std::size_t>(r);
-        const Pose2 u_true = between(truth[i], w.robot_pose(r));
-        const Pose2 u_odo = between(odo[i], w.sensor_frame(r).odometer);
-        const Eigen::Vector3d var = increment_variances(u_true, o.odometry);
-        nx.add((u_odo.x - u_true.x) / std::sqrt(var.x()));
-        ny.add((u_odo.y - u_true.y) / std::sqrt(var.y()));
-        nt.add(wrap_angle(u_odo.theta - u_true.theta) / std::sqrt(var.z()));
-        odo[i] = w.sensor_frame(r).odometer;
-        truth[i] = w.robot_pose(r);
-      }
-    }
+    test::for_each_increment(w, o.frames, [&](int, int, const Pose2& u_true, const Pose2& u_odo) {
+      const Eigen::Vector3d var = increment_variances(u_true, o.odometry);
+      nx.add((u_odo.x - u_true.x) / std::sqrt(var.x()));
+      ny.add((u_odo.y - u_true.y) / std::sqrt(var.y()));
+      nt.add(wrap_angle(u_odo.theta - u_true.theta) / std::sqrt(var.z()));
+    });
   }
   const double rel = 4.5 * std::sqrt(2.0 / static_cast<double>(nx.n));
   EXPECT_NEAR(nx.var(), 1.0, rel);

@@ -31,30 +31,19 @@ TEST(SimOdometer, ReportedIncrementsTimesTheScalesAreTheTrueOnes) {
   o.robots[2].odometer = {1.1, 0.97, -0.01};
   const double dt = o.dt_s();
   World w(o);
-  std::vector<Pose2> odo, truth;
   std::vector<double> turned(3, 0.0), reported_turn(3, 0.0);  // summed, unwrapped [rad]
-  for (int r = 0; r < 3; ++r) {
-    odo.push_back(w.sensor_frame(r).odometer);
-    truth.push_back(w.robot_pose(r));
-  }
-  for (int k = 1; k < o.frames; ++k) {
-    w.step();
-    for (int r = 0; r < 3; ++r) {
-      const auto i = static_cast<std::size_t>(r);
-      const OdometerError& e = o.robots[i].odometer;
-      const Pose2 u = between(truth[i], w.robot_pose(r));                // true, in B at frame k - 1
-      const Pose2 u_r = between(odo[i], w.sensor_frame(r).odometer);     // reported
-      // THEN each frame: dx = s_v dx_r, dy = s_v dy_r, dtheta = s_w dtheta_r + b dt
-      EXPECT_NEAR(e.speed_scale * u_r.x, u.x, 1e-12) << "robot " << r + 1 << " frame " << k;
-      EXPECT_NEAR(e.speed_scale * u_r.y, u.y, 1e-12) << "robot " << r + 1 << " frame " << k;
-      EXPECT_NEAR(e.turn_scale * u_r.theta + e.turn_bias_rad_s * dt, u.theta, 1e-12)
-          << "robot " << r + 1 << " frame " << k;
-      turned[i] += u.theta;
-      reported_turn[i] += u_r.theta;
-      odo[i] = w.sensor_frame(r).odometer;
-      truth[i] = w.robot_pose(r);
-    }
-  }
+  // u: true, in B at frame k - 1; u_r: reported
+  test::for_each_increment(w, o.frames, [&](int k, int r, const Pose2& u, const Pose2& u_r) {
+    const auto i = static_cast<std::size_t>(r);
+    const OdometerError& e = o.robots[i].odometer;
+    // THEN each frame: dx = s_v dx_r, dy = s_v dy_r, dtheta = s_w dtheta_r + b dt
+    EXPECT_NEAR(e.speed_scale * u_r.x, u.x, 1e-12) << "robot " << r + 1 << " frame " << k;
+    EXPECT_NEAR(e.speed_scale * u_r.y, u.y, 1e-12) << "robot " << r + 1 << " frame " << k;
+    EXPECT_NEAR(e.turn_scale * u_r.theta + e.turn_bias_rad_s * dt, u.theta, 1e-12)
+        << "robot " << r + 1 << " frame " << k;
+    turned[i] += u.theta;
+    reported_turn[i] += u_r.theta;
+  });
   // AND over the whole semicircle (pi rad in 14.9 s): robot 1 reports
   // (pi - 0.02 x 14.9) / 0.9 = 3.1596 rad, robot 2 exactly pi, robot 3
   // (pi + 0.01 x 14.9) / 1.1 = 2.9915 rad

@@ -25,17 +25,18 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path.insert(0, os.path.join(_here, "..", "..", "tools"))
-from elaslam_tool import need as _need, run_in_venv  # noqa: E402
+from elaslam_tool import run_in_venv  # noqa: E402
 
 if __name__ == "__main__":
     run_in_venv()
 # ----------------------------------------------------------------------------------
-import argparse  # noqa: E402
 import collections  # noqa: E402
 import random  # noqa: E402
-import signal  # noqa: E402
 import struct  # noqa: E402
 import time  # noqa: E402
+
+sys.path.insert(0, _here)
+from attacker import Rounds, set_up  # noqa: E402
 
 
 MISSION = 0  # the team's mission, learnt from the first trailer heard (it is not secret)
@@ -49,15 +50,7 @@ def fake_trailer(sender, counter):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--build-dir", required=True)
-    ap.add_argument("--period", type=float, default=0.02)
-    ap.add_argument("--duration", type=float, default=600.0)
-    args = ap.parse_args()
-    sys.path.insert(0, os.path.join(args.build_dir, "lcmgen", "python"))
-    import elaslam as T  # noqa: E402
-    lcm = _need("lcm")
-    lc = lcm.LCM()
+    args, T, _, lc = set_up(__doc__, lambda ap: None, 0.02)
     rng = random.Random(15)
     sent = collections.Counter()
     heard = collections.defaultdict(list)  # channel -> genuine sealed datagrams, in order
@@ -76,13 +69,8 @@ def main():
         lc.publish(channel, data)
         sent[kind] += 1
 
-    stop = [False]
-    for s in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(s, lambda *_: stop.__setitem__(0, True))
-    end = time.monotonic() + args.duration
-    n = 0
-    while not stop[0] and time.monotonic() < end:
-        n += 1
+    rounds = Rounds(args.duration)
+    for n in rounds:
         now = int(time.time() * 1e6)
         # LMAP_EVENT: ADD at (100, 100), tiny covariance, team and non-team robot ids.
         e = T.landmark_event_t()
@@ -136,12 +124,7 @@ def main():
         if heard.get("POSE_1"):
             send("genuine moved to another channel", "POSE_2", heard["POSE_1"][-1])
         # Hear the team meanwhile (the datagrams to replay).
-        deadline = time.monotonic() + args.period
-        while time.monotonic() < deadline and not stop[0]:
-            try:
-                lc.handle_timeout(max(1, int((deadline - time.monotonic()) * 1000)))
-            except OSError:  # the wait interrupted by SIGTERM / SIGINT
-                pass
+        rounds.listen(lc, args.period)
         if len(mine) > 20000:
             mine.clear()
     print("forger: sent " + ", ".join(f"{k} {v}" for k, v in sorted(sent.items())))

@@ -32,15 +32,8 @@ if [ "${1:-}" = "--inner" ]; then  # inside a namespace: --inner BUILD OUT [run_
   BUILD="$2" OUT="$3"
   shift 3
   mkdir -p "$OUT"
-  "$PY" "$HERE/forger.py" --build-dir "$BUILD" --period 0.1 > "$OUT.forger.txt" 2>&1 &
-  FORGER=$!
-  trap 'kill -TERM $FORGER 2>/dev/null || true' EXIT
-  rc=0
-  "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT" --no-progress --no-baseline "$@" || rc=$?
-  kill -TERM $FORGER 2>/dev/null || true
-  wait $FORGER || true
-  trap - EXIT
-  exit $rc
+  run_team_attacked "$OUT.forger.txt" "$PY" "$HERE/forger.py" --build-dir "$BUILD" --period 0.1 \
+    -- --build-dir "$BUILD" --out "$OUT" --no-progress --no-baseline "$@"
 fi
 
 BUILD="$(cd "${1:?usage: forger.sh BUILD_DIR}" && pwd)"
@@ -70,20 +63,7 @@ for r in "${ROBOTS[@]}"; do
     "$OUT/attacked/logs/robot_node_$r.log" || { tail -n 3 "$OUT/attacked/logs/robot_node_$r.log"; fail "robot $r's frames"; }
 done
 rc=0
-poses=0
-check compare-poses "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --robots "${ROBOTS[@]}" --frames "$FRAMES" \
-  --tol 1e-9 --allow-missing 5 > "$OUT/poses.txt" || poses=$?
-cat "$OUT/poses.txt"
-case $poses in
-  0) echo "forger: the attacked team's poses are the unattacked team's, frame by frame" ;;
-  3) echo "forger: (not a failure) notice timing differed between the two live runs" ;;
-  *) fail "the attacked team's poses differ from the unattacked team's" ;;
-esac
-echo -n "forger: final global map, attacked vs unattacked: "
-if ! check compare-maps "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --tol 1e-6; then
-  [ "$poses" -ne 0 ] || fail "the same poses, but the attacked team's map differs"
-  echo "forger: (not a failure) the robots' inputs differed by notice timing"
-fi
+compare_attacked forger
 # evaluate with the roster (run_team.sh passes it) leaves out what the nodes refused: the
 # attacked recording scores as the unattacked one; log_info --roster counts it.
 python3 - "$OUT/ref/metrics.json" "$OUT/attacked/metrics.json" "$poses" <<'PY' || fail "evaluate --roster"

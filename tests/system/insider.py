@@ -32,19 +32,18 @@ import sys
 
 _here = os.path.dirname(os.path.realpath(__file__))
 sys.path.insert(0, os.path.join(_here, "..", "..", "tools"))
-from elaslam_tool import need as _need, run_in_venv  # noqa: E402
+from elaslam_tool import run_in_venv  # noqa: E402
 
 if __name__ == "__main__":
     run_in_venv()
 # ----------------------------------------------------------------------------------
-import argparse  # noqa: E402
 import collections  # noqa: E402
 import hashlib  # noqa: E402
-import signal  # noqa: E402
 import struct  # noqa: E402
 import time  # noqa: E402
 
 sys.path.insert(0, _here)
+from attacker import Rounds, set_up  # noqa: E402
 from lcm_check import load_roster  # noqa: E402
 
 
@@ -64,21 +63,16 @@ class Signer:
         return payload + header + self.key.sign(digest).signature
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--build-dir", required=True)
+def options(ap):
     ap.add_argument("--key", required=True, help="the taken-over member's secret key")
     ap.add_argument("--sender", type=int, required=True, help="its sender id")
     ap.add_argument("--roster", required=True)
     ap.add_argument("--silence-key")
     ap.add_argument("--replay")
-    ap.add_argument("--period", type=float, default=0.1)
-    ap.add_argument("--duration", type=float, default=600.0)
-    args = ap.parse_args()
-    sys.path.insert(0, os.path.join(args.build_dir, "lcmgen", "python"))
-    import elaslam as T  # noqa: E402
-    lcm = _need("lcm")
-    lc = lcm.LCM()
+
+
+def main():
+    args, T, lcm, lc = set_up(__doc__, options, 0.1)
     _, mission = load_roster(args.roster)
     me = Signer(args.key)
     silencer = Signer(args.silence_key) if args.silence_key else None
@@ -102,15 +96,10 @@ def main():
                                         counter[0] if ctr is None else ctr))
         sent[kind] += 1
 
-    stop = [False]
-    for s in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(s, lambda *_: stop.__setitem__(0, True))
     start = time.monotonic()
-    end = start + args.duration
-    n = 0
+    rounds = Rounds(args.duration)
     silenced = replayed = False
-    while not stop[0] and time.monotonic() < end:
-        n += 1
+    for n in rounds:
         now = int(time.time() * 1e6)
         e = T.landmark_event_t()
         e.utime, e.frame, e.robot_id, e.incarnation, e.seq = now, 10 + n, 2, incarnation, n
@@ -144,12 +133,7 @@ def main():
                     lc.publish(ev.channel, ev.data)
                     sent["SENSOR_1 of another mission's recording"] += 1
             replayed = True
-        deadline = time.monotonic() + args.period
-        while time.monotonic() < deadline and not stop[0]:
-            try:
-                lc.handle_timeout(max(1, int((deadline - time.monotonic()) * 1000)))
-            except OSError:  # the wait interrupted by SIGTERM / SIGINT
-                pass
+        rounds.listen(lc, args.period)
     print("insider: sent " + ", ".join(f"{k} {v}" for k, v in sorted(sent.items())))
     return 0
 

@@ -30,17 +30,9 @@ if [ "${1:-}" = "--inner" ]; then  # inside a namespace: --inner BUILD OUT KEYS 
   BUILD="$2" OUT="$3" KEYS="$4" OLD="$5"
   shift 5
   mkdir -p "$OUT"
-  "$PY" "$HERE/insider.py" --build-dir "$BUILD" --key "$KEYS/robot_3.key" --sender 3 --roster "$KEYS/team.yaml" \
-    --silence-key "$KEYS/simulator.key" --replay "$OLD" --period 0.1 > "$OUT.insider.txt" 2>&1 &
-  INSIDER=$!
-  trap 'kill -TERM $INSIDER 2>/dev/null || true' EXIT
-  rc=0
-  "$ROOT/tools/run_team.sh" --inside --build-dir "$BUILD" --out "$OUT" --no-progress --no-baseline --keys "$KEYS" "$@" \
-    < /dev/null || rc=$?
-  kill -TERM $INSIDER 2>/dev/null || true
-  wait $INSIDER || true
-  trap - EXIT
-  exit $rc
+  run_team_attacked "$OUT.insider.txt" "$PY" "$HERE/insider.py" --build-dir "$BUILD" --key "$KEYS/robot_3.key" \
+    --sender 3 --roster "$KEYS/team.yaml" --silence-key "$KEYS/simulator.key" --replay "$OLD" --period 0.1 \
+    -- --build-dir "$BUILD" --out "$OUT" --no-progress --no-baseline --keys "$KEYS" "$@"
 fi
 
 BUILD="$(cd "${1:?usage: insider.sh BUILD_DIR}" && pwd)"
@@ -72,19 +64,7 @@ for r in "${ROBOTS[@]}"; do
   ! grep -q "started over\|starting fresh" "$OUT/attacked/logs/robot_node_$r.log" || fail "robot $r started over"
 done
 check() { "$PY" "$HERE/lcm_check.py" --build-dir "$BUILD" --roster "$OUT/m2/team.yaml" "$@"; }
-poses=0
-check compare-poses "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --robots "${ROBOTS[@]}" --frames "$FRAMES" \
-  --tol 1e-9 --allow-missing 5 || poses=$?
-case $poses in
-  0) echo "insider: the attacked team's poses are the unattacked team's, frame by frame" ;;
-  3) echo "insider: (not a failure) notice timing differed between the two live runs" ;;
-  *) fail "the attacked team's poses differ from the unattacked team's" ;;
-esac
-echo -n "insider: final global map, attacked vs unattacked: "
-if ! check compare-maps "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --tol 1e-6; then
-  [ "$poses" -ne 0 ] || fail "the same poses, but the attacked team's map differs"
-  echo "insider: (not a failure) the robots' inputs differed by notice timing"
-fi
+compare_attacked insider
 python3 - "$OUT/attacked/metrics.json" <<'PY' || fail "evaluate's refusals"
 import json, sys
 a = json.load(open(sys.argv[1]))["authentication"]

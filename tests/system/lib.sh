@@ -10,6 +10,17 @@
 #   kill_pids_at_exit          PIDS=(), and every process put in PIDS is killed at exit
 #   stop_pids                  SIGINT to every process in PIDS, then wait for each;
 #                              returns 1 when one exited with an error; PIDS=()
+#   run_team_attacked LOG CMD... -- TEAM_ARGS...
+#                              inside a namespace: the attacking process CMD in the
+#                              background (its output in LOG) while tools/run_team.sh
+#                              --inside TEAM_ARGS runs; then CMD is stopped (SIGTERM);
+#                              exits with run_team.sh's status
+#   compare_attacked NAME      the recordings OUT/ref (unattacked) and OUT/attacked of
+#                              ROBOTS over FRAMES frames: the same poses frame by frame
+#                              and the same final global map (the script's check:
+#                              lcm_check.py), or a difference that notice timing
+#                              explains (noted); fail otherwise. Sets poses (the
+#                              exit status of compare-poses)
 
 # shellcheck source=tests/system/wait_for.sh
 . "$(dirname "${BASH_SOURCE[0]}")/wait_for.sh"
@@ -36,6 +47,38 @@ make_out() {
 kill_pids_at_exit() {
   PIDS=()
   trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+}
+
+run_team_attacked() {
+  local log="$1" attacker=() rc=0
+  shift
+  while [ "$1" != "--" ]; do attacker+=("$1"); shift; done
+  shift
+  "${attacker[@]}" > "$log" 2>&1 &
+  ATTACKER=$!
+  trap 'kill -TERM $ATTACKER 2>/dev/null || true' EXIT
+  "$ROOT/tools/run_team.sh" --inside "$@" < /dev/null || rc=$?
+  kill -TERM $ATTACKER 2>/dev/null || true
+  wait $ATTACKER || true
+  trap - EXIT
+  exit $rc
+}
+
+compare_attacked() {
+  local name="$1"
+  poses=0
+  check compare-poses "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --robots "${ROBOTS[@]}" --frames "$FRAMES" \
+    --tol 1e-9 --allow-missing 5 || poses=$?
+  case $poses in
+    0) echo "$name: the attacked team's poses are the unattacked team's, frame by frame" ;;
+    3) echo "$name: (not a failure) notice timing differed between the two live runs" ;;
+    *) fail "the attacked team's poses differ from the unattacked team's" ;;
+  esac
+  echo -n "$name: final global map, attacked vs unattacked: "
+  if ! check compare-maps "$OUT/ref/run.lcmlog" "$OUT/attacked/run.lcmlog" --tol 1e-6; then
+    [ "$poses" -ne 0 ] || fail "the same poses, but the attacked team's map differs"
+    echo "$name: (not a failure) the robots' inputs differed by notice timing"
+  fi
 }
 
 stop_pids() {

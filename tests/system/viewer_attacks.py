@@ -40,6 +40,8 @@ import threading
 import time
 import urllib.parse
 
+from event_stream import state_counts
+
 BAD = []
 
 
@@ -352,15 +354,9 @@ class Browser(threading.Thread):
             self.status = status_of(data)
             self.states += data.count(b"event: state")
             self.ready.set()
-            s.settimeout(0.5)
-            while self.status == 200 and not self.stop.is_set():
-                try:
-                    chunk = s.recv(65536)
-                except socket.timeout:
-                    continue
-                if not chunk:
-                    break
-                self.states += chunk.count(b"event: state")
+            if self.status == 200:
+                for n in state_counts(s, lambda: not self.stop.is_set(), 0.5):
+                    self.states += n
             s.close()
         except OSError:
             pass

@@ -19,6 +19,8 @@ import time
 import urllib.parse
 import urllib.request
 
+from event_stream import state_counts
+
 
 def open_stream(host, port):
     s = socket.create_connection((host, port), timeout=5)
@@ -52,17 +54,8 @@ def reading_stream(host, port, within):
 
 def drain(s, seconds):
     """Reads the stream for `seconds`: the count of states received."""
-    states, t_end = 0, time.monotonic() + seconds
-    s.settimeout(0.2)
-    while time.monotonic() < t_end:
-        try:
-            chunk = s.recv(65536)
-        except socket.timeout:
-            continue
-        if not chunk:
-            break
-        states += chunk.count(b"event: state")
-    return states
+    t_end = time.monotonic() + seconds
+    return sum(state_counts(s, lambda: time.monotonic() < t_end, 0.2))
 
 
 def main():

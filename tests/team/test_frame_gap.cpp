@@ -8,40 +8,32 @@
 
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/team/team_run.hpp"
+#include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
 
 // The simulator's frames, robot index `robot` missing frames [from, to): it is given
 // frame from - 1 again, which it refuses as a repeat, so it next sees frame `to`.
-class GapFrames : public FrameProvider {
+class GapFrames : public SimulatorFrames {
  public:
   GapFrames(const sim::ScenarioOptions& o, int robot, int from, int to)
-      : frames_(o), robot_(robot), from_(from), to_(to) {}
-  int num_frames() const override { return frames_.num_frames(); }
-  int num_robots() const override { return frames_.num_robots(); }
-  int robot_id(int i) const override { return frames_.robot_id(i); }
+      : SimulatorFrames(o), robot_(robot), from_(from), to_(to) {}
   void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    frames_.frame(k, gt, sensors);
+    SimulatorFrames::frame(k, gt, sensors);
     sensor_frame_t& s = (*sensors)[static_cast<std::size_t>(robot_)];
     if (k == from_ - 1) last_ = s;
     if (k >= from_ && k < to_) s = last_;
   }
 
  private:
-  SimulatorFrames frames_;
   int robot_, from_, to_;
   sensor_frame_t last_{};
 };
 
-const TeamConfig& paper() {
-  static const TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  return c;
-}
-
 // Robot index 1's mean position error over the run [m].
 double run_gap(int seed, double rate, int gap) {
-  TeamConfig c = paper();
+  TeamConfig c = test::paper();
   c.scenario.seed = seed;
   c.scenario.rate_hz = rate;
   const int from = 64;

@@ -8,21 +8,19 @@
 
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/team/team_run.hpp"
+#include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
 
 // The simulator's frames (SimulatorFrames), robot index `kicked`'s odometer turned by
 // `kick` rad from frame `at` on (its odometry says it turned that much more than it did).
-class KickedFrames : public FrameProvider {
+class KickedFrames : public SimulatorFrames {
  public:
   KickedFrames(const sim::ScenarioOptions& o, int kicked, int at, double kick)
-      : frames_(o), kicked_(kicked), at_(at), kick_(kick) {}
-  int num_frames() const override { return frames_.num_frames(); }
-  int num_robots() const override { return frames_.num_robots(); }
-  int robot_id(int i) const override { return frames_.robot_id(i); }
+      : SimulatorFrames(o), kicked_(kicked), at_(at), kick_(kick) {}
   void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    frames_.frame(k, gt, sensors);
+    SimulatorFrames::frame(k, gt, sensors);
     sensor_frame_t& s = (*sensors)[static_cast<std::size_t>(kicked_)];
     const Pose2 odo{s.odom_x, s.odom_y, s.odom_theta};
     if (k == at_) at_odo_ = odo;
@@ -35,16 +33,10 @@ class KickedFrames : public FrameProvider {
   }
 
  private:
-  SimulatorFrames frames_;
   int kicked_, at_;
   double kick_;
   Pose2 at_odo_;
 };
-
-const TeamConfig& paper() {
-  static const TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  return c;
-}
 
 struct Outcome {
   double kicked_error = 0.0;   // robot 1's mean position error after the kick [m]
@@ -55,7 +47,7 @@ struct Outcome {
 };
 
 Outcome run_kicked(bool team_map, int seed, double gate = 0.9999) {
-  TeamConfig c = paper();
+  TeamConfig c = test::paper();
   c.robot.team_map_gate_probability = gate;
   c.scenario.seed = seed;
   c.scenario.dynamism_percent = 0.0;
@@ -105,7 +97,7 @@ TEST(LostRobot, TheGaugeTestNeverMovesARobotOfATeamWhoseMapsAreRight) {
   for (const double dynamism : {0.0, 50.0}) {
     for (int seed = 1; seed <= 5; ++seed) {
       SCOPED_TRACE("dynamism " + std::to_string(dynamism) + " seed " + std::to_string(seed));
-      TeamConfig c = paper();
+      TeamConfig c = test::paper();
       c.scenario.seed = seed;
       c.scenario.dynamism_percent = dynamism;
       c.robot.team_map_fuse = true;

@@ -12,14 +12,10 @@
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/team/team_run.hpp"
+#include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
-
-const TeamConfig& paper() {
-  static const TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  return c;
-}
 
 TeamConfig config_for(Mode mode, double dynamism, double speed, int seed) {
   RunOverrides o;
@@ -27,7 +23,7 @@ TeamConfig config_for(Mode mode, double dynamism, double speed, int seed) {
   o.dynamism_percent = dynamism;
   o.landmark_speed_mps = speed;
   o.seed = seed;
-  return apply_overrides(paper(), o);
+  return apply_overrides(test::paper(), o);
 }
 
 RunResult run(Mode mode, double dynamism, double speed, int seed) {
@@ -69,7 +65,7 @@ TEST(TeamRun, InAStaticWorldTheHistoryTakesMostOfTheConfirmationDelaysCost) {
         robots[history] += (ela.metrics.robots[i].error_mean - ekf.metrics.robots[i].error_mean) / (3 * n);
     }
   }
-  ASSERT_GT(paper().robot.candidate_history_frames, 0);
+  ASSERT_GT(test::paper().robot.candidate_history_frames, 0);
   EXPECT_GT(robots[0], 0.004);  // the cost without it
   EXPECT_LT(robots[1], 0.5 * robots[0]);
   EXPECT_LT(robots[1], 0.003);
@@ -244,7 +240,7 @@ TEST(TeamRun, MetricsJsonCarriesProvenanceAndTheConfigThatRan) {
   o.seed = 7;
   o.rate_hz = 20.0;
   o.frames = 30;
-  const TeamConfig c = apply_overrides(paper(), o);
+  const TeamConfig c = apply_overrides(test::paper(), o);
   const RunResult r = run_team(c);
   const RunInfo info{"consensus", 20.0, 0.3, 7, "paper.yaml", c.effective_yaml, "run_scenario --seed 7"};
   const nlohmann::json j = metrics_json(info, r);
@@ -259,7 +255,7 @@ TEST(TeamRun, MetricsJsonCarriesProvenanceAndTheConfigThatRan) {
   EXPECT_EQ(cfg["scenario"]["seed"], 7);
   EXPECT_EQ(cfg["scenario"]["rate_hz"], 20);
   EXPECT_EQ(cfg["scenario"]["frames"], 30);
-  EXPECT_EQ(cfg["robot"]["filter"]["capacity"], paper().robot.ekf.capacity) << "the rest is the file's";
+  EXPECT_EQ(cfg["robot"]["filter"]["capacity"], test::paper().robot.ekf.capacity) << "the rest is the file's";
 }
 
 // An override the scenario cannot run is refused with the reason, as the simulator does.
@@ -267,14 +263,14 @@ TEST(TeamRun, OverridesAreCheckedAgainstTheWholeScenario) {
   RunOverrides o;
   o.rate_hz = 0.1;  // robot 1 would move 12.7 m per frame, more than D = 8 m
   try {
-    apply_overrides(paper(), o);
+    apply_overrides(test::paper(), o);
     FAIL() << "a rate of 0.1 Hz was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("scenario.robots[0].speed_mps"), std::string::npos) << e.what();
   }
   o.rate_hz.reset();
   o.frames = 0;
-  EXPECT_THROW(apply_overrides(paper(), o), std::invalid_argument);
+  EXPECT_THROW(apply_overrides(test::paper(), o), std::invalid_argument);
 }
 
 // robot.ela.candidate_history_frames is checked like every key: a window beyond 100
@@ -309,7 +305,7 @@ TEST(TeamRun, NonFiniteOverridesAreRefusedNamingTheValue) {
     rate.rate_hz = v;
     for (const auto& [o, what] : {std::pair{speed, "speed"}, {dynamism, "dynamism"}, {rate, "rate"}}) {
       try {
-        apply_overrides(paper(), o);
+        apply_overrides(test::paper(), o);
         ADD_FAILURE() << what << " " << v << " was accepted";
       } catch (const std::invalid_argument& e) {
         EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();

@@ -18,6 +18,7 @@
 #include "elaslam/common/config.hpp"
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/team/team_run.hpp"
+#include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
@@ -27,14 +28,12 @@ namespace {
 // = (s_v dx_r, s_v dy_r, s_w dtheta_r + b dt)): each step's increment of the
 // simulator's odometer d becomes the reported (d.x / s_v, d.y / s_v,
 // (d.theta - b dt) / s_w), accumulated into the reported odometer.
-class MiscalibratedFrames : public FrameProvider {
+class MiscalibratedFrames : public SimulatorFrames {
  public:
-  MiscalibratedFrames(const sim::ScenarioOptions& o, const OdometryCalibration& c) : frames_(o), c_(c), dt_(o.dt_s()) {}
-  int num_frames() const override { return frames_.num_frames(); }
-  int num_robots() const override { return frames_.num_robots(); }
-  int robot_id(int i) const override { return frames_.robot_id(i); }
+  MiscalibratedFrames(const sim::ScenarioOptions& o, const OdometryCalibration& c)
+      : SimulatorFrames(o), c_(c), dt_(o.dt_s()) {}
   void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    frames_.frame(k, gt, sensors);
+    SimulatorFrames::frame(k, gt, sensors);
     if (k == 0) {
       last_.assign(sensors->size(), Pose2{});
       reported_.assign(sensors->size(), Pose2{});
@@ -57,16 +56,10 @@ class MiscalibratedFrames : public FrameProvider {
   }
 
  private:
-  SimulatorFrames frames_;
   OdometryCalibration c_;
   double dt_;
   std::vector<Pose2> last_, reported_;
 };
-
-const TeamConfig& paper() {
-  static const TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  return c;
-}
 
 // The priors by the rule of docs/adr/0024-odometry-calibration.md, not fitted to this test:
 // scales 1 +- 0.1, random walk 1e-3 / sqrt(s).
@@ -86,7 +79,7 @@ struct Outcome {
 };
 
 Outcome run(int seed, const OdometryCalibration& error, const CalibrationOptions& calibration) {
-  TeamConfig c = paper();
+  TeamConfig c = test::paper();
   c.scenario.seed = seed;
   c.scenario.dynamism_percent = 0.0;  // a static world: the odometer's error is the test
   c.robot.ekf.calibration = calibration;

@@ -22,6 +22,7 @@
 #include "elaslam/team/team_run.hpp"
 
 #include "../robot_node/scene.hpp"
+#include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
@@ -201,8 +202,6 @@ TEST(TeamMap, DueOncePerPeriodAlsoWhenTheFinishedFrameJumpsOverItsMultiple) {
   EXPECT_FALSE(main.team_map_due(-1));
 }
 
-const TeamConfig& paper();
-
 // ---- a landmark that leaves the aided filter and comes back ------------------------
 
 // A corridor: landmarks every 2 m on both sides, a robot that drives 20 m out and
@@ -299,13 +298,7 @@ TEST(TeamMap, ACandidatesTeamEstimateIsFusedAsOfItsTeamMapOnceConfirmed) {
     for (int i = 0; i < 6; ++i) ASSERT_EQ(ela.lmap()[i].status, LandmarkStatus::kStatic) << "landmark " << i;
     const EkfSlam& a = ela.estimate();
     const EkfSlam& b = ekf.estimate();
-    double d = std::max({std::fabs(a.pose().x - b.pose().x), std::fabs(a.pose().y - b.pose().y),
-                         std::fabs(a.pose().theta - b.pose().theta), (a.pose_cov() - b.pose_cov()).cwiseAbs().maxCoeff()});
-    for (int i = 0; i < 6; ++i) {
-      d = std::max({d, (a.landmark(i) - b.landmark(i)).cwiseAbs().maxCoeff(),
-                    (a.pose_landmark_cov(i) - b.pose_landmark_cov(i)).cwiseAbs().maxCoeff()});
-      for (int j = 0; j < 6; ++j) d = std::max(d, (a.landmark_cross_cov(i, j) - b.landmark_cross_cov(i, j)).cwiseAbs().maxCoeff());
-    }
+    const double d = test::max_difference_by_id(a, b, 6);
     if (hold) {
       EXPECT_LT(d, 1e-12);
       EXPECT_EQ(ela.team_counters().fused, 6);
@@ -348,7 +341,7 @@ TEST(TeamMap, ACandidateThatStartsOverDropsItsHeldTeamEstimate) {
 // dropped every robot's estimate of it when it moved and started it afresh, so the
 // team's estimate is data the robot never had, and it is fused whole.
 TEST(TeamMap, ALandmarkThatMovedStartsItsChannelAgain) {
-  TeamConfig c = paper();
+  TeamConfig c = test::paper();
   c.scenario.dynamism_percent = 0.0;
   c.scenario.seed = 3;
   c.robot.team_map_fuse = true;
@@ -413,17 +406,12 @@ TEST(TeamMap, ALandmarkThatMovedStartsItsChannelAgain) {
 
 // ---- the team: NEES and accuracy --------------------------------------------------
 
-const TeamConfig& paper() {
-  static const TeamConfig c = load_team_config(std::string(ELASLAM_SOURCE_DIR) + "/config/paper.yaml");
-  return c;
-}
-
 TeamConfig team_config(bool team_map, double dynamism, int seed) {
   RunOverrides o;
   o.dynamism_percent = dynamism;
   o.landmark_speed_mps = 0.5;
   o.seed = seed;
-  TeamConfig c = apply_overrides(paper(), o);
+  TeamConfig c = apply_overrides(test::paper(), o);
   c.robot.team_map_fuse = team_map;
   c.main.team_map_period_frames = team_map ? 10 : 0;
   return c;

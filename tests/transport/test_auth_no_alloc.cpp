@@ -13,7 +13,7 @@
 #include "elaslam/sensor_frame_t.hpp"
 #include "elaslam/transport/auth_transport.hpp"
 #include "elaslam/transport/inprocess_transport.hpp"
-#include "elaslam/transport/node_shell.hpp"
+#include "round_trip.hpp"
 
 namespace elaslam::transport::auth {
 namespace {
@@ -59,31 +59,7 @@ TEST(AuthNoAlloc, ASensorToPoseRoundTripThroughAuthenticatedTransportsAllocatesN
   InProcessTransport bus;
   AuthenticatedTransport robot_t(bus, test::team_setup(1, 1), "robot", nullptr);
   AuthenticatedTransport sim_t(bus, test::team_setup(kSenderSimulator, 2), "sim", nullptr);
-  NodeShell robot(robot_t, ShellOptions("robot", "", nullptr));
-  NodeShell sim(sim_t, ShellOptions("sim", "", nullptr));
-  long poses = 0;
-  robot.subscribe<sensor_frame_t>("SENSOR_1", [&](const sensor_frame_t& s, const std::string&) {
-    pose_estimate_t p{};
-    p.frame = s.frame;
-    p.robot_id = s.robot_id;
-    robot.publish("POSE_1", p);
-  }, kUnboundedQueue);
-  sim.subscribe<pose_estimate_t>("POSE_[0-9]+", [&](const pose_estimate_t&, const std::string&) { ++poses; },
-                                 kUnboundedQueue);
-  sensor_frame_t s{};
-  s.robot_id = 1;
-  s.obs.resize(10);
-  s.num_obs = 10;
-  auto frame = [&](int k) {
-    s.frame = k;
-    sim.publish("SENSOR_1", s);
-    bus.dispatch_all();
-  };
-  for (int k = 0; k < 100; ++k) frame(k);
-  {
-    test::NoAllocRegion region;
-    for (int k = 100; k < 2000; ++k) frame(k);
-  }
+  const long poses = test::sensor_pose_round_trip(bus, robot_t, sim_t);
   EXPECT_EQ(test::allocations_in_region(), 0);
   EXPECT_EQ(poses, 2000);
   EXPECT_EQ(robot_t.counters().accepted, 2000);

@@ -156,6 +156,11 @@ class MainNode {
   /// message may be applied, else why not (counted as kFrameWindow / kSeqWindow).
   std::string check_frame(int robot_id, int frame, Refusal* reason);
   std::string check_seq(int robot_id, std::int64_t seq, bool snapshot, Refusal* reason);
+  /// The checks an LMAP_EVENT (snapshot false) or an LMAP_SNAPSHOT chunk (true) passes
+  /// before it is applied: valid, of the robot's current incarnation, inside its seq
+  /// and frame windows. False when refused (counted; `why`, when given, says why).
+  template <class Msg>
+  bool admit(const Msg& m, bool snapshot, std::string* why);
   /// The incarnation check of every robot message: false when it must be refused.
   bool accept_incarnation(int robot_id, std::int64_t incarnation, int frame);
   /// A robot restarted without its state: its stream starts over, a snapshot is asked.
