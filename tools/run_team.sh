@@ -73,7 +73,7 @@
 #   --auth makes a new team's keys and mission in DIR/keys and uses them. Without
 #   either, the config's team: section decides (the repo's configs have none).
 # - --channel-groups (or the config's team.channel_groups: true): every process opens
-#   one LCM port per channel group, ports P to P+19 (docs/adr/0037-channel-groups.md), so that
+#   one LCM port per channel group, ports P to P+20 (docs/adr/0037-channel-groups.md), so that
 #   each is woken only by what it reads. The recording is then one
 #   recorder per group in use (DIR/groups/), merged by log_merge into DIR/run.lcmlog
 #   after the run.

@@ -20,7 +20,7 @@ COMMENT = {".cpp": "//", ".hpp": "//", ".h": "//", ".java": "//", ".lcm": "//",
            ".py": "#", ".sh": "#", ".cmake": "#", ".yaml": "#", ".service": "#", ".conf": "#", ".in": "#"}
 COMMENT[".inc"] = "#"  # packaging/systemd/hardening.inc: a unit file fragment
 NOT_SOURCE = ("fuzz/corpus/", "tests/golden/reference/", "tests/common/data/", "tests/dataset/data/",
-              "tests/team/data/", "fuzz/ledger/")
+              "fuzz/ledger/")
 
 
 def comment_of(path):
