@@ -12,6 +12,7 @@
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/config.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/run_info.hpp"
 
 namespace elaslam::mrclam {
 namespace {
@@ -28,19 +29,13 @@ bool write_msg(const LogWriter& write, const std::string& channel, std::int64_t 
 
 run_info_t import_run_info(const FrameSource& src, const Options& o, const std::string& dataset_dir,
                            const std::string& effective_yaml) {
-  run_info_t m{};
-  m.frame = -1;
-  m.schema_version = run_info_t::SCHEMA_VERSION;
-  m.source = "mrclam_import";
-  m.version = cli::version_line("mrclam_import");
+  run_info_t m = run_info_start("mrclam_import", src.robot_ids());  // <= kMaxRobots (FrameSource)
   m.scenario = dataset_dir;
   m.seed = -1;
   m.dynamism_percent = -1.0;
   m.landmark_speed_mps = -1.0;
   m.rate_hz = o.rate_hz;
   m.frames = src.num_frames();
-  contract::set_count(&m.robot_ids, &m.num_robots, static_cast<int>(src.robot_ids().size()));  // <= kMaxRobots (FrameSource)
-  for (std::size_t i = 0; i < src.robot_ids().size(); ++i) m.robot_ids[i] = static_cast<std::int16_t>(src.robot_ids()[i]);
   m.config_yaml = config::edit_yaml(effective_yaml, [&o](YAML::Node& root) {  // the overrides, recorded
     YAML::Node d = root["dataset"];
     d["rate_hz"] = o.rate_hz;

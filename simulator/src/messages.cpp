@@ -1,10 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "elaslam/simulator/messages.hpp"
 
+#include <vector>
+
 #include <yaml-cpp/yaml.h>
 
 #include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/run_info.hpp"
 
 namespace elaslam::sim {
 
@@ -73,12 +76,10 @@ namespace elaslam::sim {
 
 elaslam::run_info_t to_run_info(const ScenarioOptions& o, const std::string& scenario, const std::string& effective_yaml,
                                 const std::string& mode, std::int64_t utime) {
-  elaslam::run_info_t m{};
+  std::vector<int> ids;
+  for (const auto& r : o.robots) ids.push_back(r.id);  // <= kMaxRobots: check_scenario
+  elaslam::run_info_t m = run_info_start("simulator", ids);
   m.utime = utime;
-  m.frame = -1;
-  m.schema_version = elaslam::run_info_t::SCHEMA_VERSION;
-  m.source = "simulator";
-  m.version = cli::version_line("simulator");
   m.scenario = scenario;
   m.mode = mode;
   m.seed = o.seed;
@@ -86,8 +87,6 @@ elaslam::run_info_t to_run_info(const ScenarioOptions& o, const std::string& sce
   m.landmark_speed_mps = o.landmark_speed_mps;
   m.rate_hz = o.rate_hz;
   m.frames = o.frames;
-  contract::set_count(&m.robot_ids, &m.num_robots, static_cast<int>(o.robots.size()));  // <= kMaxRobots: check_scenario
-  for (std::size_t i = 0; i < o.robots.size(); ++i) m.robot_ids[i] = static_cast<std::int16_t>(o.robots[i].id);
   m.config_yaml = config::edit_yaml(effective_yaml, [&o](YAML::Node& root) {  // the overrides, recorded
     YAML::Node sc = root["scenario"];
     sc["frames"] = o.frames;
