@@ -2,20 +2,17 @@
 #include "elaslam/team/dataset_report.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 #include <utility>
 
 #include "elaslam/eval/report.hpp"
+#include "elaslam/team/parallel.hpp"
 
 namespace elaslam {
 namespace {
@@ -124,29 +121,14 @@ DatasetSources load_sources(const std::string& dir, const mrclam::Options& o, bo
 }
 
 void run_dataset_runs(const DatasetConfig& cfg, const DatasetSources& src, int jobs, std::vector<DatasetRun>* runs) {
-  std::atomic<std::size_t> next{0};
-  std::mutex failed;
-  std::exception_ptr failure;  // the first exception of any worker, rethrown after the join
-  auto worker = [&] {
-    try {
-      for (std::size_t i; (i = next++) < runs->size();) {
-        DatasetRun& run = (*runs)[i];
-        RobotOptions ro = cfg.robot;
-        parse_mode(run.mode, &ro.mode);
-        DatasetFrames frames(src.of(run.barcodes));
-        run.result = run_team(ro, cfg.main, frames);
-        run.robot_corrections = robot_corrections(run.result);
-      }
-    } catch (...) {  // escaping a thread would std::terminate the process
-      std::lock_guard<std::mutex> lock(failed);
-      if (!failure) failure = std::current_exception();
-      next = runs->size();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::min<int>(jobs, static_cast<int>(runs->size())); ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  run_parallel(runs->size(), jobs, [&](std::size_t i) {
+    DatasetRun& run = (*runs)[i];
+    RobotOptions ro = cfg.robot;
+    parse_mode(run.mode, &ro.mode);
+    DatasetFrames frames(src.of(run.barcodes));
+    run.result = run_team(ro, cfg.main, frames);
+    run.robot_corrections = robot_corrections(run.result);
+  });
 }
 
 nlohmann::json dataset_json(const mrclam::FrameSource& src, const mrclam::Options& o, const std::string& dir,

@@ -4,13 +4,12 @@
 
 #include <atomic>
 #include <cmath>
-#include <exception>
 #include <mutex>
 #include <sstream>
 #include <stdexcept>
-#include <thread>
 
 #include "elaslam/simulator/scenario.hpp"
+#include "elaslam/team/parallel.hpp"
 
 namespace elaslam {
 
@@ -87,34 +86,20 @@ std::vector<SweepJob> make_jobs(const SweepGrid& g, int seed_base) {
 void run_sweep(const TeamConfig& base, const std::vector<SweepJob>& jobs, int threads, std::vector<SweepResult>* out,
                const SweepProgress& progress) {
   out->assign(jobs.size(), SweepResult{});
-  std::atomic<std::size_t> next{0}, done{0};
+  std::atomic<std::size_t> done{0};
   std::mutex report;
-  std::exception_ptr failure;  // the first exception of any worker, rethrown after the join
-  auto worker = [&] {
-    try {
-      for (std::size_t i = next++; i < jobs.size(); i = next++) {
-        const SweepJob& j = jobs[i];
-        RunOverrides o;
-        o.mode = j.mode;
-        o.dynamism_percent = j.dynamism;
-        o.landmark_speed_mps = j.speed;
-        o.seed = j.seed;
-        const RunResult r = run_team(apply_overrides(base, o));
-        (*out)[i] = summarise(r);
-        const std::size_t d = ++done;
-        std::lock_guard<std::mutex> lock(report);
-        if (progress) progress(d, jobs.size());
-      }
-    } catch (...) {  // escaping a thread would std::terminate the process
-      std::lock_guard<std::mutex> lock(report);
-      if (!failure) failure = std::current_exception();
-      next = jobs.size();
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  run_parallel(jobs.size(), threads, [&](std::size_t i) {
+    const SweepJob& j = jobs[i];
+    RunOverrides o;
+    o.mode = j.mode;
+    o.dynamism_percent = j.dynamism;
+    o.landmark_speed_mps = j.speed;
+    o.seed = j.seed;
+    (*out)[i] = summarise(run_team(apply_overrides(base, o)));
+    const std::size_t d = ++done;
+    std::lock_guard<std::mutex> lock(report);
+    if (progress) progress(d, jobs.size());
+  });
 }
 
 RunOverrides map_run(const SweepGrid& g, int seed_base) {
