@@ -15,6 +15,7 @@
 #include <benchmark/benchmark.h>
 
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/mover_track.hpp"
 // The filter's private kernels, for the covariance step alone (BM_CovarianceStep);
 // the others are not used here.
 #pragma GCC diagnostic push
@@ -201,6 +202,34 @@ void BM_CovarianceStep(benchmark::State& state) {
   state.counters["FMA_per_s"] = benchmark::Counter(fma, benchmark::Counter::kIsIterationInvariantRate);
 }
 
+// Mover tracks' frame (robot_node/mover_track.hpp): each of n tracks mixed,
+// predicted over one 0.1 s frame and updated with one sighting, as a frame with n
+// movers in view would cost on top of the filter's (BM_EkfSlamFrame).
+void BM_MoverTracksFrame(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::vector<MoverTrack> tracks(static_cast<std::size_t>(n));
+  std::vector<TrackSighting> sightings(static_cast<std::size_t>(n));
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < n; ++i) {
+    TrackSighting& s = sightings[static_cast<std::size_t>(i)];
+    s.z = {2.0 + 1.5 * (u(rng) + 1.0), 3.0 * u(rng)};
+    s.R = Eigen::Vector2d(0.0025, 3e-4).asDiagonal();
+    s.pose_cov = Eigen::Vector3d(4e-4, 4e-4, 2.5e-5).asDiagonal();
+    tracks[static_cast<std::size_t>(i)].start(s, inverse_observe(s.pose, s.z), 0.0);
+  }
+  double t = 0.0;
+  for (auto _ : state) {
+    t += 0.1;
+    for (int i = 0; i < n; ++i) {
+      MoverTrack& track = tracks[static_cast<std::size_t>(i)];
+      track.predict(t);
+      benchmark::DoNotOptimize(track.update(sightings[static_cast<std::size_t>(i)]).d2);
+    }
+    benchmark::ClobberMemory();
+  }
+}
+
 void landmark_counts(benchmark::internal::Benchmark* b) {
   for (const int n : {16, 72, 150, 256, 512, 1024}) b->Arg(n);
   b->ArgName("landmarks")->Unit(benchmark::kMicrosecond);
@@ -217,6 +246,7 @@ BENCHMARK(BM_EkfSlamFrameWithFullView)->Apply(landmark_counts);
 BENCHMARK(BM_EkfSlamFrameCalibrated)->Apply(landmark_counts);
 BENCHMARK(BM_DenseEkfFrame)->Apply(dense_landmark_counts);
 BENCHMARK(BM_CovarianceStep)->Apply(landmark_counts);
+BENCHMARK(BM_MoverTracksFrame)->Arg(1)->Arg(36)->ArgName("tracks")->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace elaslam

@@ -21,6 +21,7 @@
 
 #include "../support/no_alloc.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/mover_track.hpp"
 
 #ifndef EIGEN_RUNTIME_NO_MALLOC
 #error "test_ekf_no_alloc must be compiled with EIGEN_RUNTIME_NO_MALLOC"
@@ -142,6 +143,34 @@ INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfNoAlloc, ::testing::Combine(::t
                            return std::string(std::get<0>(i.param) ? "Joseph" : "Standard") +
                                   (std::get<1>(i.param) ? "Calibrated" : "");
                          });
+
+// A mover track's frame: the IMM's mixing, prediction (several steps when frames
+// were missed), updates and restarts, and its read-outs.
+TEST(MoverTrackNoAlloc, FramesAllocateNothing) {
+  MoverTrack track;
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  TrackSighting s;
+  s.R = Eigen::Vector2d(0.0025, 3e-4).asDiagonal();
+  s.pose_cov = Eigen::Vector3d(4e-4, 4e-4, 2.5e-5).asDiagonal();
+  track.start(Eigen::Vector2d(3.0, 1.0), Eigen::Matrix2d::Identity() * 0.01, Eigen::Vector2d(3.0, 1.0), 0.0);
+  long allocations = -1;
+  double sum = 0.0;
+  int restarts = 0;
+  {
+    NoAllocRegion guard;
+    for (int k = 1; k <= 400; ++k) {
+      track.predict(k * 0.1 + (k % 50 == 0 ? 0.5 : 0.0));
+      s.z = {3.2 + 0.05 * uni(rng), 0.3 + (k % 97 == 0 ? 1.5 : 0.02 * uni(rng))};
+      restarts += track.update(s).restarted ? 1 : 0;
+      sum += track.mean()(0) + track.covariance()(0, 0) + (track.validated() ? 1.0 : 0.0);
+    }
+    allocations = test::allocations_in_region();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(restarts, 0);  // the restart path ran inside the region
+  EXPECT_TRUE(std::isfinite(sum));
+}
 
 TEST(EkfNoAllocGuard, CounterSeesAnAllocation) {
   long allocations = -1;

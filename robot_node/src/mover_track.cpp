@@ -1,0 +1,305 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "elaslam/robot_node/mover_track.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/LU>
+
+#include "elaslam/common/stats.hpp"
+
+namespace elaslam {
+namespace {
+
+using Mat2 = Eigen::Matrix2d;
+using Vec2 = Eigen::Vector2d;
+using Mat42 = Eigen::Matrix<double, 4, 2>;
+
+void require(bool ok, const char* key, const char* what) {
+  if (!ok) throw std::invalid_argument(std::string("mover track: ") + key + " " + what);
+}
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+
+/// Per-axis 2x2 blocks [[a, b], [c, d]] of (p, v) written onto both axes of the
+/// 4x4 (p_x, p_y, v_x, v_y) matrix.
+TrackMatrix per_axis(double a, double b, double c, double d) {
+  TrackMatrix M = TrackMatrix::Zero();
+  for (int k = 0; k < 2; ++k) {
+    M(k, k) = a;
+    M(k, k + 2) = b;
+    M(k + 2, k) = c;
+    M(k + 2, k + 2) = d;
+  }
+  return M;
+}
+
+}  // namespace
+
+const char* motion_model_name(MotionModel m) {
+  switch (m) {
+    case MotionModel::kStatic: return "static";
+    case MotionModel::kBounded: return "bounded";
+    case MotionModel::kConstantVelocity: return "constant_velocity";
+  }
+  return "unknown";
+}
+
+MoverTrack::MoverTrack(const MoverTrackOptions& o) : options_(o) {
+  require(positive(o.model_sojourn_s), "model_sojourn_s", "must be positive and finite");
+  require(positive(o.static_walk_m_per_sqrt_s), "static_walk_m_per_sqrt_s", "must be positive and finite");
+  require(positive(o.bounded_sigma_m), "bounded_sigma_m", "must be positive and finite");
+  require(positive(o.bounded_omega_rad_s), "bounded_omega_rad_s", "must be positive and finite");
+  require(positive(o.bounded_damping), "bounded_damping", "must be positive and finite");
+  require(positive(o.cv_accel_sigma), "cv_accel_sigma", "must be positive and finite");
+  require(positive(o.initial_speed_sigma_mps), "initial_speed_sigma_mps", "must be positive and finite");
+  require(positive(o.max_step_s), "max_step_s", "must be positive and finite");
+  double sum = 0.0;
+  for (double p : o.initial_probabilities) {
+    require(std::isfinite(p) && p >= 0.0, "initial_probabilities", "must be finite and not negative");
+    sum += p;
+  }
+  require(sum > 0.0, "initial_probabilities", "must not all be 0");
+  require(o.restart_probability > 0.0 && o.restart_probability < 1.0, "restart_probability", "must be in (0, 1)");
+  require(o.validation_probability > 0.0 && o.validation_probability < 1.0, "validation_probability",
+          "must be in (0, 1)");
+  require(o.validation_sightings >= 1 && o.validation_sightings <= kMaxValidationSightings, "validation_sightings",
+          "must be in 1..64");
+  restart_d2_ = chi2_quantile(o.restart_probability, 2);
+  valid_d2_ = chi2_quantile(o.validation_probability, 2 * o.validation_sightings);
+  // Stationary variance of a damped spring's offset under white acceleration of
+  // spectral density q: q / (4 zeta w^3).
+  const double w = o.bounded_omega_rad_s;
+  bounded_q_ = 4.0 * o.bounded_damping * w * w * w * o.bounded_sigma_m * o.bounded_sigma_m;
+}
+
+void MoverTrack::start(const Vec2& p, const Mat2& P, const Vec2& anchor, double t) {
+  TrackVector x = TrackVector::Zero();
+  x.head<2>() = p;
+  TrackMatrix C = TrackMatrix::Zero();
+  C.topLeftCorner<2, 2>() = P;
+  const double s2 = options_.initial_speed_sigma_mps * options_.initial_speed_sigma_mps;
+  C(2, 2) = C(3, 3) = s2;
+  double sum = 0.0;
+  for (double q : options_.initial_probabilities) sum += q;
+  for (int j = 0; j < kMotionModels; ++j) {
+    x_[j] = x;
+    P_[j] = C;
+    mu_[j] = options_.initial_probabilities[j] / sum;
+  }
+  anchor_ = anchor;
+  t_ = t;
+  active_ = true;
+  window_count_ = window_next_ = 0;
+  sightings_ = 0;
+}
+
+void MoverTrack::start(const TrackSighting& s, const Vec2& anchor, double t) {
+  Eigen::Matrix<double, 2, 3> G_x;
+  Mat2 G_z;
+  const Vec2 p = inverse_observe(s.pose, s.z, &G_x, &G_z);
+  const Mat2 P = G_x * s.pose_cov * G_x.transpose() + G_z * s.R * G_z.transpose();
+  start(p, P, anchor, t);
+}
+
+void MoverTrack::transition(MotionModel m, double dt, TrackMatrix* F, TrackVector* c, TrackMatrix* Q) const {
+  const double dt2 = dt * dt, dt3 = dt2 * dt;
+  c->setZero();
+  switch (m) {
+    case MotionModel::kStatic: {
+      const double walk = options_.static_walk_m_per_sqrt_s;
+      *F = per_axis(1.0, 0.0, 0.0, 0.0);
+      // The velocity is held at zero; a small variance keeps the covariance regular.
+      constexpr double kRestSpeedVar = 1e-6;  // [m^2/s^2]: (1 mm/s)^2
+      *Q = per_axis(walk * walk * dt, 0.0, 0.0, kRestSpeedVar);
+      return;
+    }
+    case MotionModel::kBounded: {
+      // A = [[0, 1], [-w^2, -2 zeta w]] per axis, about the equilibrium (anchor, 0);
+      // F = I + A dt + A^2 dt^2 / 2 (error O((w dt)^3), dt <= max_step_s).
+      const double w = options_.bounded_omega_rad_s, z = options_.bounded_damping;
+      const double a21 = -w * w, a22 = -2.0 * z * w;
+      // A^2 = [[a21, a22], [a22 a21, a21 + a22^2]]
+      *F = per_axis(1.0 + a21 * dt2 / 2, dt + a22 * dt2 / 2, a21 * dt + a22 * a21 * dt2 / 2,
+                    1.0 + a22 * dt + (a21 + a22 * a22) * dt2 / 2);
+      // Q = q int_0^dt phi(s) phi(s)' ds, phi(s) = Phi(s) (0, 1)' the response to an
+      // impulse of acceleration, Phi(s) the same expansion; by 3-point Gauss-Legendre
+      // (exact for the polynomial of degree 4 this is).
+      const double nodes[3] = {0.5 * dt * (1.0 - std::sqrt(0.6)), 0.5 * dt, 0.5 * dt * (1.0 + std::sqrt(0.6))};
+      const double weights[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+      double qpp = 0.0, qpv = 0.0, qvv = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        const double u = nodes[i];
+        const double phi_p = u + a22 * u * u / 2, phi_v = 1.0 + a22 * u + (a21 + a22 * a22) * u * u / 2;
+        qpp += weights[i] * phi_p * phi_p;
+        qpv += weights[i] * phi_p * phi_v;
+        qvv += weights[i] * phi_v * phi_v;
+      }
+      const double q = bounded_q_ * dt;
+      *Q = per_axis(q * qpp, q * qpv, q * qpv, q * qvv);
+      TrackVector eq = TrackVector::Zero();
+      eq.head<2>() = anchor_;
+      *c = (TrackMatrix::Identity() - *F) * eq;
+      return;
+    }
+    case MotionModel::kConstantVelocity: {
+      const double q = options_.cv_accel_sigma * options_.cv_accel_sigma;
+      *F = per_axis(1.0, dt, 0.0, 1.0);
+      *Q = per_axis(q * dt3 / 3, q * dt2 / 2, q * dt2 / 2, q * dt);
+      return;
+    }
+  }
+}
+
+Eigen::Matrix3d MoverTrack::switching(double dt) const {
+  const double stay = std::exp(-dt / options_.model_sojourn_s);
+  const double leave = (1.0 - stay) / (kMotionModels - 1);
+  Eigen::Matrix3d pi = Eigen::Matrix3d::Constant(leave);
+  pi.diagonal().setConstant(stay);
+  return pi;
+}
+
+void MoverTrack::predict_model(int j, double dt) {
+  TrackMatrix F, Q;
+  TrackVector c;
+  transition(static_cast<MotionModel>(j), dt, &F, &c, &Q);
+  x_[j] = F * x_[j] + c;
+  P_[j] = F * P_[j] * F.transpose() + Q;
+  P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
+}
+
+void MoverTrack::predict(double t) {
+  if (!active_ || !(t > t_)) return;
+  const double dt = t - t_;
+  // Mixing (IMM step 1): c_j = sum_i pi_ij mu_i; each model starts from the
+  // moment-matched mixture of all models, weighted by mu_{i|j} = pi_ij mu_i / c_j.
+  const Eigen::Matrix3d pi = switching(dt);
+  std::array<double, kMotionModels> c{};
+  for (int j = 0; j < kMotionModels; ++j) {
+    for (int i = 0; i < kMotionModels; ++i) c[j] += pi(i, j) * mu_[i];
+  }
+  std::array<TrackVector, kMotionModels> x0{};
+  std::array<TrackMatrix, kMotionModels> P0{};
+  for (int j = 0; j < kMotionModels; ++j) {
+    x0[j].setZero();
+    for (int i = 0; i < kMotionModels; ++i) x0[j] += (pi(i, j) * mu_[i] / c[j]) * x_[i];
+    P0[j].setZero();
+    for (int i = 0; i < kMotionModels; ++i) {
+      const TrackVector d = x_[i] - x0[j];
+      P0[j] += (pi(i, j) * mu_[i] / c[j]) * (P_[i] + d * d.transpose());
+    }
+  }
+  x_ = x0;
+  P_ = P0;
+  mu_ = c;
+  // Prediction (IMM step 2), in equal steps no longer than max_step_s.
+  const int steps = std::max(1, static_cast<int>(std::ceil(dt / options_.max_step_s - 1e-9)));
+  const double h = dt / steps;
+  for (int j = 0; j < kMotionModels; ++j) {
+    for (int k = 0; k < steps; ++k) predict_model(j, h);
+  }
+  t_ = t;
+}
+
+TrackUpdate MoverTrack::update(const TrackSighting& s) {
+  TrackUpdate out;
+  if (!active_) return out;
+  std::array<Vec2, kMotionModels> nu{};
+  std::array<Mat2, kMotionModels> S{};
+  std::array<double, kMotionModels> loglik{};
+  double min_d2 = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < kMotionModels; ++j) {
+    Eigen::Matrix<double, 2, 3> H_x;
+    Mat2 H_l;
+    const RangeBearing h = observe(s.pose, x_[j].head<2>(), &H_x, &H_l);
+    nu[j] << s.z.range - h.range, wrap_angle(s.z.bearing - h.bearing);
+    // The pose is considered, not estimated: its covariance widens the sighting's.
+    const Mat2 R_total = s.R + H_x * s.pose_cov * H_x.transpose();
+    const Mat42 PHt = P_[j].leftCols<2>() * H_l.transpose();
+    S[j] = H_l * PHt.topRows<2>() + R_total;
+    const Mat2 S_inv = S[j].inverse();
+    const double d2 = nu[j].dot(S_inv * nu[j]);
+    min_d2 = std::min(min_d2, d2);
+    loglik[j] = -0.5 * d2 - 0.5 * std::log(S[j].determinant());
+    // Joseph form: P = (I - K H) P (I - K H)' + K R K', H = [H_l 0].
+    const Mat42 K = PHt * S_inv;
+    Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
+    H.leftCols<2>() = H_l;
+    const TrackMatrix IKH = TrackMatrix::Identity() - K * H;
+    x_[j] += K * nu[j];
+    P_[j] = IKH * P_[j] * IKH.transpose() + K * R_total * K.transpose();
+    P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
+  }
+  // The combined innovation under the predicted probabilities (its moments).
+  Vec2 nu_bar = Vec2::Zero();
+  for (int j = 0; j < kMotionModels; ++j) nu_bar += mu_[j] * nu[j];
+  Mat2 S_bar = Mat2::Zero();
+  for (int j = 0; j < kMotionModels; ++j) {
+    const Vec2 d = nu[j] - nu_bar;
+    S_bar += mu_[j] * (S[j] + d * d.transpose());
+  }
+  out.d2 = nu_bar.dot(S_bar.inverse() * nu_bar);
+  if (!(min_d2 <= restart_d2_)) {
+    // No model explains the sighting (a jump, a wrong association): start again there.
+    const std::int64_t restarts = restarts_ + 1;
+    start(s, inverse_observe(s.pose, s.z), t_);
+    restarts_ = restarts;
+    sightings_ = 1;
+    out.restarted = true;
+    return out;
+  }
+  // Model probabilities (IMM step 3), in the log domain against underflow; a floor
+  // keeps every model able to come back through the switching matrix.
+  const double top = *std::max_element(loglik.begin(), loglik.end());
+  double sum = 0.0;
+  for (int j = 0; j < kMotionModels; ++j) {
+    mu_[j] *= std::exp(loglik[j] - top);
+    sum += mu_[j];
+  }
+  constexpr double kFloor = 1e-9;
+  double floored = 0.0;
+  for (int j = 0; j < kMotionModels; ++j) {
+    mu_[j] = std::max(mu_[j] / sum, kFloor);
+    floored += mu_[j];
+  }
+  for (double& m : mu_) m /= floored;
+  // An object at rest anchors its next excursion where it rests.
+  constexpr double kRestProbability = 0.9;
+  if (mu_[0] > kRestProbability) anchor_ = x_[0].head<2>();
+  window_[static_cast<std::size_t>(window_next_)] = out.d2;
+  window_next_ = (window_next_ + 1) % options_.validation_sightings;
+  window_count_ = std::min(window_count_ + 1, options_.validation_sightings);
+  ++sightings_;
+  return out;
+}
+
+TrackVector MoverTrack::mean() const {
+  TrackVector m = TrackVector::Zero();
+  for (int j = 0; j < kMotionModels; ++j) m += mu_[j] * x_[j];
+  return m;
+}
+
+TrackMatrix MoverTrack::covariance() const {
+  const TrackVector m = mean();
+  TrackMatrix C = TrackMatrix::Zero();
+  for (int j = 0; j < kMotionModels; ++j) {
+    const TrackVector d = x_[j] - m;
+    C += mu_[j] * (P_[j] + d * d.transpose());
+  }
+  return C;
+}
+
+MotionModel MoverTrack::likeliest() const {
+  return static_cast<MotionModel>(std::max_element(mu_.begin(), mu_.end()) - mu_.begin());
+}
+
+bool MoverTrack::validated() const {
+  if (!active_ || window_count_ < options_.validation_sightings) return false;
+  double sum = 0.0;
+  for (int k = 0; k < window_count_; ++k) sum += window_[static_cast<std::size_t>(k)];
+  return sum <= valid_d2_;
+}
+
+}  // namespace elaslam
