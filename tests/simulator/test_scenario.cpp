@@ -318,6 +318,17 @@ TEST(SimScenario, EmptyRegionKeysAndChecks) {
                   "scenario.landmarks.empty_region", "wrong type: expected a map of keys");
 }
 
+// config/movers.yaml: paper.yaml's scenario with its 36 movers of three kinds.
+TEST(SimScenario, MoversConfigLoads) {
+  const ScenarioOptions o = load_scenario(std::string(ELASLAM_SOURCE_DIR) + "/config/movers.yaml");
+  EXPECT_EQ(o.movers.kinds, (std::vector<MotionKind>{MotionKind::kOscillating, MotionKind::kConstantVelocity,
+                                                      MotionKind::kStopAndGo}));
+  EXPECT_EQ(o.stop_and_go_move_frames(), 30);
+  EXPECT_EQ(o.stop_and_go_stop_frames(), 30);
+  EXPECT_NE(describe(o).find("  movers: 12 oscillating, 12 constant_velocity, 12 stop_and_go"), std::string::npos)
+      << describe(o);
+}
+
 // scenario.movers: absent, the paper's oscillating movers; listed, the kinds in
 // order; stop_and_go's stretches default to 3 s each and may be given one by one.
 TEST(SimScenario, MoverKeysAndDefaults) {
