@@ -4,10 +4,12 @@
 //
 //   scenario_dump --config config/paper.yaml [--dynamism P] [--speed V] [--seed S] [--check] --out FILE.csv
 //
-// Output: '#' lines with key=value metadata (world bounds, D, rate, ...), then
-// rows "frame,kind,id,x,y,theta,moving" with kind robot (pose T_WB, theta [rad]),
-// landmark (theta empty) or obs (robot id; x, y = the noisy observation's landmark
-// position in W computed from the TRUE pose, to visualise the field of view).
+// Output: '#' lines with key=value metadata (world bounds, D, rate, the mover
+// kinds, ...), then rows "frame,kind,id,x,y,theta,moving,motion" with kind robot
+// (pose T_WB, theta [rad]), landmark (theta empty; motion: static, oscillating,
+// constant_velocity or stop_and_go) or obs (robot id; x, y = the noisy
+// observation's landmark position in W computed from the TRUE pose, to visualise
+// the field of view; moving = the landmark's id). motion is empty but for landmarks.
 // Exit codes: 0 ok, 1 cannot write, 2 bad command line or configuration.
 #include <cmath>
 #include <cstdio>
@@ -29,19 +31,20 @@ void write_frame(std::FILE* f, const elaslam::sim::World& w) {
   for (int r = 0; r < w.num_robots(); ++r) {
     const auto& T = w.robot_pose(r);
     const int id = w.options().robots[static_cast<std::size_t>(r)].id;
-    std::fprintf(f, "%d,robot,%d,%.9g,%.9g,%.9g,0\n", k, id, T.x, T.y, T.theta);
+    std::fprintf(f, "%d,robot,%d,%.9g,%.9g,%.9g,0,\n", k, id, T.x, T.y, T.theta);
     const auto& sf = w.sensor_frame(r);
     for (int i = 0; i < sf.num_obs; ++i) {
       const auto& z = sf.obs[static_cast<std::size_t>(i)];
       const double a = T.theta + z.bearing_rad;
-      std::fprintf(f, "%d,obs,%d,%.9g,%.9g,,%d\n", k, id, T.x + z.range_m * std::cos(a),
+      std::fprintf(f, "%d,obs,%d,%.9g,%.9g,,%d,\n", k, id, T.x + z.range_m * std::cos(a),
                    T.y + z.range_m * std::sin(a), z.landmark_id);
     }
   }
   const auto& p = w.landmark_positions();
   for (int i = 0; i < w.num_landmarks(); ++i)
-    std::fprintf(f, "%d,landmark,%d,%.9g,%.9g,,%d\n", k, i, p[static_cast<std::size_t>(i)].x(),
-                 p[static_cast<std::size_t>(i)].y(), w.is_moving(i) ? 1 : 0);
+    std::fprintf(f, "%d,landmark,%d,%.9g,%.9g,,%d,%s\n", k, i, p[static_cast<std::size_t>(i)].x(),
+                 p[static_cast<std::size_t>(i)].y(), w.is_moving(i) ? 1 : 0,
+                 elaslam::sim::motion_kind_name(w.kind(i)));
 }
 
 int dump_main(int argc, char** argv) {
@@ -87,7 +90,15 @@ int dump_main(int argc, char** argv) {
                o.world.x_max_m, o.world.y_min_m, o.world.y_max_m, o.sensor.fov_diameter_m);
   std::fprintf(f, "# frames=%d\n# rate_hz=%g\n# seed=%d\n# dynamism_percent=%g\n# landmark_speed_mps=%g\n", o.frames,
                o.rate_hz, o.seed, o.dynamism_percent, o.landmark_speed_mps);
-  std::fprintf(f, "frame,kind,id,x,y,theta,moving\n");
+  // The mover kinds in the order the moving ids take them in turn (scenario.movers).
+  std::string kinds;
+  for (const auto kind : o.movers.kinds)
+    kinds += (kinds.empty() ? "" : ",") + std::string(elaslam::sim::motion_kind_name(kind));
+  std::fprintf(f, "# movers=%s\n# reversal_period_frames=%d\n", kinds.c_str(), o.reversal_period_frames);
+  if (o.movers.uses(elaslam::sim::MotionKind::kStopAndGo))
+    std::fprintf(f, "# stop_and_go_move_frames=%d\n# stop_and_go_stop_frames=%d\n", o.stop_and_go_move_frames(),
+                 o.stop_and_go_stop_frames());
+  std::fprintf(f, "frame,kind,id,x,y,theta,moving,motion\n");
   elaslam::sim::World w(o);
   for (int k = 0; k < o.frames; ++k) {
     if (k > 0) w.step();

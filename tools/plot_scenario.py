@@ -103,7 +103,10 @@ def read_dump(csv_path):
         for line in f:
             if line.startswith("#"):
                 key, _, value = line[1:].strip().partition("=")
-                meta[key] = float(value)
+                try:
+                    meta[key] = float(value)
+                except ValueError:  # movers=oscillating,constant_velocity: text
+                    meta[key] = value
             else:
                 lines.append(line)
     for row in csv.DictReader(lines):
@@ -111,9 +114,14 @@ def read_dump(csv_path):
         if row["kind"] == "robot":
             robots.setdefault(int(row["id"]), []).append((x, y, float(row["theta"])))
         elif row["kind"] == "landmark":
-            lm = landmarks.setdefault(int(row["id"]), {"xy": [], "moving": row["moving"] == "1"})
+            lm = landmarks.setdefault(int(row["id"]), {"xy": [], "moving": row["moving"] == "1",
+                                                       "motion": row.get("motion") or "oscillating"})
             lm["xy"].append((x, y))
     return meta, robots, landmarks
+
+
+# A moving landmark's colour by its mover kind (scenario.movers).
+MOTION_COLOURS = {"oscillating": "tab:red", "constant_velocity": "tab:purple", "stop_and_go": "tab:orange"}
 
 
 def plot(meta, robots, landmarks, out):
@@ -121,9 +129,10 @@ def plot(meta, robots, landmarks, out):
     for lm in landmarks.values():
         x0, y0 = lm["xy"][0]
         if lm["moving"]:
+            c = MOTION_COLOURS.get(lm["motion"], "tab:red")
             xs, ys = zip(*lm["xy"])
-            ax.plot(xs, ys, "-", color="tab:red", lw=1.0, alpha=0.7)
-            ax.plot(x0, y0, "o", mfc="none", mec="tab:red", ms=6)
+            ax.plot(xs, ys, "-", color=c, lw=1.0, alpha=0.7)
+            ax.plot(x0, y0, "o", mfc="none", mec=c, ms=6)
         else:
             ax.plot(x0, y0, "k.", ms=7)
     half_d = 0.5 * meta["fov_diameter_m"]
@@ -135,7 +144,11 @@ def plot(meta, robots, landmarks, out):
         ax.add_patch(plt.Circle((x0, y0), half_d, fill=False, ls="--", color=c, lw=1))
         ax.arrow(x0, y0, 0.8 * math.cos(th0), 0.8 * math.sin(th0), head_width=0.3, color=c)
     ax.plot([], [], "k.", label="static landmark")
-    ax.plot([], [], "o-", mfc="none", color="tab:red", label="moving landmark (path)")
+    motions = sorted({lm["motion"] for lm in landmarks.values() if lm["moving"]})
+    if motions == ["oscillating"] or not motions:
+        ax.plot([], [], "o-", mfc="none", color="tab:red", label="moving landmark (path)")
+    for m in ([] if motions == ["oscillating"] else motions):
+        ax.plot([], [], "o-", mfc="none", color=MOTION_COLOURS.get(m, "tab:red"), label=f"{m} (path)")
     ax.plot([], [], "--", color="gray", label=f"field of view at start (D = {meta['fov_diameter_m']:g} m)")
     ax.set_xlim(meta["x_min_m"] - 0.5, meta["x_max_m"] + 0.5)
     ax.set_ylim(meta["y_min_m"] - 0.5, meta["y_max_m"] + 0.5)

@@ -208,6 +208,54 @@ void Reader::read_vector(const std::string& key, std::vector<double>* out, std::
   record(key, rec);
 }
 
+void Reader::read_enum_list(const std::string& key, std::vector<std::string>* out,
+                            std::initializer_list<const char*> allowed, std::size_t min_items,
+                            std::size_t max_items, bool optional) {
+  auto echo = [&](const std::vector<std::string>& items) {
+    YAML::Node rec(YAML::NodeType::Sequence);
+    for (const std::string& item : items) rec.push_back(item);
+    rec.SetStyle(YAML::EmitterStyle::Flow);
+    record(key, rec);
+  };
+  bool present = false;
+  YAML::Node n = child(key, optional, &present);
+  if (!present) {
+    if (optional) echo(*out);
+    return;
+  }
+  if (!n.IsSequence()) {
+    fail(key, "wrong type: expected a list of strings, got " + scalar_text(n));
+    return;
+  }
+  if (n.size() < min_items || n.size() > max_items) {
+    fail(key, "wrong length: got " + num(n.size()) + " items, expected " + num(min_items) + " to " +
+                  num(max_items));
+    return;
+  }
+  std::string choices;
+  for (const char* a : allowed) choices += (choices.empty() ? "" : ", ") + std::string(a);
+  std::vector<std::string> v;
+  bool ok = true;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const std::string item_key = key + "[" + num(i) + "]";
+    if (!n[i].IsScalar()) {
+      fail(item_key, "wrong type: expected a string, got " + scalar_text(n[i]));
+      ok = false;
+      continue;
+    }
+    const std::string item = n[i].Scalar();
+    if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return item == a; })) {
+      fail(item_key, "invalid value '" + item + "', expected one of: " + choices);
+      ok = false;
+      continue;
+    }
+    v.push_back(item);
+  }
+  if (!ok) return;
+  *out = v;
+  echo(v);
+}
+
 void Reader::section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional) {
   bool present = false;
   YAML::Node n = child(key, optional, &present);

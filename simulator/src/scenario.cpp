@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "elaslam/simulator/scenario.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <utility>
 #include <sstream>
 
 #include "elaslam/common/contract.hpp"
@@ -107,6 +109,64 @@ void parse_robot(config::Reader& r, RobotPathOptions* p, const OdometerError& ev
   r.section("odometry", [&](config::Reader& s) { parse_odometer_error(s, &p->odometer); }, /*optional=*/true);
 }
 
+// The kinds a moving landmark can take, as the configuration spells them.
+constexpr MotionKind kMoverKinds[] = {MotionKind::kOscillating, MotionKind::kConstantVelocity,
+                                      MotionKind::kStopAndGo};
+// A stop-and-go stretch's bounds [s] as read; check_scenario wants a frame at least.
+constexpr double kStretchMinS = 1e-3;
+
+void parse_movers(config::Reader& r, MoverOptions* m) {
+  std::vector<std::string> names;
+  r.read_enum_list("kinds", &names, {"oscillating", "constant_velocity", "stop_and_go"}, 1, limits::kMaxMoverKinds);
+  if (!names.empty()) {  // empty: the list was bad, reported already
+    m->kinds.clear();
+    for (const std::string& name : names)
+      for (MotionKind k : kMoverKinds)
+        if (name == motion_kind_name(k)) m->kinds.push_back(k);
+  }
+  r.section(
+      "stop_and_go",
+      [&](config::Reader& s) {
+        s.read_optional("move_s", &m->stop_and_go.move_s, kStretchMinS, kBig);
+        s.read_optional("stop_s", &m->stop_and_go.stop_s, kStretchMinS, kBig);
+      },
+      /*optional=*/true);
+}
+
+// round(duration x rate), saturated so that a huge product stays an int (checked).
+int stretch_frames(double duration_s, double rate_hz) {
+  const double f = std::round(duration_s * rate_hz);
+  return f >= 0.0 && f <= static_cast<double>(limits::kFramesMax) ? static_cast<int>(f) : limits::kFramesMax + 1;
+}
+
+void check_movers(const ScenarioOptions& o, std::vector<Problem>* out) {
+  const MoverOptions& m = o.movers;
+  if (m.kinds.empty() || m.kinds.size() > limits::kMaxMoverKinds)
+    out->push_back({"movers.kinds", "must list 1 to " + std::to_string(limits::kMaxMoverKinds) + " kinds"});
+  for (std::size_t i = 0; i < m.kinds.size(); ++i)
+    if (m.kinds[i] == MotionKind::kStatic)
+      out->push_back({"movers.kinds[" + std::to_string(i) + "]",
+                      "static is not a mover kind: expected oscillating, constant_velocity or stop_and_go (the "
+                      "static landmarks are the ones dynamism_percent leaves out)"});
+  const std::pair<const char*, double> stretches[] = {{"move_s", m.stop_and_go.move_s},
+                                                      {"stop_s", m.stop_and_go.stop_s}};
+  for (const auto& [key, seconds] : stretches) {
+    const std::string path = std::string("movers.stop_and_go.") + key;
+    if (!(seconds > 0.0 && seconds <= kBig)) {
+      out->push_back({path, "must be in (0, " + num(kBig) + "] s, got " + num(seconds)});
+      continue;
+    }
+    if (!m.uses(MotionKind::kStopAndGo)) continue;  // kept for switching kinds: not turned into frames
+    const int frames = stretch_frames(seconds, o.rate_hz);
+    if (frames < 1)
+      out->push_back({path, num(seconds) + " s is less than one frame at " + num(o.rate_hz) +
+                                " Hz: make it at least 1 / rate_hz = " + num(1.0 / o.rate_hz) + " s"});
+    else if (frames > limits::kFramesMax)
+      out->push_back({path, num(seconds) + " s is more than " + std::to_string(limits::kFramesMax) + " frames at " +
+                                num(o.rate_hz) + " Hz"});
+  }
+}
+
 bool has_spin(const RobotPathOptions& p) { return p.spin.duration_s > 0.0; }
 
 // Is every point of the part of the semicircle the robot drives inside the world?
@@ -188,6 +248,21 @@ int ScenarioOptions::moving_count(int num_landmarks) const {
   return static_cast<int>(std::lround(dynamism_percent * num_landmarks / 100.0));
 }
 
+int ScenarioOptions::stop_and_go_move_frames() const { return stretch_frames(movers.stop_and_go.move_s, rate_hz); }
+int ScenarioOptions::stop_and_go_stop_frames() const { return stretch_frames(movers.stop_and_go.stop_s, rate_hz); }
+
+bool MoverOptions::uses(MotionKind k) const { return std::find(kinds.begin(), kinds.end(), k) != kinds.end(); }
+
+const char* motion_kind_name(MotionKind k) {
+  switch (k) {
+    case MotionKind::kStatic: return "static";
+    case MotionKind::kOscillating: return "oscillating";
+    case MotionKind::kConstantVelocity: return "constant_velocity";
+    case MotionKind::kStopAndGo: return "stop_and_go";
+  }
+  return "?";
+}
+
 const char* layout_name(Layout l) {
   switch (l) {
     case Layout::kGrid: return "grid";
@@ -231,6 +306,7 @@ std::vector<Problem> check_scenario(const ScenarioOptions& o) {
                                              " m (paper section 3.2) and below the world's size"});
   if (!(o.dynamism_percent >= 0.0 && o.dynamism_percent <= limits::kDynamismMaxPercent))
     out.push_back({"dynamism_percent", "must be in [0, 100], got " + num(o.dynamism_percent)});
+  check_movers(o, &out);
   if (o.robots.empty() || o.robots.size() > static_cast<std::size_t>(contract::kMaxRobots))
     out.push_back({"robots", "need 1 to " + std::to_string(contract::kMaxRobots) + " robots"});
   check_robots(o, &out);
@@ -266,6 +342,7 @@ void parse(config::Reader& r, ScenarioOptions* o) {
   r.read("dynamism_percent", &o->dynamism_percent, 0.0, limits::kDynamismMaxPercent);
   r.read("landmark_speed_mps", &o->landmark_speed_mps, 0.0, limits::kLandmarkSpeedMaxMps);
   r.read("reversal_period_frames", &o->reversal_period_frames, 1, 100000000);
+  r.section("movers", [&](config::Reader& s) { parse_movers(s, &o->movers); }, /*optional=*/true);
   o->robots.clear();
   r.list(
       "robots",
@@ -299,6 +376,33 @@ ScenarioOptions load_scenario(const std::string& path, std::string* effective_ya
   return load(doc, effective_yaml);
 }
 
+namespace {
+// " 12 oscillating, 12 constant_velocity (kinds in turn over the moving ids)": the
+// j-th moving landmark takes kinds[j % K], so entry t of the list gets m / K
+// movers, one more when t < m % K.
+std::string describe_movers(const ScenarioOptions& o, int moving) {
+  const std::vector<MotionKind>& kinds = o.movers.kinds;
+  if (kinds.empty()) return " none listed";
+  const int k = static_cast<int>(kinds.size());
+  std::ostringstream os;
+  bool first = true;
+  for (MotionKind kind : kMoverKinds) {
+    int count = 0;
+    for (int t = 0; t < k; ++t)
+      if (kinds[static_cast<std::size_t>(t)] == kind) count += moving / k + (t < moving % k ? 1 : 0);
+    if (!o.movers.uses(kind)) continue;
+    os << (first ? " " : ", ") << count << " " << motion_kind_name(kind);
+    first = false;
+  }
+  if (k > 1) {
+    os << " (kinds [";
+    for (int t = 0; t < k; ++t) os << (t ? ", " : "") << motion_kind_name(kinds[static_cast<std::size_t>(t)]);
+    os << "] in turn over the moving ids)";
+  }
+  return os.str();
+}
+}  // namespace
+
 std::string describe(const ScenarioOptions& o) {
   std::vector<Eigen::Vector2d> layout;
   std::string why;
@@ -314,6 +418,11 @@ std::string describe(const ScenarioOptions& o) {
      << "  landmarks: " << n << " (" << layout_name(o.landmarks.layout) << "), dynamism "
      << o.dynamism_percent << " % (" << o.moving_count(n) << " moving) at " << o.landmark_speed_mps
      << " m/s, reversal every " << o.reversal_period_frames << " frames\n";
+  os << "  movers:" << describe_movers(o, o.moving_count(n)) << "\n";
+  if (o.movers.uses(MotionKind::kStopAndGo))
+    os << "    stop_and_go: moving " << o.movers.stop_and_go.move_s << " s (" << o.stop_and_go_move_frames()
+       << " frames), standing still " << o.movers.stop_and_go.stop_s << " s (" << o.stop_and_go_stop_frames()
+       << " frames), each from its own random point of the cycle\n";
   const EmptyRegion& e = o.landmarks.empty_region;
   if (e.enabled)
     os << "  empty region: [" << e.x_min_m << ", " << e.x_max_m << "] x [" << e.y_min_m << ", " << e.y_max_m

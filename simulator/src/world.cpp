@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "elaslam/simulator/world.hpp"
 
+#include <algorithm>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -22,6 +23,7 @@ World::World(const ScenarioOptions& o) : options_(o) {
   const std::size_t n = p_LinW_.size();
   reflected_.assign(n, 0);
   pick_moving_set();
+  assign_kinds();
 
   const auto seed = static_cast<std::uint64_t>(o.seed);
   for (const RobotPathOptions& path : o.robots) {
@@ -56,20 +58,66 @@ void World::pick_moving_set() {
   for (std::size_t i = 0; i < n; ++i) dir_.push_back(direction_vector(static_cast<int>(dirs.below(4))));
 }
 
+// The moving landmarks take the listed kinds in turn, ids ascending. A stop-and-go
+// cycle's starting point is drawn for every landmark from its own stream, one number
+// each, so that it depends neither on the dynamism nor on the kinds of the others;
+// the streams of the layout, the moving set and the directions are left as they were.
+void World::assign_kinds() {
+  const std::size_t n = p_LinW_.size();
+  const std::vector<MotionKind>& kinds = options_.movers.kinds;
+  kind_.assign(n, MotionKind::kStatic);
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (moving_[i]) kind_[i] = kinds[j++ % kinds.size()];
+
+  // At least a frame each (check_scenario holds them there when a mover uses them).
+  move_frames_ = std::max(1, options_.stop_and_go_move_frames());
+  stop_frames_ = std::max(1, options_.stop_and_go_stop_frames());
+  const std::int64_t cycle = move_frames_ + stop_frames_;
+  Rng phases(static_cast<std::uint64_t>(options_.seed), stream::kMoverPhase);
+  phase_.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i)
+    phase_[i] = std::min(cycle - 1, static_cast<std::int64_t>(phases.uniform() * static_cast<double>(cycle)));
+
+  // Frame 0: the motion each landmark starts with.
+  const double speed = options_.landmark_speed_mps;
+  standing_.assign(n, 1);
+  velocity_.assign(n, Eigen::Vector2d::Zero());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (kind_[i] == MotionKind::kStatic || (kind_[i] == MotionKind::kStopAndGo && !moves_in_step(i, 0))) continue;
+    standing_[i] = 0;
+    velocity_[i] = speed * dir_[i];
+  }
+}
+
+bool World::moves_in_step(std::size_t i, int k) const {
+  return (static_cast<std::int64_t>(k) + phase_[i]) % (move_frames_ + stop_frames_) < move_frames_;
+}
+
 void World::step() {
   const int k = frame_;
-  // Landmarks: the move from frame k to k + 1. Every reversal period each moving
-  // landmark turns to the opposite direction (paper section 4).
+  // Landmarks: the move from frame k to k + 1. Every reversal period each
+  // oscillating landmark turns to the opposite direction (paper section 4); the
+  // constant-velocity ones keep theirs, and the stop-and-go ones keep theirs while
+  // they move and stand in between. All bounce off the borders and the empty region.
   const double step_m = options_.landmark_speed_mps / options_.rate_hz;
   const bool reverse = k > 0 && k % options_.reversal_period_frames == 0;
   for (std::size_t i = 0; i < p_LinW_.size(); ++i) {
     reflected_[i] = 0;
     if (!moving_[i]) continue;
-    if (reverse) dir_[i] = -dir_[i];
+    if (kind_[i] == MotionKind::kStopAndGo && !moves_in_step(i, k)) {
+      standing_[i] = 1;
+      velocity_[i].setZero();
+      continue;
+    }
+    if (reverse && kind_[i] == MotionKind::kOscillating) dir_[i] = -dir_[i];
+    const Eigen::Vector2d from = p_LinW_[i];
     if (advance_landmark(&p_LinW_[i], &dir_[i], step_m, options_.world, options_.landmarks.empty_region)) {
       reflected_[i] = 1;
       ++counters_.border_reflections;
     }
+    standing_[i] = 0;
+    velocity_[i] = (p_LinW_[i] - from) * options_.rate_hz;
   }
   // Robots follow their paths exactly; the odometer integrates what it reports of
   // the true increment (its systematic error inverted), with noise on top.

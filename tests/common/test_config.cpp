@@ -162,6 +162,41 @@ TEST(Config, BadEnumListsChoices) {
              "robot.mode: invalid value 'fast', expected one of: ekf, gated");
 }
 
+// A list of names from a fixed set: each item checked and named by its index; the
+// default echoed when the key is optional and absent.
+TEST(Config, EnumListItemsAreCheckedAndEchoed) {
+  auto read = [](const std::string& text, std::vector<std::string>* out, bool optional) {
+    Document doc = Document::from_string(text, "test.yaml");
+    doc.section("robot", [&](Reader& r) { r.read_enum_list("kinds", out, {"a", "b"}, 1, 3, optional); });
+    doc.finish();
+    return YAML::Load(doc.effective_yaml());
+  };
+  std::vector<std::string> kinds{"a"};
+  YAML::Node eff = read("robot: {kinds: [b, a, b]}\n", &kinds, false);
+  EXPECT_EQ(kinds, (std::vector<std::string>{"b", "a", "b"}));
+  EXPECT_EQ(eff["robot"]["kinds"].size(), 3u);
+  kinds = {"a"};
+  eff = read("robot: {}\n", &kinds, true);
+  EXPECT_EQ(kinds, std::vector<std::string>{"a"});
+  EXPECT_EQ(eff["robot"]["kinds"][0].as<std::string>(), "a");  // the default shown
+  auto error = [&](const std::string& text) {
+    std::vector<std::string> out{"a"};
+    try {
+      read(text, &out, false);
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(out, std::vector<std::string>{"a"}) << "a refused list changed the value";
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_HAS(error("robot: {kinds: [a, c]}\n"), "robot.kinds[1]: invalid value 'c', expected one of: a, b");
+  EXPECT_HAS(error("robot: {kinds: [{x: 1}, a]}\n"), "robot.kinds[0]: wrong type: expected a string, got a map");
+  EXPECT_HAS(error("robot: {kinds: []}\n"), "robot.kinds: wrong length: got 0 items, expected 1 to 3");
+  EXPECT_HAS(error("robot: {kinds: [a, a, a, a]}\n"), "robot.kinds: wrong length: got 4 items, expected 1 to 3");
+  EXPECT_HAS(error("robot: {kinds: a}\n"), "robot.kinds: wrong type: expected a list of strings, got 'a'");
+  EXPECT_HAS(error("robot: {}\n"), "robot.kinds: missing (required key)");
+}
+
 TEST(Config, MalformedYamlGivesLine) {
   const std::string e = errors_of("robot:\n  sigma_m: [0.1\n  capacity: 3\n");
   EXPECT_HAS(e, "test.yaml");

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // Scenario configuration: the default file loads, every kind of bad input is
 // rejected with its key path and a message that says what was expected.
+#include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -314,6 +316,119 @@ TEST(SimScenario, EmptyRegionKeysAndChecks) {
                   "scenario.landmarks.empty_region.radius_m", "unknown key");
   expect_rejected(with("grid_rows: 8}", "grid_rows: 8, empty_region: [0, 1, 0, 1]}"),
                   "scenario.landmarks.empty_region", "wrong type: expected a map of keys");
+}
+
+// config/movers.yaml: paper.yaml's scenario with its 36 movers of three kinds.
+TEST(SimScenario, MoversConfigLoads) {
+  const ScenarioOptions o = load_scenario(std::string(ELASLAM_SOURCE_DIR) + "/config/movers.yaml");
+  EXPECT_EQ(o.movers.kinds, (std::vector<MotionKind>{MotionKind::kOscillating, MotionKind::kConstantVelocity,
+                                                      MotionKind::kStopAndGo}));
+  EXPECT_EQ(o.stop_and_go_move_frames(), 30);
+  EXPECT_EQ(o.stop_and_go_stop_frames(), 30);
+  EXPECT_NE(describe(o).find("  movers: 12 oscillating, 12 constant_velocity, 12 stop_and_go"), std::string::npos)
+      << describe(o);
+}
+
+// scenario.movers: absent, the paper's oscillating movers; listed, the kinds in
+// order; stop_and_go's stretches default to 3 s each and may be given one by one.
+TEST(SimScenario, MoverKeysAndDefaults) {
+  const ScenarioOptions plain = load_scenario_text(kBase);
+  EXPECT_EQ(plain.movers.kinds, std::vector<MotionKind>{MotionKind::kOscillating});
+  EXPECT_EQ(plain.movers.stop_and_go.move_s, 3.0);
+  EXPECT_EQ(plain.movers.stop_and_go.stop_s, 3.0);
+  EXPECT_EQ(plain.stop_and_go_move_frames(), 30);
+  const ScenarioOptions mixed = load_scenario_text(
+      with("  reversal_period_frames: 20\n",
+           "  reversal_period_frames: 20\n  movers:\n    kinds: [stop_and_go, oscillating, constant_velocity, "
+           "stop_and_go]\n    stop_and_go: {stop_s: 1.25}\n"));
+  EXPECT_EQ(mixed.movers.kinds, (std::vector<MotionKind>{MotionKind::kStopAndGo, MotionKind::kOscillating,
+                                                          MotionKind::kConstantVelocity, MotionKind::kStopAndGo}));
+  EXPECT_EQ(mixed.movers.stop_and_go.move_s, 3.0);
+  EXPECT_EQ(mixed.movers.stop_and_go.stop_s, 1.25);
+  EXPECT_EQ(mixed.stop_and_go_stop_frames(), 13);  // round(12.5)
+}
+
+TEST(SimScenario, MoverBadKeysAreNamed) {
+  auto movers = [](const std::string& yaml) {
+    return with("  reversal_period_frames: 20\n", "  reversal_period_frames: 20\n  movers: " + yaml + "\n");
+  };
+  expect_rejected(movers("{kinds: [oscillating, teleport]}"), "scenario.movers.kinds[1]",
+                  "invalid value 'teleport', expected one of: oscillating, constant_velocity, stop_and_go");
+  expect_rejected(movers("{kinds: [static]}"), "scenario.movers.kinds[0]", "invalid value 'static'");
+  expect_rejected(movers("{kinds: []}"), "scenario.movers.kinds", "wrong length: got 0 items, expected 1 to 64");
+  expect_rejected(movers("{kinds: oscillating}"), "scenario.movers.kinds",
+                  "wrong type: expected a list of strings, got 'oscillating'");
+  expect_rejected(movers("{kinds: [[oscillating]]}"), "scenario.movers.kinds[0]", "wrong type: expected a string");
+  expect_rejected(movers("{stop_and_go: {move_s: 1.0}}"), "scenario.movers.kinds", "missing (required key)");
+  expect_rejected(movers("{kinds: [oscillating], speed_mps: 1.0}"), "scenario.movers.speed_mps", "unknown key");
+  expect_rejected(movers("[oscillating]"), "scenario.movers", "wrong type: expected a map of keys");
+  for (const char* bad : {"0", "-1", "0.0001"})
+    expect_rejected(movers(std::string("{kinds: [stop_and_go], stop_and_go: {move_s: ") + bad + "}}"),
+                    "scenario.movers.stop_and_go.move_s", "out of range: got " + std::string(bad));
+  for (const char* bad : {".nan", "-.inf", "1e999"})
+    expect_rejected(movers(std::string("{kinds: [stop_and_go], stop_and_go: {stop_s: ") + bad + "}}"),
+                    "scenario.movers.stop_and_go.stop_s", "not a finite number");
+  expect_rejected(movers("{kinds: [stop_and_go], stop_and_go: {move_s: 1, pause_s: 1}}"),
+                  "scenario.movers.stop_and_go.pause_s", "unknown key");
+  // A stretch must last a frame at least (0.04 s is 0.4 frames at 10 Hz)...
+  expect_rejected(movers("{kinds: [stop_and_go], stop_and_go: {stop_s: 0.04}}"), "scenario.movers.stop_and_go.stop_s",
+                  "0.04 s is less than one frame at 10 Hz: make it at least 1 / rate_hz = 0.1 s");
+  // ...when a mover uses it: a file may keep the stretches while no mover stops.
+  EXPECT_NO_THROW(load_scenario_text(movers("{kinds: [constant_velocity], stop_and_go: {stop_s: 0.04}}")));
+}
+
+// Options built in code (or overridden after loading) meet the same checks.
+TEST(SimScenario, MoverChecksOfCodeBuiltOptions) {
+  auto problems_at = [](const ScenarioOptions& o, const std::string& key) {
+    std::string all;
+    for (const Problem& p : check_scenario(o))
+      if (p.key == key) all += p.what + ";";
+    return all;
+  };
+  ScenarioOptions o = load_scenario_text(kBase);
+  ASSERT_TRUE(check_scenario(o).empty());
+  o.movers.kinds.clear();
+  EXPECT_NE(problems_at(o, "movers.kinds").find("must list 1 to 64 kinds"), std::string::npos);
+  o.movers.kinds = {MotionKind::kConstantVelocity, MotionKind::kStatic};
+  EXPECT_NE(problems_at(o, "movers.kinds[1]").find("static is not a mover kind"), std::string::npos);
+  o.movers.kinds = {MotionKind::kStopAndGo};
+  o.movers.stop_and_go.move_s = std::nan("");
+  EXPECT_NE(problems_at(o, "movers.stop_and_go.move_s").find("must be in (0, 1e+06] s, got nan"), std::string::npos);
+  o.movers.stop_and_go.move_s = 2.0;
+  EXPECT_TRUE(check_scenario(o).empty());
+  o.rate_hz = 0.2;  // a rate override can make a stretch shorter than a frame: 2 s is 0.4 frames
+  EXPECT_NE(problems_at(o, "movers.stop_and_go.move_s").find("less than one frame at 0.2 Hz"), std::string::npos);
+}
+
+TEST(SimScenario, MoversAreEchoedWhenGivenAndDescribed) {
+  auto effective = [](const std::string& text) {
+    config::Document doc = config::Document::from_string(text, "test.yaml");
+    ScenarioOptions o;
+    doc.allow_sections();
+    doc.section("scenario", [&](config::Reader& r) { parse(r, &o); });
+    doc.finish();
+    return YAML::Load(doc.effective_yaml());
+  };
+  // Absent, the effective config says nothing of movers (results of the default
+  // scenario record the same configuration as before the kinds existed).
+  EXPECT_FALSE(effective(kBase)["scenario"]["movers"].IsDefined());
+  const std::string mixed_text = with(
+      "  reversal_period_frames: 20\n",
+      "  reversal_period_frames: 20\n  movers: {kinds: [oscillating, constant_velocity, stop_and_go]}\n");
+  const YAML::Node eff = effective(mixed_text)["scenario"]["movers"];
+  ASSERT_TRUE(eff["kinds"].IsSequence());
+  EXPECT_EQ(eff["kinds"].size(), 3u);
+  EXPECT_EQ(eff["kinds"][2].as<std::string>(), "stop_and_go");
+  // The start-up summary names the kinds with their counts (20 % of 72: 14 movers).
+  EXPECT_NE(describe(load_scenario_text(kBase)).find("  movers: 14 oscillating\n"), std::string::npos)
+      << describe(load_scenario_text(kBase));
+  const std::string d = describe(load_scenario_text(mixed_text));
+  EXPECT_NE(d.find("  movers: 5 oscillating, 5 constant_velocity, 4 stop_and_go (kinds [oscillating, "
+                   "constant_velocity, stop_and_go] in turn over the moving ids)\n"),
+            std::string::npos)
+      << d;
+  EXPECT_NE(d.find("    stop_and_go: moving 3 s (30 frames), standing still 3 s (30 frames)"), std::string::npos)
+      << d;
 }
 
 }  // namespace

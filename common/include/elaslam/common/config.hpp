@@ -87,6 +87,11 @@ class Reader {
                  bool optional = false);
   /// A fixed-length list of numbers, each within [lo, hi].
   void read_vector(const std::string& key, std::vector<double>* out, std::size_t size, double lo, double hi);
+  /// A list of min_items to max_items strings, each one of `allowed` (repeats allowed).
+  /// Optional and absent: *out keeps its value (the documented default), echoed.
+  void read_enum_list(const std::string& key, std::vector<std::string>* out,
+                      std::initializer_list<const char*> allowed, std::size_t min_items, std::size_t max_items,
+                      bool optional = false);
 
   /// Required nested map; the callback reads it. Unknown keys inside are reported.
   void section(const std::string& key, const std::function<void(Reader&)>& fn, bool optional = false);

@@ -21,6 +21,7 @@ namespace stream {
 constexpr std::uint64_t kLayout = 1;       // random layout positions
 constexpr std::uint64_t kMovingSet = 2;    // permutation that picks the moving landmarks
 constexpr std::uint64_t kDirections = 3;   // initial direction of every landmark
+constexpr std::uint64_t kMoverPhase = 4;   // where in its cycle every landmark would start stop-and-go
 constexpr std::uint64_t kSensorNoise = 100;   // + robot id
 constexpr std::uint64_t kOdometryNoise = 200; // + robot id
 constexpr std::uint64_t kDetection = 300;     // + robot id

@@ -5,6 +5,7 @@
 // config/paper.yaml documents every key and the reasoning behind the values.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -120,6 +121,31 @@ struct RobotPathOptions {
   OdometerError odometer;         // scenario.odometry's, or scenario.robots[i].odometry's
 };
 
+/// How a landmark moves (docs/simulator.md "Mover kinds"). kStatic is a landmark
+/// outside the moving set (World::kind); the moving ones take the other three.
+enum class MotionKind {
+  kStatic,
+  kOscillating,        // along its direction, turning round every reversal_period_frames (the paper's)
+  kConstantVelocity,   // along its direction, never turned round: it crosses the world
+  kStopAndGo,          // as kConstantVelocity for move_s, standing still for stop_s, repeating
+};
+
+/// A stop-and-go mover's stretches. Each is a whole number of frames,
+/// round(duration x rate_hz), at least one; each mover starts at its own random
+/// point of the cycle (stream::kMoverPhase).
+struct StopAndGoOptions {
+  double move_s = 3.0;   // [s] moving (bouncing off borders as a constant-velocity mover)
+  double stop_s = 3.0;   // [s] standing still
+};
+
+/// The kinds the moving landmarks take: the j-th moving landmark in ascending id
+/// order takes kinds[j % kinds.size()], so a list mixes them in its proportions.
+struct MoverOptions {
+  std::vector<MotionKind> kinds{MotionKind::kOscillating};  // the paper's movers alone
+  StopAndGoOptions stop_and_go;                              // used when kinds lists kStopAndGo
+  bool uses(MotionKind k) const;
+};
+
 struct ScenarioOptions {
   WorldBounds world;
   int frames = 150;                 // frames per run, 0..frames-1
@@ -130,13 +156,18 @@ struct ScenarioOptions {
   LandmarkOptions landmarks;
   double dynamism_percent = 0.0;    // share of the landmarks that move [%]
   double landmark_speed_mps = 0.1;  // [m/s] speed of the moving landmarks
-  int reversal_period_frames = 20;  // moving landmarks turn around every this many frames
+  int reversal_period_frames = 20;  // oscillating movers turn around every this many frames
+  MoverOptions movers;              // how the moving landmarks move (scenario.movers)
   std::vector<RobotPathOptions> robots;
 
   double dt_s() const { return 1.0 / rate_hz; }
   /// round(dynamism x N): the number of moving landmarks among the N the world has
   /// (landmarks.count, less those the empty region leaves out: generate_layout).
   int moving_count(int num_landmarks) const;
+  /// A stop-and-go mover's stretches in frames: round(move_s x rate_hz) and
+  /// round(stop_s x rate_hz) (check_scenario keeps each in [1, limits::kFramesMax]).
+  int stop_and_go_move_frames() const;
+  int stop_and_go_stop_frames() const;
 };
 
 /// The ranges of the scenario keys that command lines override too (simulator,
@@ -148,6 +179,7 @@ inline constexpr int kFramesMax = 100000000;                                 // 
 inline constexpr int kSeedMax = 2147483647;                                  // seed (from 0)
 inline constexpr double kDynamismMaxPercent = 100.0;                         // dynamism_percent (from 0)
 inline constexpr double kLandmarkSpeedMaxMps = 1000.0;                       // landmark_speed_mps (from 0)
+inline constexpr std::size_t kMaxMoverKinds = 64;                            // movers.kinds (from 1 item)
 }  // namespace limits
 
 /// One problem found by check_scenario: key path relative to the scenario section.
@@ -161,8 +193,9 @@ void parse(config::Reader& r, ScenarioOptions* o);
 
 /// Cross-field checks (also the ones a command-line override can break): world
 /// non-empty, robot motion per frame below D (paper eq 14 and after), robot paths
-/// inside the world, unique robot ids, landmark speed per frame below D, layout
-/// feasible and inside the world, capacities of the message contract.
+/// inside the world, unique robot ids, landmark speed per frame below D, mover kinds
+/// listed and stop-and-go stretches of at least a frame, layout feasible and inside
+/// the world, capacities of the message contract.
 std::vector<Problem> check_scenario(const ScenarioOptions& o);
 
 /// Load the `scenario` section of a YAML file; the sections of the other
@@ -177,5 +210,7 @@ ScenarioOptions load_scenario_text(const std::string& text, const std::string& s
 std::string describe(const ScenarioOptions& o);
 
 const char* layout_name(Layout l);
+/// The configuration's spelling of a kind: static, oscillating, constant_velocity, stop_and_go.
+const char* motion_kind_name(MotionKind k);
 
 }  // namespace elaslam::sim

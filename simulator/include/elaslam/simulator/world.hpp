@@ -54,7 +54,20 @@ class World {
   const Pose2& robot_pose(int i) const { return robot_T_WB_[static_cast<std::size_t>(i)]; }
   /// True landmark positions p_LinW at this frame, index = landmark id.
   const std::vector<Eigen::Vector2d>& landmark_positions() const { return p_LinW_; }
+  /// Whether landmark id is in the moving set (a stop-and-go mover standing still is).
   bool is_moving(int id) const { return moving_[static_cast<std::size_t>(id)] != 0; }
+  /// How landmark id moves: kStatic outside the moving set, else the kind it took
+  /// from scenario.movers.kinds (the moving ids ascending take the kinds in turn).
+  MotionKind kind(int id) const { return kind_[static_cast<std::size_t>(id)]; }
+  /// Whether landmark id stood still over the last step() (always for a static one;
+  /// a stop-and-go mover in a stop). At frame 0: whether its first step is a stop.
+  bool standing_still(int id) const { return standing_[static_cast<std::size_t>(id)] != 0; }
+  /// True velocity of landmark id in W [m/s] over the last step(): its displacement
+  /// times rate_hz, zero while it stands still (after a bounce within the step, the
+  /// mean over the step, shorter than the speed; direction() is the new heading).
+  /// At frame 0: the velocity it starts with, its speed along its initial direction
+  /// (zero when static or when its first step is a stop).
+  const Eigen::Vector2d& velocity(int id) const { return velocity_[static_cast<std::size_t>(id)]; }
   /// Current unit direction of landmark id in W (defined for static ones too, unused).
   const Eigen::Vector2d& direction(int id) const { return dir_[static_cast<std::size_t>(id)]; }
   /// Whether landmark id bounced off a border during the last step().
@@ -68,6 +81,9 @@ class World {
  private:
   void sense();
   void pick_moving_set();
+  void assign_kinds();
+  /// Whether stop-and-go landmark i moves in the step from frame k to k + 1.
+  bool moves_in_step(std::size_t i, int k) const;
 
   ScenarioOptions options_;
   int frame_ = 0;
@@ -80,6 +96,12 @@ class World {
   std::vector<Eigen::Vector2d> dir_;
   std::vector<std::uint8_t> moving_;
   std::vector<std::uint8_t> reflected_;
+  std::vector<MotionKind> kind_;
+  std::vector<std::uint8_t> standing_;
+  std::vector<Eigen::Vector2d> velocity_;
+  std::vector<std::int64_t> phase_;    // stop-and-go: steps into the cycle at frame 0, in [0, cycle)
+  std::int64_t move_frames_ = 1;       // stop-and-go stretches [frames]
+  std::int64_t stop_frames_ = 1;
   WorldCounters counters_;
 };
 
