@@ -63,6 +63,31 @@ nlohmann::json yaml_text_to_json(const std::string& yaml) {
   }
 }
 
+namespace {
+
+// A figure over `count` samples: null when there is none (never "0 of 0").
+nlohmann::json over(std::int64_t count, double value) { return count > 0 ? nlohmann::json(value) : nlohmann::json(); }
+
+}  // namespace
+
+nlohmann::json tracks_json(const TrackMetrics& t) {
+  return {{"samples", t.samples},
+          {"position_rms_m", over(t.samples, t.position_rms_m)},
+          {"moving_samples", t.moving_samples},
+          {"speed_rms_mps", over(t.moving_samples, t.speed_rms_mps)},
+          {"heading_rms_deg", over(t.moving_samples, t.heading_rms_deg)},
+          {"stopped_verdicts", t.stopped_verdicts},
+          {"at_rest_samples", t.at_rest_samples},
+          {"stop_precision", over(t.stopped_verdicts, t.stop_precision)},
+          {"stop_recall", over(t.at_rest_samples, t.stop_recall)},
+          {"stops", t.stops},
+          {"stops_found", t.stops_found},
+          {"stop_latency_s", over(t.stops_found, t.stop_latency_s)},
+          {"nees_samples", t.nees_samples},
+          {"nees_mean", over(t.nees_samples, t.nees_mean)},
+          {"nees_in_band", over(t.nees_samples, t.nees_in_band)}};
+}
+
 nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
   const RunMetrics& m = r.metrics;
   nlohmann::json j;
@@ -110,6 +135,7 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
                     {"true_positives", m.true_positives},
                     {"detectable", m.detectable}};
   j["timing"] = {{"frame_us_p50", m.frame_us_p50}, {"frame_us_p99", m.frame_us_p99}, {"frame_us_max", m.frame_us_max}};
+  if (m.tracks_scored) j["tracks"] = tracks_json(m.tracks);
   j["final_map"] = {{"static", r.final_map.size()}, {"moving", r.final_moving.size()}};
   j["source"] = info.source;
   j["config"] = yaml_text_to_json(info.effective_config);

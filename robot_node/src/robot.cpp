@@ -50,6 +50,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
       filters_(options.ekf, options.team_map_fuse, history_window(options), history_ops(options)),
       team_(options.team_map_fuse ? options.ekf.max_landmark_id : 0, options.team_map_min_gain),
       lmap_(options.ekf.max_landmark_id, lifecycle_rules(options)),
+      tracks_(options.tracking, options.ekf.max_landmark_id),
       gate_(options),
       monitor_(options.consistency_window_frames, options.consistency_probability) {
   team_gate_threshold_ = options.team_map_gate_probability < 1.0 ? chi2_quantile(options.team_map_gate_probability, 2)
@@ -59,6 +60,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   updated_.reserve(static_cast<std::size_t>(options.max_observations));
   pairs_.reserve(static_cast<std::size_t>(options.ekf.capacity));
   events_.reserve(event_capacity(options));
+  track_ops_.reserve(2 * static_cast<std::size_t>(options.max_observations));
 }
 
 void Robot::reset() {
@@ -70,6 +72,9 @@ void Robot::reset() {
   monitor_.restart();
   team_.clear();
   trouble_frame_ = -1;
+  tracks_.clear();
+  track_ops_.clear();
+  clock_s_ = 0.0;
 }
 
 FrameSummary Robot::process(const FrameInput& in) {
@@ -78,7 +83,9 @@ FrameSummary Robot::process(const FrameInput& in) {
   gate_.clear();
   updated_.clear();
   s.num_obs = in.num_obs;
+  const double dt = initialised_ ? step_seconds(in) : 0.0;
   predict(in, &s);
+  clock_s_ += dt;
   last_frame_ = in.frame;
   for (int k = 0; k < in.num_obs; ++k) lmap_.seen(in.obs[static_cast<std::size_t>(k)].landmark_id, in.frame);
 
@@ -100,6 +107,7 @@ FrameSummary Robot::process(const FrameInput& in) {
   s.events_dropped = events_dropped_;
   events_dropped_ = 0;
   check_consistency(&s);
+  apply_track_ops(&s);
   // Trouble the robot sees itself: every mapped landmark it judged, at least
   // kTeamMinTested, failed (a robot lost in heading finds them all outside their
   // ELA; movers rarely make a whole view), or the consistency monitor's verdict.
@@ -280,6 +288,9 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     // STATIC ones, and those found moving in step 3, were judged in view.
     if (e.status == LandmarkStatus::kStatic || e.moved_frame == in.frame) continue;
     ++s->num_candidates;
+    // Sightings the map keeps out go to the landmark's track; one found or told
+    // moving before without a track (lost, or told while out of view) starts one.
+    queue_track(TrackOp::Kind::kSee, id, o.z, e.position, e.times_moving > 0);
     record_sighting(id, o.z);
     if (e.status == LandmarkStatus::kCandidate && filters_.own().has_landmark(id)) {
       if (gate_.judge_candidate(id, filters_.own().check(id, o.z), &lmap_)) {
@@ -307,6 +318,7 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
 // from now on, starting with this frame's sighting.
 void Robot::confirm(int id, const RangeBearing& z, FrameSummary* s) {
   const bool returned = lmap_.confirm(id, last_frame_);
+  queue_track(TrackOp::Kind::kEnd, id, z, Eigen::Vector2d::Zero(), false);  // STATIC again: the map holds it
   FilterHistory::Op held;
   held.kind = FilterHistory::Kind::kHeldPosition;
   filters_.upgrade(id, &held);
@@ -383,11 +395,55 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   }
   lmap_.found_moving(id, last_frame_, seen != nullptr);
   if (seen) {
+    // The verdict "not static" starts the mover's track at the sighting, anchored
+    // where the landmark stood.
+    queue_track(TrackOp::Kind::kBegin, id, *seen, last, true);
     record_sighting(id, *seen);
     added(filters_.add(last_frame_, id, *seen, &s->filter_faults), s);
   }
   emit_at(EventKind::kMoving, id, last, last_cov);
   ++s->num_moving;
+}
+
+void Robot::queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const Eigen::Vector2d& anchor,
+                        bool may_begin) {
+  if (!tracks_.enabled() || track_ops_.size() == track_ops_.capacity()) return;
+  TrackOp op;
+  op.kind = kind;
+  op.id = id;
+  op.z = z;
+  op.anchor = anchor;
+  op.may_begin = may_begin;
+  track_ops_.push_back(op);
+}
+
+// The frame's track operations, with the pose the frame ends with (the one POSE
+// reports) and its covariance; then the tracks unseen lately end.
+void Robot::apply_track_ops(FrameSummary* s) {
+  if (!tracks_.enabled()) return;
+  if (!track_ops_.empty()) {
+    TrackSighting t;
+    t.R = filters_.own().measurement_cov();
+    t.pose = filters_.estimate().pose();
+    t.pose_cov = filters_.estimate().pose_cov();
+    for (const TrackOp& op : track_ops_) {
+      t.z = op.z;
+      switch (op.kind) {
+        case TrackOp::Kind::kBegin:
+          if (tracks_.begin(op.id, t, op.anchor, clock_s_)) ++s->tracked;
+          break;
+        case TrackOp::Kind::kSee:
+          if (tracks_.see(op.id, t, clock_s_) || (op.may_begin && tracks_.begin(op.id, t, op.anchor, clock_s_)))
+            ++s->tracked;
+          break;
+        case TrackOp::Kind::kEnd:
+          tracks_.end(op.id, /*returned=*/true);
+          break;
+      }
+    }
+    track_ops_.clear();
+  }
+  tracks_.expire(clock_s_);
 }
 
 // The bounded filter (docs/adr/0036-bounded-filter.md): a robot in a world

@@ -126,6 +126,24 @@ void parse_team_map(config::Reader& t, RobotOptions* o) {
   t.read_optional("hold_candidates", &o->team_map_hold_candidates);
 }
 
+// The moving landmarks' tracks (MoverTracks, MoverTrack; docs/tracking.md).
+void parse_tracking(config::Reader& t, TrackingOptions* o) {
+  t.read_optional("enabled", &o->enabled);
+  t.read_optional("max_tracks", &o->max_tracks, 0, 4096);
+  t.read_optional("lost_after_s", &o->lost_after_s, 1e-3, 3600.0);
+  MoverTrackOptions& k = o->track;
+  t.read_optional("model_sojourn_s", &k.model_sojourn_s, 1e-3, 3600.0);
+  t.read_optional("static_walk_m_per_sqrt_s", &k.static_walk_m_per_sqrt_s, 1e-9, 10.0);
+  t.read_optional("bounded_sigma_m", &k.bounded_sigma_m, 1e-3, 100.0);
+  t.read_optional("bounded_omega_rad_s", &k.bounded_omega_rad_s, 1e-3, 100.0);
+  t.read_optional("bounded_damping", &k.bounded_damping, 1e-3, 10.0);
+  t.read_optional("cv_accel_sigma", &k.cv_accel_sigma, 1e-6, 100.0);
+  t.read_optional("initial_speed_sigma_mps", &k.initial_speed_sigma_mps, 1e-6, 100.0);
+  t.read_optional("validation_sightings", &k.validation_sightings, 1, MoverTrack::kMaxValidationSightings);
+  t.read_optional("validation_probability", &k.validation_probability, 0.5, 1.0 - 1e-12);
+  t.read_optional("restart_probability", &k.restart_probability, 0.5, 1.0 - 1e-12);
+}
+
 }  // namespace
 
 void parse(config::Reader& r, RobotOptions* o) {
@@ -139,6 +157,7 @@ void parse(config::Reader& r, RobotOptions* o) {
   r.section("odometry_calibration", [&](config::Reader& c) { parse_calibration(c, &o->ekf.calibration); },
             /*optional=*/true);
   r.section("team_map", [&](config::Reader& t) { parse_team_map(t, o); }, /*optional=*/true);
+  r.section("tracking", [&](config::Reader& t) { parse_tracking(t, &o->tracking); }, /*optional=*/true);
   parse(r, &o->limits);
   if (o->ekf.capacity > o->ekf.max_landmark_id)
     r.fail("filter.capacity", "larger than filter.max_landmark_id: slots that can never be used");

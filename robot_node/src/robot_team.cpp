@@ -124,6 +124,7 @@ void Robot::relocalise(const GaugeTest& own, const GaugeTest& aided) {
       EkfStatus::kOk)
     return;
   lmap_.apply_rigid_motion(T.rotation, T.translation);
+  tracks_.clear();  // estimated in the frame the motion corrects
   filters_.restart_history();
   monitor_.restart();
   trouble_frame_ = -1;

@@ -170,6 +170,10 @@ class InProcessTeam {
   std::vector<sensor_frame_t> sensors_;
   sensor_frame_t sensor_;
   MetricsAccumulator acc_;
+  TrackScorer tracks_;
+  std::vector<TrackSample> samples_;
+  std::vector<std::uint8_t> present_;
+  void score_tracks();
   RunResult out_;
 };
 
@@ -254,11 +258,34 @@ void InProcessTeam::run_frame(int k) {
   main_ports_.publish_map(k);
   bus_.dispatch_all();  // -> the recorder
   acc_.add(f_);
+  score_tracks();
+}
+
+// Each robot's tracks at this frame against the truth the frame came with.
+void InProcessTeam::score_tracks() {
+  present_.assign(f_.true_landmarks.size(), 0);
+  for (int i = 0; i < gt_in_.num_landmarks; ++i) {
+    const int id = gt_in_.landmarks[i].id;
+    if (id >= 0 && id < static_cast<int>(present_.size())) present_[static_cast<std::size_t>(id)] = 1;
+  }
+  samples_.clear();
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    const MoverTracks& tracks = robots_[r].robot().tracks();
+    for (const int id : tracks.ids()) {
+      const MoverTrack& t = tracks.track(id);
+      samples_.push_back({static_cast<int>(r), id, t.mean(), t.covariance(), t.stopped()});
+    }
+  }
+  tracks_.add(time_s_, f_.true_landmarks, present_, samples_);
 }
 
 RunResult InProcessTeam::finish() {
   RunResult out = std::move(out_);
   out.metrics = acc_.finish();
+  if (!robots_.empty() && robots_.front().robot().tracks().enabled()) {
+    out.metrics.tracks_scored = true;
+    out.metrics.tracks = tracks_.finish();
+  }
   out.frames = acc_.frames();
   out.robot_ids = acc_.robot_ids();
   for (RobotMetrics& rm : out.metrics.robots)

@@ -148,6 +148,17 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       std::int64_t rebuilds = 0;  // robot.ela.candidate_history_frames (on in config/paper.yaml)
       for (const auto& r : robots) rebuilds += r.robot().history().rebuilds();
       EXPECT_GT(rebuilds, 50);
+      // The movers' tracks (robot.tracking, on by default): started, fed and ended.
+      std::int64_t started = 0, updates = 0, ended = 0;
+      for (const auto& r : robots) {
+        const TrackCounters& c = r.robot().tracks().counters();
+        started += c.started;
+        updates += c.updates;
+        ended += c.returned + c.lost;
+      }
+      EXPECT_GT(started, 10);
+      EXPECT_GT(updates, 50);
+      EXPECT_GT(ended, 0);
     }
   }
 }

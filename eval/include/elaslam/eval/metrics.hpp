@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "elaslam/common/geometry.hpp"
+#include "elaslam/eval/track_score.hpp"
 
 namespace elaslam {
 
@@ -90,6 +91,10 @@ struct RunMetrics {
   double mean_frames_to_detect = 0.0;
   int flagged = 0, true_positives = 0, detectable = 0;
   std::int64_t frame_us_p50 = 0, frame_us_p99 = 0, frame_us_max = 0;
+  // The robots' tracks of moving landmarks against the truth (track_score.hpp):
+  // in-process runs with robot.tracking on (a recorded log carries no tracks).
+  bool tracks_scored = false;
+  TrackMetrics tracks;
 };
 
 /// Per-frame row of frames.csv.

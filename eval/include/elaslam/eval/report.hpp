@@ -33,6 +33,8 @@ struct RunInfo {
 constexpr int kMetricsSchemaVersion = 2;
 
 nlohmann::json metrics_json(const RunInfo& info, const RunResult& r);
+/// metrics.json's "tracks": the track scores, a figure null when nothing was scored for it.
+nlohmann::json tracks_json(const TrackMetrics& t);
 
 /// The YAML text as a JSON value (scalars typed as numbers / booleans where they
 /// parse); null for empty text.

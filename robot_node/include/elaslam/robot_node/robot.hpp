@@ -20,6 +20,7 @@
 #include "elaslam/robot_node/ela_gate.hpp"
 #include "elaslam/robot_node/filter_history.hpp"
 #include "elaslam/robot_node/lmap.hpp"
+#include "elaslam/robot_node/mover_tracks.hpp"
 #include "elaslam/robot_node/rigid_fit.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/robot_node/team_aid.hpp"
@@ -80,6 +81,7 @@ struct FrameSummary {
   bool inconsistent = false;  // the consistency monitor's verdict after this frame
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
   int drifted = 0;            // 1: the own filter had drifted from the aided one: no MOVING finding (own_filter_drifted)
+  int tracked = 0;            // sightings of moving landmarks that went to their tracks (robot.tracking)
 };
 
 /// One landmark of a team map (TEAM_MAP_<r>).
@@ -182,6 +184,11 @@ class Robot {
   /// the own one. Its pose is the robot's pose (POSE).
   const EkfSlam& estimate() const { return filters_.estimate(); }
   const TeamCounters& team_counters() const { return team_counters_; }
+  /// The moving landmarks' tracks (robot.tracking, docs/tracking.md): consider
+  /// estimates that never correct the robot.
+  const MoverTracks& tracks() const { return tracks_; }
+  /// [s] the robot's clock: the frames' stamps since its first frame (step_seconds).
+  double clock_s() const { return clock_s_; }
   const Relocalisation& last_relocalisation() const { return relocalisation_; }
   const TeamChannel& team_channel() const { return team_; }
   const LMap& lmap() const { return lmap_; }
@@ -215,6 +222,19 @@ class Robot {
   void check_missing(FrameSummary* s);
   bool expected_in_view(int id, const Pose2& pose) const;
   void mark_moving(int id, const RangeBearing* seen, FrameSummary* s);
+  /// The frame's operations on the tracks, in order, applied at the end of the
+  /// frame (apply_track_ops) with the robot's pose and covariance then: reading the
+  /// covariance mid-frame would settle the filter's pending covariance steps early
+  /// and change its rounding, and tracks must change nothing the robot estimates.
+  struct TrackOp {
+    enum class Kind : std::uint8_t { kBegin, kSee, kEnd } kind = Kind::kSee;
+    int id = -1;
+    RangeBearing z;
+    Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // kBegin; kSee: where a new track anchors
+    bool may_begin = false;  // kSee: the landmark was found or told moving before
+  };
+  void queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const Eigen::Vector2d& anchor, bool may_begin);
+  void apply_track_ops(FrameSummary* s);
   /// A free slot in the filter: true when there is one or one was made by evicting
   /// the held landmark farthest from the robot beyond sensor_range that was not
   /// seen this frame (a STATIC one is archived, a candidate dropped); false when
@@ -262,6 +282,9 @@ class Robot {
   bool own_filter_drifted() const;
   int trouble_frame_ = -1;  // last frame all of whose judged landmarks failed, or found inconsistent
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
+  MoverTracks tracks_;  // the moving landmarks' tracks (not in the state file: a restart starts none)
+  std::vector<TrackOp> track_ops_;  // this frame's (reserved: two per observation)
+  double clock_s_ = 0.0;  // [s] clock_s()
   ElaGate gate_;  // this frame's verdicts and gate records
   ConsistencyMonitor monitor_;  // NIS of the corrections over a window of frames
   bool initialised_ = false;

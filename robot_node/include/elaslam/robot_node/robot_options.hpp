@@ -8,6 +8,7 @@
 #include "elaslam/common/contract.hpp"
 #include "elaslam/common/limits.hpp"
 #include "elaslam/robot_node/ekf_slam.hpp"
+#include "elaslam/robot_node/mover_tracks.hpp"
 
 namespace elaslam {
 
@@ -19,6 +20,7 @@ bool parse_mode(const std::string& s, Mode* m);
 struct RobotOptions {
   Mode mode = Mode::kEla;
   EkfOptions ekf;  // robot.filter, and robot.odometry_calibration (ekf.calibration)
+  TrackingOptions tracking;  // robot.tracking: the moving landmarks' tracks (docs/tracking.md)
   /// Observations a SENSOR frame may carry (robot.filter.max_observations; a frame
   /// with more is refused). Sizes the frame buffers at start-up.
   int max_observations = contract::kMaxObsPerFrame;

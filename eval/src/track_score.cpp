@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "elaslam/eval/track_score.hpp"
+
+#include <cmath>
+
+#include <Eigen/LU>
+
+#include "elaslam/common/stats.hpp"
+
+namespace elaslam {
+
+void TrackScorer::add(double time_s, const std::vector<Eigen::Vector2d>& truth, const std::vector<std::uint8_t>& present,
+                      const std::vector<TrackSample>& tracks) {
+  const double dt = have_last_ ? time_s - last_time_s_ : 0.0;
+  const auto known = [](const std::vector<std::uint8_t>& v, int id) {
+    return id >= 0 && id < static_cast<int>(v.size()) && v[static_cast<std::size_t>(id)] != 0;
+  };
+  // The true velocity over the last frame, where both frames have the landmark.
+  const auto true_velocity = [&](int id, Eigen::Vector2d* v) {
+    if (!(dt > 0.0) || !known(present, id) || !known(last_present_, id) ||
+        id >= static_cast<int>(last_truth_.size()))
+      return false;
+    *v = (truth[static_cast<std::size_t>(id)] - last_truth_[static_cast<std::size_t>(id)]) / dt;
+    return true;
+  };
+  if (was_moving_.size() < truth.size()) was_moving_.resize(truth.size(), 0);
+  std::vector<std::uint8_t> moving_now(truth.size(), 0);
+  std::vector<std::uint8_t> has_velocity(truth.size(), 0);
+  std::vector<Eigen::Vector2d> velocity(truth.size(), Eigen::Vector2d::Zero());
+  for (int id = 0; id < static_cast<int>(truth.size()); ++id) {
+    const auto i = static_cast<std::size_t>(id);
+    if (!true_velocity(id, &velocity[i])) continue;
+    has_velocity[i] = 1;
+    moving_now[i] = velocity[i].norm() > TrackMetrics::kMovingSpeedMps ? 1 : 0;
+  }
+  static const double kNeesLow = chi2_quantile(0.025, 4), kNeesHigh = chi2_quantile(0.975, 4);
+  std::map<std::pair<int, int>, Open> still_open;
+  for (const TrackSample& s : tracks) {
+    if (!known(present, s.landmark_id) || s.landmark_id >= static_cast<int>(truth.size())) continue;
+    const auto i = static_cast<std::size_t>(s.landmark_id);
+    ++n_;
+    pos2_ += (s.x.head<2>() - truth[i]).squaredNorm();
+    if (!has_velocity[i]) continue;
+    const Eigen::Vector2d& v = velocity[i];
+    const Eigen::Vector2d v_est = s.x.tail<2>();
+    if (moving_now[i]) {
+      ++n_moving_;
+      const double ds = v_est.norm() - v.norm();
+      speed2_ += ds * ds;
+      const double angle = std::atan2(v.x() * v_est.y() - v.y() * v_est.x(), v.dot(v_est));
+      heading2_ += angle * angle;
+    } else {
+      ++at_rest_;
+    }
+    if (s.stopped) {
+      ++found_stopped_;
+      if (!moving_now[i]) ++found_and_at_rest_;
+    }
+    Eigen::Vector4d e;
+    e << s.x.head<2>() - truth[i], v_est - v;
+    const Eigen::FullPivLU<Eigen::Matrix4d> lu(s.P);
+    if (lu.isInvertible()) {
+      const double nees = e.dot(lu.solve(e));
+      nees_ += nees;
+      ++n_nees_;
+      if (nees >= kNeesLow && nees <= kNeesHigh) ++nees_in_;
+    }
+    // Stops: a landmark that moved at the last frame and rests now has stopped; its
+    // track's first "stopped" verdict from then on ends the wait. A wait ends
+    // unfound when the landmark moves on or its track ends.
+    const std::pair<int, int> key(s.robot, s.landmark_id);
+    auto open = open_stops_.find(key);
+    if (open == open_stops_.end() && was_moving_[i] && !moving_now[i]) {
+      ++stops_;
+      open = open_stops_.emplace(key, Open{time_s}).first;
+    }
+    if (open == open_stops_.end()) continue;
+    if (s.stopped) {
+      ++stops_found_;
+      latency_sum_ += time_s - open->second.since_s;
+    } else if (!moving_now[i]) {
+      still_open.emplace(key, open->second);
+    }
+  }
+  open_stops_ = std::move(still_open);
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    if (has_velocity[i]) was_moving_[i] = moving_now[i];
+  last_truth_ = truth;
+  last_present_ = present;
+  last_time_s_ = time_s;
+  have_last_ = true;
+}
+
+TrackMetrics TrackScorer::finish() const {
+  TrackMetrics m;
+  m.samples = n_;
+  m.moving_samples = n_moving_;
+  if (n_ > 0) m.position_rms_m = std::sqrt(pos2_ / static_cast<double>(n_));
+  if (n_moving_ > 0) {
+    m.speed_rms_mps = std::sqrt(speed2_ / static_cast<double>(n_moving_));
+    m.heading_rms_deg = std::sqrt(heading2_ / static_cast<double>(n_moving_)) * 180.0 / 3.14159265358979323846;
+  }
+  m.stopped_verdicts = found_stopped_;
+  m.at_rest_samples = at_rest_;
+  m.nees_samples = n_nees_;
+  if (found_stopped_ > 0) m.stop_precision = static_cast<double>(found_and_at_rest_) / static_cast<double>(found_stopped_);
+  if (at_rest_ > 0) m.stop_recall = static_cast<double>(found_and_at_rest_) / static_cast<double>(at_rest_);
+  m.stops = stops_;
+  m.stops_found = stops_found_;
+  if (stops_found_ > 0) m.stop_latency_s = latency_sum_ / static_cast<double>(stops_found_);
+  if (n_nees_ > 0) {
+    m.nees_mean = nees_ / static_cast<double>(n_nees_);
+    m.nees_in_band = static_cast<double>(nees_in_) / static_cast<double>(n_nees_);
+  }
+  return m;
+}
+
+}  // namespace elaslam

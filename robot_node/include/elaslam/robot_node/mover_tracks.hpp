@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: Apache-2.0
+// A robot's tracks of its moving landmarks (docs/tracking.md): a pool of MoverTrack
+// slots, sized at construction, and which landmark holds which. Robot starts a track
+// when it finds a landmark moving (or sees one it was told moves), feeds it the
+// sightings that the map keeps out, and ends it when the landmark is STATIC again
+// or has gone unseen for `lost_after_s`. A full pool is counted (`full`), as every
+// capacity of the robot is. No allocation after construction.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "elaslam/robot_node/mover_track.hpp"
+
+namespace elaslam {
+
+/// robot.tracking (the optional config section).
+struct TrackingOptions {
+  bool enabled = true;
+  int max_tracks = 64;        // tracks held at once (the pool's slots)
+  double lost_after_s = 3.0;  // [s] a track unseen this long ends
+  MoverTrackOptions track;
+};
+
+struct TrackCounters {
+  std::int64_t started = 0;   // tracks started
+  std::int64_t returned = 0;  // ... ended because the landmark became STATIC again
+  std::int64_t lost = 0;      // ... ended unseen for lost_after_s
+  std::int64_t ended = 0;     // ... ended otherwise (a reset of the robot's map, a relocalisation)
+  std::int64_t updates = 0;   // sightings fed to tracks
+  std::int64_t restarts = 0;  // sightings no model explained (MoverTrack::update)
+  std::int64_t full = 0;      // tracks not started: every slot taken
+};
+
+class MoverTracks {
+ public:
+  /// Throws std::invalid_argument naming a bad option (MoverTrack's, max_tracks).
+  MoverTracks(const TrackingOptions& options, int max_landmark_id);
+
+  bool enabled() const { return options_.enabled; }
+  const TrackingOptions& options() const { return options_; }
+
+  /// Starts (or starts again) landmark id's track at the sighting, anchored at
+  /// `anchor` (its last static position), at time t [s]. False when tracking is off,
+  /// the id is out of range or no slot is free (counted in `full`).
+  bool begin(int id, const TrackSighting& s, const Eigen::Vector2d& anchor, double t);
+  /// Predicts id's track to t and corrects it with the sighting; false when id has
+  /// no track.
+  bool see(int id, const TrackSighting& s, double t);
+  /// Ends id's track (`returned`: the landmark is STATIC again).
+  void end(int id, bool returned);
+  /// Ends every track unseen since before t - lost_after_s.
+  void expire(double t);
+  /// Ends every track (counted in `ended`).
+  void clear();
+
+  bool has(int id) const { return slot_of(id) >= 0; }
+  /// id's track; has(id) must hold.
+  const MoverTrack& track(int id) const { return pool_[static_cast<std::size_t>(slot_of(id))]; }
+  /// The landmarks with a track, in the order their tracks started.
+  const std::vector<int>& ids() const { return ids_; }
+  const TrackCounters& counters() const { return counters_; }
+
+ private:
+  int slot_of(int id) const {
+    return id >= 0 && id < static_cast<int>(slot_.size()) ? slot_[static_cast<std::size_t>(id)] : -1;
+  }
+  void release(int id);
+
+  TrackingOptions options_;
+  std::vector<MoverTrack> pool_;     // max_tracks slots
+  std::vector<double> last_seen_;    // [s] per slot
+  std::vector<int> free_;            // free slots (a stack)
+  std::vector<int> slot_;            // per landmark id: its slot, -1 without a track
+  std::vector<int> ids_;             // landmarks with a track (reserved: max_tracks)
+  TrackCounters counters_;
+};
+
+}  // namespace elaslam

@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: Apache-2.0
+// The moving landmarks' tracks (robot.tracking): the pool of MoverTracks on its own
+// (slots, order, expiry, a full pool counted), and the Robot that starts a track
+// at a MOVING verdict, feeds it the sightings its map keeps out, ends it at the
+// landmark's RETURN, and is not moved by it (tracks are consider estimates).
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "elaslam/robot_node/mover_tracks.hpp"
+#include "elaslam/robot_node/robot.hpp"
+#include "scene.hpp"
+
+namespace elaslam {
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+
+TrackSighting sighting_of(const Vec2& p) {
+  TrackSighting s;
+  s.z = observe(Pose2{}, p);
+  s.R = Eigen::Vector2d(0.0025, 1e-4).asDiagonal();
+  s.pose_cov = Eigen::Matrix3d::Identity() * 1e-6;
+  return s;
+}
+
+TEST(MoverTracks, SlotsAreTakenAndGivenBackInOrder) {
+  TrackingOptions o;
+  o.max_tracks = 2;
+  o.lost_after_s = 1.0;
+  MoverTracks tracks(o, 16);
+  EXPECT_TRUE(tracks.begin(5, sighting_of(Vec2(2, 0)), Vec2(2, 0), 0.0));
+  EXPECT_TRUE(tracks.begin(3, sighting_of(Vec2(0, 2)), Vec2(0, 2), 0.0));
+  EXPECT_FALSE(tracks.begin(7, sighting_of(Vec2(1, 1)), Vec2(1, 1), 0.0));  // full
+  EXPECT_EQ(tracks.counters().full, 1);
+  EXPECT_EQ(tracks.ids(), (std::vector<int>{5, 3}));
+  EXPECT_FALSE(tracks.begin(16, sighting_of(Vec2(1, 1)), Vec2(1, 1), 0.0));  // id out of range
+  EXPECT_FALSE(tracks.see(7, sighting_of(Vec2(1, 1)), 0.1));                  // no track
+  // Seen at 0.5 s; 3 is not: at 1.2 s only 3 is lost (unseen for more than 1 s).
+  EXPECT_TRUE(tracks.see(5, sighting_of(Vec2(2, 0)), 0.5));
+  tracks.expire(1.2);
+  EXPECT_EQ(tracks.ids(), (std::vector<int>{5}));
+  EXPECT_EQ(tracks.counters().lost, 1);
+  EXPECT_FALSE(tracks.has(3));
+  EXPECT_NEAR(tracks.track(5).time(), 0.5, 1e-12);
+  // The freed slot takes 7; ending 5 as returned frees the other.
+  EXPECT_TRUE(tracks.begin(7, sighting_of(Vec2(1, 1)), Vec2(1, 1), 1.2));
+  tracks.end(5, /*returned=*/true);
+  EXPECT_EQ(tracks.counters().returned, 1);
+  EXPECT_EQ(tracks.ids(), (std::vector<int>{7}));
+  tracks.clear();
+  EXPECT_TRUE(tracks.ids().empty());
+  EXPECT_EQ(tracks.counters().ended, 1);
+  EXPECT_EQ(tracks.counters().started, 3);
+  EXPECT_EQ(tracks.counters().updates, 1);
+}
+
+TEST(MoverTracks, DisabledHoldsNoSlotAndBadOptionsAreRefused) {
+  TrackingOptions o;
+  o.enabled = false;
+  MoverTracks off(o, 16);
+  EXPECT_FALSE(off.begin(1, sighting_of(Vec2(2, 0)), Vec2(2, 0), 0.0));
+  EXPECT_EQ(off.counters().full, 0);
+  o = {};
+  o.max_tracks = -1;
+  EXPECT_THROW(MoverTracks(o, 16), std::invalid_argument);
+  o = {};
+  o.lost_after_s = 0.0;
+  EXPECT_THROW(MoverTracks(o, 16), std::invalid_argument);
+  o = {};
+  o.track.cv_accel_sigma = -1.0;
+  EXPECT_THROW(MoverTracks(o, 16), std::invalid_argument);
+}
+
+/// A robot standing among six landmarks 3 m away, at 10 Hz with stamps; landmark 2
+/// is still for 2 s, moves at 0.8 m/s for 3 s, then stands still again.
+class RobotTracks : public ::testing::Test {
+ protected:
+  static constexpr int kMover = 2;
+  static constexpr double kSpeed = 0.8;
+  static constexpr int kStart = 20, kStop = 50, kFrames = 120;
+
+  static Vec2 mover_at(int frame, const Vec2& start) {
+    const int moving = std::clamp(frame, kStart, kStop) - kStart;
+    return start + kSpeed * 0.1 * moving * Vec2(0.0, 1.0);
+  }
+  /// Runs the scene; `each(frame, robot, truth of the mover)` after every frame.
+  template <class Each>
+  static void run(Robot* r, std::uint64_t seed, const Each& each) {
+    std::vector<Vec2> lms = test::ring(6, 3.0);
+    const Vec2 start = lms[kMover];
+    std::mt19937_64 rng(seed);
+    for (int f = 0; f < kFrames; ++f) {
+      lms[kMover] = mover_at(f, start);
+      FrameInput in = test::frame_from(f, Pose2{}, Pose2{}, lms, test::all_ids(6), &rng);
+      in.utime = 1'700'000'000'000'000 + std::int64_t{100000} * f;
+      r->process(in);
+      each(f, *r, lms[kMover]);
+    }
+  }
+};
+
+TEST_F(RobotTracks, AMoverIsTrackedFromItsMovingVerdictUntilItReturns) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  int moving_frame = -1, returned_frame = -1, tracked_frames = 0;
+  double pos2 = 0.0, vel2 = 0.0;
+  int scored = 0;
+  run(&r, 7, [&](int f, const Robot& robot, const Vec2& truth) {
+    for (const MapEvent& e : robot.events()) {
+      if (e.landmark_id != kMover) continue;
+      if (e.kind == EventKind::kMoving && moving_frame < 0) moving_frame = f;
+      if (e.kind == EventKind::kReturn) returned_frame = f;
+    }
+    if (!robot.tracks().has(kMover)) return;
+    ++tracked_frames;
+    const MoverTrack& t = robot.tracks().track(kMover);
+    // Scored from 1 s after the verdict while the mover moves.
+    if (moving_frame >= 0 && f >= moving_frame + 10 && f < kStop) {
+      pos2 += (t.mean().head<2>() - truth).squaredNorm();
+      vel2 += (t.mean().tail<2>() - Vec2(0.0, kSpeed)).squaredNorm();
+      ++scored;
+    }
+  });
+  ASSERT_GE(moving_frame, kStart);
+  ASSERT_LT(moving_frame, kStart + 10);  // found within 1 s
+  ASSERT_GT(scored, 10);
+  EXPECT_LT(std::sqrt(pos2 / scored), 0.05);
+  EXPECT_LT(std::sqrt(vel2 / scored), 0.1);
+  // It stopped at frame 50: it returns to the map, and the track ends there.
+  ASSERT_GT(returned_frame, kStop);
+  EXPECT_FALSE(r.tracks().has(kMover));
+  EXPECT_EQ(r.tracks().counters().returned, 1);
+  EXPECT_EQ(tracked_frames, returned_frame - moving_frame);
+  EXPECT_GT(r.tracks().counters().updates, 20);
+  EXPECT_EQ(r.tracks().counters().full, 0);
+}
+
+TEST_F(RobotTracks, TracksNeverMoveTheRobotNorItsMap) {
+  RobotOptions on = test::robot_options(Mode::kEla);
+  RobotOptions off = on;
+  off.tracking.enabled = false;
+  Robot a(on, 1), b(off, 1);
+  run(&a, 9, [](int, const Robot&, const Vec2&) {});
+  run(&b, 9, [](int, const Robot&, const Vec2&) {});
+  EXPECT_GT(a.tracks().counters().started, 0);
+  EXPECT_EQ(b.tracks().counters().started, 0);
+  ASSERT_EQ(a.filter().mean().size(), b.filter().mean().size());
+  EXPECT_EQ(a.filter().mean(), b.filter().mean());
+  EXPECT_EQ(a.filter().covariance(), b.filter().covariance());
+}
+
+TEST_F(RobotTracks, TheClockFollowsTheStampsAndAResetEndsEveryTrack) {
+  Robot r(test::robot_options(Mode::kEla), 1);
+  bool had_track = false;
+  run(&r, 11, [&](int f, const Robot& robot, const Vec2&) {
+    if (f == kStop - 1) had_track = robot.tracks().has(kMover);
+  });
+  EXPECT_TRUE(had_track);
+  EXPECT_NEAR(r.clock_s(), 0.1 * (kFrames - 1), 1e-9);
+  r.reset();
+  EXPECT_TRUE(r.tracks().ids().empty());
+  EXPECT_DOUBLE_EQ(r.clock_s(), 0.0);
+}
+
+}  // namespace
+}  // namespace elaslam
