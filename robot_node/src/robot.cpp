@@ -294,7 +294,9 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     record_sighting(id, o.z);
     if (e.status == LandmarkStatus::kCandidate && filters_.own().has_landmark(id)) {
       if (gate_.judge_candidate(id, filters_.own().check(id, o.z), &lmap_)) {
-        if (lmap_.candidate_consistent(id)) {
+        const bool moving_track = options_.tracking.return_when_stopped && tracks_.has(id) &&
+                                  !tracks_.track(id).stopped();
+        if (lmap_.candidate_consistent(id) && !moving_track) {
           confirm(id, o.z, s);
         } else if (options_.candidate_updates) {
           filters_.update_landmark_only(last_frame_, id, o.z, &s->filter_faults);

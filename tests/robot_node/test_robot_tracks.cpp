@@ -3,6 +3,7 @@
 // (slots, order, expiry, a full pool counted), and the Robot that starts a track
 // at a MOVING verdict, feeds it the sightings its map keeps out, ends it at the
 // landmark's RETURN, and is not moved by it (tracks are consider estimates).
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -136,6 +137,39 @@ TEST_F(RobotTracks, AMoverIsTrackedFromItsMovingVerdictUntilItReturns) {
   EXPECT_EQ(tracked_frames, returned_frame - moving_frame);
   EXPECT_GT(r.tracks().counters().updates, 20);
   EXPECT_EQ(r.tracks().counters().full, 0);
+}
+
+// A mover at 0.3 m/s agrees with its candidate's anchor for return_frames sightings
+// and comes back to the map while it still moves; with return_when_stopped its
+// RETURN waits until its track finds it stopped (it stops at frame 50).
+TEST(RobotTracksReturn, ASlowMoverReturnsOnlyOnceItsTrackFindsItStopped) {
+  const auto returns_while_moving = [](bool when_stopped, int* first_return) {
+    RobotOptions o = test::robot_options(Mode::kEla);
+    o.tracking.return_when_stopped = when_stopped;
+    Robot r(o, 1);
+    std::vector<Vec2> lms = test::ring(6, 3.0);
+    const Vec2 start = lms[2];
+    std::mt19937_64 rng(7);
+    int during = 0;
+    *first_return = -1;
+    for (int f = 0; f < 120; ++f) {
+      lms[2] = start + 0.03 * (std::clamp(f, 20, 50) - 20) * Vec2(0.0, 1.0);
+      FrameInput in = test::frame_from(f, Pose2{}, Pose2{}, lms, test::all_ids(6), &rng);
+      in.utime = 1'700'000'000'000'000 + std::int64_t{100000} * f;
+      r.process(in);
+      for (const MapEvent& e : r.events()) {
+        if (e.landmark_id != 2 || e.kind != EventKind::kReturn) continue;
+        if (f < 50) ++during;
+        if (*first_return < 0 && f >= 50) *first_return = f;
+      }
+    }
+    return during;
+  };
+  int after_off = -1, after_on = -1;
+  EXPECT_GT(returns_while_moving(false, &after_off), 0);
+  EXPECT_EQ(returns_while_moving(true, &after_on), 0);
+  EXPECT_GT(after_on, 50);  // it does come back once it rests
+  EXPECT_LT(after_on, 80);
 }
 
 TEST_F(RobotTracks, TracksNeverMoveTheRobotNorItsMap) {

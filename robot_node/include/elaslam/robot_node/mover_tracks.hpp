@@ -21,6 +21,9 @@ struct TrackingOptions {
   bool enabled = true;
   int max_tracks = 64;        // tracks held at once (the pool's slots)
   double lost_after_s = 3.0;  // [s] a track unseen this long ends
+  /// A candidate with a track returns to the map (RETURN) only once its track finds
+  /// it stopped, not as soon as return_frames sightings agree (a slow mover does).
+  bool return_when_stopped = false;
   MoverTrackOptions track;
 };
 
