@@ -72,11 +72,19 @@ report() {
     printf '%-18s %14s %8s  %s\n' "$t" "$(total "$t")" "$n" "$r"
   done
 }
-commit=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
-# The ledger itself is not the code under test: appending to it does not make the tree dirty.
-git -C "$ROOT" diff --quiet HEAD -- . ':(exclude)fuzz/ledger' 2>/dev/null || commit="$commit+dirty"
+# The commit a chunk's build is made from: each chunk rebuilds the target from the
+# tree as it is then, so it is read again before every chunk. The ledger itself is
+# not the code under test: appending to it does not make the tree dirty.
+code_commit() {
+  local c
+  c=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+  git -C "$ROOT" diff --quiet HEAD -- . ':(exclude)fuzz/ledger' 2>/dev/null || c="$c+dirty"
+  echo "$c"
+}
+commit=$(code_commit)
 if [ "$STATUS" -eq 1 ]; then report; exit 0; fi
 while :; do
+  commit=$(code_commit)
   next=""; least=""
   for t in $TARGETS; do
     failed_before "$t" && { echo "fuzz_campaign.sh: $t failed in an earlier chunk; fix it first" >&2; report; exit 1; }
