@@ -50,6 +50,24 @@ std::string num(T v) {
   return os.str();
 }
 
+bool is_one_of(const std::string& v, std::initializer_list<const char*> allowed) {
+  return std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return v == a; });
+}
+
+/// The problem with value `v` when it is not one of `allowed` ("" when it is).
+std::string not_one_of(const std::string& v, std::initializer_list<const char*> allowed) {
+  if (is_one_of(v, allowed)) return "";
+  std::string list;
+  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+  return "invalid value '" + v + "', expected one of: " + list;
+}
+
+/// The problem with a list of n items when n is outside [lo, hi] ("" when inside).
+std::string length_problem(std::size_t n, std::size_t lo, std::size_t hi) {
+  if (n >= lo && n <= hi) return "";
+  return "wrong length: got " + num(n) + " items, expected " + num(lo) + " to " + num(hi);
+}
+
 }  // namespace
 
 ConfigError::ConfigError(const std::string& source, std::vector<std::string> problems)
@@ -172,11 +190,8 @@ void Reader::read_optional(const std::string& key, std::string* out) { scalar(ke
 void Reader::read_enum(const std::string& key, std::string* out, std::initializer_list<const char*> allowed,
                        bool optional) {
   if (!scalar(key, out, optional, "a string")) return;
-  for (const char* a : allowed)
-    if (*out == a) return;
-  std::string list;
-  for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-  fail(key, "invalid value '" + *out + "', expected one of: " + list);
+  const std::string problem = not_one_of(*out, allowed);
+  if (!problem.empty()) fail(key, problem);
 }
 
 void Reader::read_vector(const std::string& key, std::vector<double>* out, std::size_t size, double lo,
@@ -227,13 +242,10 @@ void Reader::read_enum_list(const std::string& key, std::vector<std::string>* ou
     fail(key, "wrong type: expected a list of strings, got " + scalar_text(n));
     return;
   }
-  if (n.size() < min_items || n.size() > max_items) {
-    fail(key, "wrong length: got " + num(n.size()) + " items, expected " + num(min_items) + " to " +
-                  num(max_items));
+  if (const std::string problem = length_problem(n.size(), min_items, max_items); !problem.empty()) {
+    fail(key, problem);
     return;
   }
-  std::string choices;
-  for (const char* a : allowed) choices += (choices.empty() ? "" : ", ") + std::string(a);
   std::vector<std::string> v;
   bool ok = true;
   for (std::size_t i = 0; i < n.size(); ++i) {
@@ -244,8 +256,8 @@ void Reader::read_enum_list(const std::string& key, std::vector<std::string>* ou
       continue;
     }
     const std::string item = n[i].Scalar();
-    if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return item == a; })) {
-      fail(item_key, "invalid value '" + item + "', expected one of: " + choices);
+    if (const std::string problem = not_one_of(item, allowed); !problem.empty()) {
+      fail(item_key, problem);
       ok = false;
       continue;
     }
@@ -283,9 +295,8 @@ void Reader::list(const std::string& key, const std::function<void(Reader&, std:
     fail(key, "wrong type: expected a list, got " + scalar_text(n));
     return;
   }
-  if (n.size() < min_items || n.size() > max_items) {
-    fail(key, "wrong length: got " + num(n.size()) + " items, expected " + num(min_items) + " to " +
-                  num(max_items));
+  if (const std::string problem = length_problem(n.size(), min_items, max_items); !problem.empty()) {
+    fail(key, problem);
     return;
   }
   YAML::Node rec(YAML::NodeType::Sequence);

@@ -23,6 +23,15 @@ void require(bool ok, const char* key, const char* what) {
 }
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
+/// A sighting's world position and its covariance, the pose's included.
+Vec2 position_of(const TrackSighting& s, Mat2* P) {
+  Eigen::Matrix<double, 2, 3> G_x;
+  Mat2 G_z;
+  const Vec2 p = inverse_observe(s.pose, s.z, &G_x, &G_z);
+  *P = G_x * s.pose_cov * G_x.transpose() + G_z * s.R * G_z.transpose();
+  return p;
+}
+
 /// Per-axis 2x2 blocks [[a, b], [c, d]] of (p, v) written onto both axes of the
 /// 4x4 (p_x, p_y, v_x, v_y) matrix.
 TrackMatrix per_axis(double a, double b, double c, double d) {
@@ -97,10 +106,8 @@ void MoverTrack::start(const Vec2& p, const Mat2& P, const Vec2& anchor, double 
 }
 
 void MoverTrack::start(const TrackSighting& s, const Vec2& anchor, double t) {
-  Eigen::Matrix<double, 2, 3> G_x;
-  Mat2 G_z;
-  const Vec2 p = inverse_observe(s.pose, s.z, &G_x, &G_z);
-  const Mat2 P = G_x * s.pose_cov * G_x.transpose() + G_z * s.R * G_z.transpose();
+  Mat2 P;
+  const Vec2 p = position_of(s, &P);
   start(p, P, anchor, t);
 }
 
@@ -243,9 +250,10 @@ TrackUpdate MoverTrack::update(const TrackSighting& s) {
   out.d2 = nu_bar.dot(S_bar.inverse() * nu_bar);
   if (!(min_d2 <= restart_d2_)) {
     // No model explains the sighting (a jump, a wrong association): start again there.
-    const std::int64_t restarts = restarts_ + 1;
-    start(s, inverse_observe(s.pose, s.z), t_);
-    restarts_ = restarts;
+    Mat2 P;
+    const Vec2 p = position_of(s, &P);
+    start(p, P, p, t_);
+    ++restarts_;
     sightings_ = 1;
     out.restarted = true;
     return out;

@@ -107,7 +107,7 @@ FrameSummary Robot::process(const FrameInput& in) {
   s.events_dropped = events_dropped_;
   events_dropped_ = 0;
   check_consistency(&s);
-  apply_track_ops(&s);
+  apply_track_ops();
   // Trouble the robot sees itself: every mapped landmark it judged, at least
   // kTeamMinTested, failed (a robot lost in heading finds them all outside their
   // ELA; movers rarely make a whole view), or the consistency monitor's verdict.
@@ -421,7 +421,7 @@ void Robot::queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const
 
 // The frame's track operations, with the pose the frame ends with (the one POSE
 // reports) and its covariance; then the tracks unseen lately end.
-void Robot::apply_track_ops(FrameSummary* s) {
+void Robot::apply_track_ops() {
   if (!tracks_.enabled()) return;
   if (!track_ops_.empty()) {
     TrackSighting t;
@@ -432,11 +432,10 @@ void Robot::apply_track_ops(FrameSummary* s) {
       t.z = op.z;
       switch (op.kind) {
         case TrackOp::Kind::kBegin:
-          if (tracks_.begin(op.id, t, op.anchor, clock_s_)) ++s->tracked;
+          tracks_.begin(op.id, t, op.anchor, clock_s_);
           break;
         case TrackOp::Kind::kSee:
-          if (tracks_.see(op.id, t, clock_s_) || (op.may_begin && tracks_.begin(op.id, t, op.anchor, clock_s_)))
-            ++s->tracked;
+          if (!tracks_.see(op.id, t, clock_s_) && op.may_begin) tracks_.begin(op.id, t, op.anchor, clock_s_);
           break;
         case TrackOp::Kind::kEnd:
           tracks_.end(op.id, /*returned=*/true);

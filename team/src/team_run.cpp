@@ -43,6 +43,15 @@ GlobalMapOptions for_mode(GlobalMapOptions o, Mode mode) {
   return o;
 }
 
+/// present[id] = 1 for the landmarks the ground truth `gt` lists, over ids 0..n-1.
+void mark_present(const ground_truth_t& gt, std::size_t n, std::vector<std::uint8_t>* present) {
+  present->assign(n, 0);
+  for (int i = 0; i < gt.num_landmarks; ++i) {
+    const int id = gt.landmarks[i].id;
+    if (id >= 0 && id < static_cast<int>(n)) (*present)[static_cast<std::size_t>(id)] = 1;
+  }
+}
+
 }  // namespace
 
 TeamConfig apply_overrides(const TeamConfig& base, const RunOverrides& o) {
@@ -263,11 +272,7 @@ void InProcessTeam::run_frame(int k) {
 
 // Each robot's tracks at this frame against the truth the frame came with.
 void InProcessTeam::score_tracks() {
-  present_.assign(f_.true_landmarks.size(), 0);
-  for (int i = 0; i < gt_in_.num_landmarks; ++i) {
-    const int id = gt_in_.landmarks[i].id;
-    if (id >= 0 && id < static_cast<int>(present_.size())) present_[static_cast<std::size_t>(id)] = 1;
-  }
+  mark_present(gt_in_, f_.true_landmarks.size(), &present_);
   samples_.clear();
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     const MoverTracks& tracks = robots_[r].robot().tracks();
@@ -316,11 +321,7 @@ RunResult InProcessTeam::finish() {
   }
   out.final_truth = f_.true_landmarks;
   out.truly_moving = f_.truly_moving;
-  out.truth_present.assign(f_.true_landmarks.size(), 0);
-  for (int i = 0; i < gt_in_.num_landmarks; ++i) {
-    const int id = gt_in_.landmarks[i].id;
-    if (id >= 0 && id < static_cast<int>(out.truth_present.size())) out.truth_present[static_cast<std::size_t>(id)] = 1;
-  }
+  mark_present(gt_in_, f_.true_landmarks.size(), &out.truth_present);
   out.bus_messages = bus_.published();
   out.occupied = main_.counters().occupied;
   for (const int id : out.robot_ids) out.team_map_left_out.push_back(main_.map().team_check(id).rounds_left_out);

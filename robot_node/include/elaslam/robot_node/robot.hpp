@@ -81,7 +81,6 @@ struct FrameSummary {
   bool inconsistent = false;  // the consistency monitor's verdict after this frame
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
   int drifted = 0;            // 1: the own filter had drifted from the aided one: no MOVING finding (own_filter_drifted)
-  int tracked = 0;            // sightings of moving landmarks that went to their tracks (robot.tracking)
 };
 
 /// One landmark of a team map (TEAM_MAP_<r>).
@@ -234,7 +233,7 @@ class Robot {
     bool may_begin = false;  // kSee: the landmark was found or told moving before
   };
   void queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const Eigen::Vector2d& anchor, bool may_begin);
-  void apply_track_ops(FrameSummary* s);
+  void apply_track_ops();
   /// A free slot in the filter: true when there is one or one was made by evicting
   /// the held landmark farthest from the robot beyond sensor_range that was not
   /// seen this frame (a STATIC one is archived, a candidate dropped); false when
