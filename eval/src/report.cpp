@@ -85,7 +85,9 @@ nlohmann::json tracks_json(const TrackMetrics& t) {
           {"stop_latency_s", over(t.stops_found, t.stop_latency_s)},
           {"nees_samples", t.nees_samples},
           {"nees_mean", over(t.nees_samples, t.nees_mean)},
-          {"nees_in_band", over(t.nees_samples, t.nees_in_band)}};
+          {"nees_in_band", over(t.nees_samples, t.nees_in_band)},
+          {"segments", t.segments},
+          {"mean_segment_s", over(t.segments, t.mean_segment_s)}};
 }
 
 nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
@@ -135,7 +137,14 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
                     {"true_positives", m.true_positives},
                     {"detectable", m.detectable}};
   j["timing"] = {{"frame_us_p50", m.frame_us_p50}, {"frame_us_p99", m.frame_us_p99}, {"frame_us_max", m.frame_us_max}};
-  if (m.tracks_scored) j["tracks"] = tracks_json(m.tracks);
+  if (m.tracks_scored) {
+    j["tracks"] = tracks_json(m.tracks);
+    j["tracks"]["established"] = tracks_json(m.tracks_established);
+    if (m.tracks_true_pose_scored) {
+      j["tracks"]["true_pose"] = tracks_json(m.tracks_true_pose);
+      j["tracks"]["true_pose"]["established"] = tracks_json(m.tracks_true_pose_established);
+    }
+  }
   j["final_map"] = {{"static", r.final_map.size()}, {"moving", r.final_moving.size()}};
   j["source"] = info.source;
   j["config"] = yaml_text_to_json(info.effective_config);

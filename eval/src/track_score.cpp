@@ -35,9 +35,21 @@ void TrackScorer::add(double time_s, const std::vector<Eigen::Vector2d>& truth, 
   }
   static const double kNeesLow = chi2_quantile(0.025, 4), kNeesHigh = chi2_quantile(0.975, 4);
   std::map<std::pair<int, int>, Open> still_open;
+  std::map<std::pair<int, int>, std::int64_t> sightings_now;
   for (const TrackSample& s : tracks) {
-    if (!known(present, s.landmark_id) || s.landmark_id >= static_cast<int>(truth.size())) continue;
+    if (s.sightings < min_sightings_ || !known(present, s.landmark_id) ||
+        s.landmark_id >= static_cast<int>(truth.size()))
+      continue;
     const auto i = static_cast<std::size_t>(s.landmark_id);
+    const std::pair<int, int> key(s.robot, s.landmark_id);
+    // Continuity: the same track as at the last frame, or a new segment.
+    const auto last = last_sightings_.find(key);
+    if (last != last_sightings_.end() && s.sightings >= last->second) {
+      segment_time_s_ += dt;
+    } else {
+      ++segments_;
+    }
+    sightings_now[key] = s.sightings;
     ++n_;
     pos2_ += (s.x.head<2>() - truth[i]).squaredNorm();
     if (!has_velocity[i]) continue;
@@ -68,7 +80,6 @@ void TrackScorer::add(double time_s, const std::vector<Eigen::Vector2d>& truth, 
     // Stops: a landmark that moved at the last frame and rests now has stopped; its
     // track's first "stopped" verdict from then on ends the wait. A wait ends
     // unfound when the landmark moves on or its track ends.
-    const std::pair<int, int> key(s.robot, s.landmark_id);
     auto open = open_stops_.find(key);
     if (open == open_stops_.end() && was_moving_[i] && !moving_now[i]) {
       ++stops_;
@@ -83,6 +94,7 @@ void TrackScorer::add(double time_s, const std::vector<Eigen::Vector2d>& truth, 
     }
   }
   open_stops_ = std::move(still_open);
+  last_sightings_ = std::move(sightings_now);
   for (std::size_t i = 0; i < truth.size(); ++i)
     if (has_velocity[i]) was_moving_[i] = moving_now[i];
   last_truth_ = truth;
@@ -108,6 +120,8 @@ TrackMetrics TrackScorer::finish() const {
   m.stops = stops_;
   m.stops_found = stops_found_;
   if (stops_found_ > 0) m.stop_latency_s = latency_sum_ / static_cast<double>(stops_found_);
+  m.segments = segments_;
+  if (segments_ > 0) m.mean_segment_s = segment_time_s_ / static_cast<double>(segments_);
   if (n_nees_ > 0) {
     m.nees_mean = nees_ / static_cast<double>(n_nees_);
     m.nees_in_band = static_cast<double>(nees_in_) / static_cast<double>(n_nees_);

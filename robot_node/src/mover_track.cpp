@@ -76,6 +76,10 @@ MoverTrack::MoverTrack(const MoverTrackOptions& o) : options_(o) {
           "must be in (0, 1)");
   require(o.validation_sightings >= 1 && o.validation_sightings <= kMaxValidationSightings, "validation_sightings",
           "must be in 1..64");
+  require(std::isfinite(o.noise_memory_sightings) && o.noise_memory_sightings >= 1.0, "noise_memory_sightings",
+          "must be at least 1 and finite");
+  require(std::isfinite(o.max_noise_scale) && o.max_noise_scale >= 1.0, "max_noise_scale",
+          "must be at least 1 and finite");
   restart_d2_ = chi2_quantile(o.restart_probability, 2);
   valid_d2_ = chi2_quantile(o.validation_probability, 2 * o.validation_sightings);
   // Stationary variance of a damped spring's offset under white acceleration of
@@ -103,12 +107,16 @@ void MoverTrack::start(const Vec2& p, const Mat2& P, const Vec2& anchor, double 
   active_ = true;
   window_count_ = window_next_ = 0;
   sightings_ = 0;
+  pending_ = false;
+  mean_nis_ = 2.0;
+  noise_scale_ = 1.0;
 }
 
 void MoverTrack::start(const TrackSighting& s, const Vec2& anchor, double t) {
   Mat2 P;
   const Vec2 p = position_of(s, &P);
   start(p, P, anchor, t);
+  sightings_ = 1;
 }
 
 void MoverTrack::transition(MotionModel m, double dt, TrackMatrix* F, TrackVector* c, TrackMatrix* Q) const {
@@ -214,30 +222,26 @@ TrackUpdate MoverTrack::update(const TrackSighting& s) {
   TrackUpdate out;
   if (!active_) return out;
   std::array<Vec2, kMotionModels> nu{};
-  std::array<Mat2, kMotionModels> S{};
+  std::array<Mat2, kMotionModels> S{}, S_inv{}, R_total{}, S_raw{};
+  std::array<Mat2, kMotionModels> H_l{};
+  std::array<Mat42, kMotionModels> PHt{};
   std::array<double, kMotionModels> loglik{};
   double min_d2 = std::numeric_limits<double>::infinity();
   for (int j = 0; j < kMotionModels; ++j) {
     Eigen::Matrix<double, 2, 3> H_x;
-    Mat2 H_l;
-    const RangeBearing h = observe(s.pose, x_[j].head<2>(), &H_x, &H_l);
+    const RangeBearing h = observe(s.pose, x_[j].head<2>(), &H_x, &H_l[j]);
     nu[j] << s.z.range - h.range, wrap_angle(s.z.bearing - h.bearing);
     // The pose is considered, not estimated: its covariance widens the sighting's.
-    const Mat2 R_total = s.R + H_x * s.pose_cov * H_x.transpose();
-    const Mat42 PHt = P_[j].leftCols<2>() * H_l.transpose();
-    S[j] = H_l * PHt.topRows<2>() + R_total;
-    const Mat2 S_inv = S[j].inverse();
-    const double d2 = nu[j].dot(S_inv * nu[j]);
+    const Mat2 R_stated = s.R + H_x * s.pose_cov * H_x.transpose();
+    R_total[j] = noise_scale_ * R_stated;
+    PHt[j] = P_[j].leftCols<2>() * H_l[j].transpose();
+    const Mat2 HPHt = H_l[j] * PHt[j].topRows<2>();
+    S[j] = HPHt + R_total[j];
+    S_raw[j] = HPHt + R_stated;
+    S_inv[j] = S[j].inverse();
+    const double d2 = nu[j].dot(S_inv[j] * nu[j]);
     min_d2 = std::min(min_d2, d2);
     loglik[j] = -0.5 * d2 - 0.5 * std::log(S[j].determinant());
-    // Joseph form: P = (I - K H) P (I - K H)' + K R K', H = [H_l 0].
-    const Mat42 K = PHt * S_inv;
-    Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
-    H.leftCols<2>() = H_l;
-    const TrackMatrix IKH = TrackMatrix::Identity() - K * H;
-    x_[j] += K * nu[j];
-    P_[j] = IKH * P_[j] * IKH.transpose() + K * R_total * K.transpose();
-    P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
   }
   // The combined innovation under the predicted probabilities (its moments).
   Vec2 nu_bar = Vec2::Zero();
@@ -248,15 +252,29 @@ TrackUpdate MoverTrack::update(const TrackSighting& s) {
     S_bar += mu_[j] * (S[j] + d * d.transpose());
   }
   out.d2 = nu_bar.dot(S_bar.inverse() * nu_bar);
-  if (!(min_d2 <= restart_d2_)) {
-    // No model explains the sighting (a jump, a wrong association): start again there.
-    Mat2 P;
-    const Vec2 p = position_of(s, &P);
-    start(p, P, p, t_);
-    ++restarts_;
-    sightings_ = 1;
-    out.restarted = true;
-    return out;
+  if (!(min_d2 <= restart_d2_)) return unexplained(s, out);
+  pending_ = false;
+  if (options_.adapt_noise) {
+    // Covariance matching: the unscaled combined innovation's d2 averages 2 on a
+    // track whose stated noise is right.
+    Mat2 S_bar_raw = Mat2::Zero();
+    for (int j = 0; j < kMotionModels; ++j) {
+      const Vec2 d = nu[j] - nu_bar;
+      S_bar_raw += mu_[j] * (S_raw[j] + d * d.transpose());
+    }
+    const double a = 1.0 / options_.noise_memory_sightings;
+    mean_nis_ = (1.0 - a) * mean_nis_ + a * nu_bar.dot(S_bar_raw.inverse() * nu_bar);
+    noise_scale_ = std::clamp(mean_nis_ / 2.0, 1.0, options_.max_noise_scale);
+  }
+  for (int j = 0; j < kMotionModels; ++j) {
+    // Joseph form: P = (I - K H) P (I - K H)' + K R K', H = [H_l 0].
+    const Mat42 K = PHt[j] * S_inv[j];
+    Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
+    H.leftCols<2>() = H_l[j];
+    const TrackMatrix IKH = TrackMatrix::Identity() - K * H;
+    x_[j] += K * nu[j];
+    P_[j] = IKH * P_[j] * IKH.transpose() + K * R_total[j] * K.transpose();
+    P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
   }
   // Model probabilities (IMM step 3), in the log domain against underflow; a floor
   // keeps every model able to come back through the switching matrix.
@@ -280,6 +298,39 @@ TrackUpdate MoverTrack::update(const TrackSighting& s) {
   window_next_ = (window_next_ + 1) % options_.validation_sightings;
   window_count_ = std::min(window_count_ + 1, options_.validation_sightings);
   ++sightings_;
+  return out;
+}
+
+// A sighting no model explains is a jump, a misread or a wrong association, not a
+// motion. One alone is held back (the track unchanged); a second in a row that
+// agrees with it, within the reach of a mover at initial_speed_sigma_mps over the
+// time between them, restarts the track from the first and corrects it with the
+// second.
+TrackUpdate MoverTrack::unexplained(const TrackSighting& s, TrackUpdate out) {
+  Mat2 P;
+  const Vec2 p = position_of(s, &P);
+  if (pending_) {
+    const double reach = options_.initial_speed_sigma_mps * (t_ - pending_t_);
+    const Mat2 C = pending_P_ + P + reach * reach * Mat2::Identity();
+    const Vec2 d = p - pending_p_;
+    if (d.dot(C.inverse() * d) <= restart_d2_) {
+      const double now = t_;
+      start(pending_p_, pending_P_, pending_p_, pending_t_);
+      sightings_ = 1;
+      ++restarts_;
+      predict(now);
+      const TrackUpdate second = update(s);
+      out.restarted = true;
+      out.d2 = second.d2;
+      return out;
+    }
+  }
+  pending_ = true;
+  pending_p_ = p;
+  pending_P_ = P;
+  pending_t_ = t_;
+  ++outliers_;
+  out.outlier = true;
   return out;
 }
 

@@ -50,7 +50,9 @@ bool MoverTracks::see(int id, const TrackSighting& s, double t) {
   if (slot < 0) return false;
   MoverTrack& track = pool_[static_cast<std::size_t>(slot)];
   track.predict(t);
-  if (track.update(s).restarted) ++counters_.restarts;
+  const TrackUpdate u = track.update(s);
+  if (u.restarted) ++counters_.restarts;
+  if (u.outlier) ++counters_.outliers;
   last_seen_[static_cast<std::size_t>(slot)] = std::max(t, last_seen_[static_cast<std::size_t>(slot)]);
   ++counters_.updates;
   return true;
@@ -80,6 +82,28 @@ void MoverTracks::expire(double t) {
       ++k;
     }
   }
+}
+
+void MoverTracks::apply(const std::vector<TrackOp>& ops, const TrackSighting& base, double t) {
+  if (!options_.enabled) return;
+  TrackSighting s = base;
+  for (const TrackOp& op : ops) {
+    s.z = op.z;
+    switch (op.kind) {
+      case TrackOp::Kind::kBegin:
+        begin(op.id, s, op.anchor, t);
+        break;
+      case TrackOp::Kind::kSee:
+        if (!see(op.id, s, t) && op.may_begin) begin(op.id, s, op.anchor, t);
+        break;
+      case TrackOp::Kind::kEnd:
+        end(op.id, /*returned=*/true);
+        break;
+    }
+  }
+  expire(t);
+  // Every track's estimate is of the frame's time, seen in this frame or not.
+  for (const int id : ids_) pool_[static_cast<std::size_t>(slot_of(id))].predict(t);
 }
 
 void MoverTracks::clear() {

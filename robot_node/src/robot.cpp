@@ -82,6 +82,7 @@ FrameSummary Robot::process(const FrameInput& in) {
   events_.clear();
   gate_.clear();
   updated_.clear();
+  track_ops_.clear();
   s.num_obs = in.num_obs;
   const double dt = initialised_ ? step_seconds(in) : 0.0;
   predict(in, &s);
@@ -423,28 +424,13 @@ void Robot::queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const
 // reports) and its covariance; then the tracks unseen lately end.
 void Robot::apply_track_ops() {
   if (!tracks_.enabled()) return;
+  TrackSighting base;
   if (!track_ops_.empty()) {
-    TrackSighting t;
-    t.R = filters_.own().measurement_cov();
-    t.pose = filters_.estimate().pose();
-    t.pose_cov = filters_.estimate().pose_cov();
-    for (const TrackOp& op : track_ops_) {
-      t.z = op.z;
-      switch (op.kind) {
-        case TrackOp::Kind::kBegin:
-          tracks_.begin(op.id, t, op.anchor, clock_s_);
-          break;
-        case TrackOp::Kind::kSee:
-          if (!tracks_.see(op.id, t, clock_s_) && op.may_begin) tracks_.begin(op.id, t, op.anchor, clock_s_);
-          break;
-        case TrackOp::Kind::kEnd:
-          tracks_.end(op.id, /*returned=*/true);
-          break;
-      }
-    }
-    track_ops_.clear();
+    base.R = filters_.own().measurement_cov();
+    base.pose = filters_.estimate().pose();
+    base.pose_cov = filters_.estimate().pose_cov();
   }
-  tracks_.expire(clock_s_);
+  tracks_.apply(track_ops_, base, clock_s_);
 }
 
 // The bounded filter (docs/adr/0036-bounded-filter.md): a robot in a world

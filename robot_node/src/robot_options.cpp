@@ -143,6 +143,9 @@ void parse_tracking(config::Reader& t, TrackingOptions* o) {
   t.read_optional("validation_sightings", &k.validation_sightings, 1, MoverTrack::kMaxValidationSightings);
   t.read_optional("validation_probability", &k.validation_probability, 0.5, 1.0 - 1e-12);
   t.read_optional("restart_probability", &k.restart_probability, 0.5, 1.0 - 1e-12);
+  t.read_optional("adapt_noise", &k.adapt_noise);
+  t.read_optional("noise_memory_sightings", &k.noise_memory_sightings, 1.0, 1000.0);
+  t.read_optional("max_noise_scale", &k.max_noise_scale, 1.0, 1e6);
 }
 
 }  // namespace

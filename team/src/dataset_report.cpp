@@ -64,6 +64,47 @@ void write_calibration(std::ostream& out, const mrclam::FrameSource& src, const 
     }
 }
 
+// A track score as "position / speed / heading / stops found of true (latency) /
+// NEES": "-" where nothing was scored.
+std::string track_cells(const TrackMetrics& t) {
+  const auto fig = [](std::int64_t n, double v, int digits) {
+    if (n <= 0) return std::string("-");
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(digits) << v;
+    return o.str();
+  };
+  return fig(t.samples, t.position_rms_m, 3) + " | " + fig(t.moving_samples, t.speed_rms_mps, 3) + " | " +
+         fig(t.moving_samples, t.heading_rms_deg, 0) + " | " + std::to_string(t.stops_found) + " / " +
+         std::to_string(t.stops) + " (" + fig(t.stops_found, t.stop_latency_s, 2) + " s) | " +
+         fig(t.nees_samples, t.nees_mean, 1) + " | " + std::to_string(t.samples);
+}
+
+// report.md's tracks of moving landmarks (robot.tracking): with the robot barcodes
+// kept, the other robots are the movers and Vicon their truth (docs/tracking.md).
+void write_tracks(std::ostream& out, const std::vector<DatasetRun>& runs) {
+  const bool any = std::any_of(runs.begin(), runs.end(), [](const DatasetRun& r) {
+    return r.result.metrics.tracks_scored && r.result.metrics.tracks.samples > 0;
+  });
+  if (!any) return;
+  out << "\nTracks of moving landmarks (robot.tracking) against Vicon: position RMS [m], speed RMS [m/s] and "
+         "heading RMS [deg] (true speed above 0.03 m/s), stops found of true stops (mean latency), mean NEES of "
+         "(p, v) (4 dof), samples. 'from 5th sighting': samples of a track from its fifth sighting on; 'true "
+         "observer pose': the same sightings tracked from the observer's Vicon pose (tracking error alone).\n\n"
+         "| run | scored | position | speed | heading | stops | NEES | samples |\n"
+         "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& run : runs) {
+    const RunMetrics& m = run.result.metrics;
+    if (!m.tracks_scored || m.tracks.samples == 0) continue;
+    const std::string name = run.mode + (run.barcodes ? ", robot barcodes kept" : "");
+    out << "| " << name << " | all | " << track_cells(m.tracks) << " |\n";
+    out << "| " << name << " | from 5th sighting | " << track_cells(m.tracks_established) << " |\n";
+    if (!m.tracks_true_pose_scored) continue;
+    out << "| " << name << " | true observer pose | " << track_cells(m.tracks_true_pose) << " |\n";
+    out << "| " << name << " | true observer pose, from 5th sighting | "
+        << track_cells(m.tracks_true_pose_established) << " |\n";
+  }
+}
+
 // One run's summary as run_dataset prints it after writing its files.
 void print_run(std::ostream& log, const RunInfo& info, const DatasetRun& run, const std::vector<DeadReckoning>& dr) {
   log << "== " << run.mode << barcodes_text(run.barcodes) << '\n';
@@ -72,6 +113,14 @@ void print_run(std::ostream& log, const RunInfo& info, const DatasetRun& run, co
   for (const auto& d : dr) log << " robot " << d.id << ' ' << f3(d.error_rms);
   log << "\n  robot-barcode observations that corrected a pose: " << run.robot_corrections << "\n";
   log << "  landmarks taken as moving where a robot was (main.body_radius_m): " << run.result.occupied << "\n";
+  const RunMetrics& m = run.result.metrics;
+  if (m.tracks_scored && m.tracks.samples > 0) {
+    log << "  tracks (position m | speed m/s | heading deg | stops (latency) | NEES | samples): all "
+        << track_cells(m.tracks) << "; from 5th sighting " << track_cells(m.tracks_established) << '\n';
+    if (m.tracks_true_pose_scored)
+      log << "  tracks from the true observer pose: all " << track_cells(m.tracks_true_pose)
+          << "; from 5th sighting " << track_cells(m.tracks_true_pose_established) << '\n';
+  }
   log << "  rounds of team maps each robot was left out of (main.team_map_check_probability):";
   for (std::size_t i = 0; i < run.result.robot_ids.size(); ++i)
     log << " robot " << run.result.robot_ids[i] << ' ' << run.result.team_map_left_out[i];
@@ -225,6 +274,7 @@ void write_dataset_report(std::ostream& out, const mrclam::FrameSource& src, con
   for (const auto& s : src.stats().robots) avail += s.robot_barcodes;
   out << avail << ".\n";
   write_calibration(out, src, runs);
+  write_tracks(out, runs);
 }
 
 }  // namespace elaslam

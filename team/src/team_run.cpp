@@ -179,7 +179,16 @@ class InProcessTeam {
   std::vector<sensor_frame_t> sensors_;
   sensor_frame_t sensor_;
   MetricsAccumulator acc_;
-  TrackScorer tracks_;
+  // Confirmed tracks (a second sighting fitted: MoverTrack::confirmed) and, from
+  // their fifth sighting on, established ones.
+  TrackScorer tracks_{MoverTrack::kConfirmingSightings}, tracks_established_{TrackScorer::kEstablishedSightings};
+  // Each robot's track operations replayed with its true pose (RunMetrics::tracks_true_pose).
+  std::vector<MoverTracks> true_pose_tracks_;
+  std::vector<std::int64_t> tracks_ended_;  // per robot: its tracks' `ended` count at the last frame
+  std::vector<int> replayed_frame_;         // per robot: the last frame whose operations were replayed
+  bool true_poses_ = true;  // every frame so far had every robot's true pose
+  TrackScorer true_pose_scorer_{MoverTrack::kConfirmingSightings},
+      true_pose_established_{TrackScorer::kEstablishedSightings};
   std::vector<TrackSample> samples_;
   std::vector<std::uint8_t> present_;
   void score_tracks();
@@ -210,6 +219,9 @@ InProcessTeam::InProcessTeam(const RobotOptions& robot_options, const GlobalMapO
     RobotNode& node = robots_.emplace_back(robot_options, id);
     auto& ports = *robot_ports_.emplace_back(std::make_unique<RobotPorts<NodeShell>>(*robot_shells_.back(), node));
     keepers_.emplace_back(std::string(), robot_options, &node, /*resumed=*/false, node.incarnation(), /*mission=*/0);
+    true_pose_tracks_.emplace_back(robot_options.tracking, robot_options.ekf.max_landmark_id);
+    tracks_ended_.push_back(0);
+    replayed_frame_.push_back(-1);
     ports.open();
     ports.after_frame([this](const RobotNode& n) {  // observations that corrected the pose, by landmark
       for (const GateRecord& g : n.robot().gate_records())
@@ -270,18 +282,40 @@ void InProcessTeam::run_frame(int k) {
   score_tracks();
 }
 
-// Each robot's tracks at this frame against the truth the frame came with.
+// Each robot's tracks at this frame against the truth the frame came with; and the
+// same operations replayed on tracks fed the robot's true pose.
 void InProcessTeam::score_tracks() {
   mark_present(gt_in_, f_.true_landmarks.size(), &present_);
+  const auto sample = [](std::size_t r, int id, const MoverTrack& t) {
+    return TrackSample{static_cast<int>(r), id, t.mean(), t.covariance(), t.stopped(), t.sightings()};
+  };
   samples_.clear();
   for (std::size_t r = 0; r < robots_.size(); ++r) {
     const MoverTracks& tracks = robots_[r].robot().tracks();
-    for (const int id : tracks.ids()) {
-      const MoverTrack& t = tracks.track(id);
-      samples_.push_back({static_cast<int>(r), id, t.mean(), t.covariance(), t.stopped()});
-    }
+    for (const int id : tracks.ids()) samples_.push_back(sample(r, id, tracks.track(id)));
   }
   tracks_.add(time_s_, f_.true_landmarks, present_, samples_);
+  tracks_established_.add(time_s_, f_.true_landmarks, present_, samples_);
+  true_poses_ = true_poses_ && f_.true_poses.size() >= robots_.size();
+  if (!true_poses_) return;
+  samples_.clear();
+  for (std::size_t r = 0; r < robots_.size(); ++r) {
+    const Robot& robot = robots_[r].robot();
+    MoverTracks& shadow = true_pose_tracks_[r];
+    // A reset or relocalisation ended the robot's tracks: end the replay's too.
+    if (robot.tracks().counters().ended != tracks_ended_[r]) shadow.clear();
+    tracks_ended_[r] = robot.tracks().counters().ended;
+    TrackSighting base;
+    base.pose = f_.true_poses[r];
+    base.R = robot.filter().measurement_cov();
+    if (robot.last_frame() != replayed_frame_[r]) {  // a robot that took no frame has nothing new
+      shadow.apply(robot.track_ops(), base, robot.clock_s());
+      replayed_frame_[r] = robot.last_frame();
+    }
+    for (const int id : shadow.ids()) samples_.push_back(sample(r, id, shadow.track(id)));
+  }
+  true_pose_scorer_.add(time_s_, f_.true_landmarks, present_, samples_);
+  true_pose_established_.add(time_s_, f_.true_landmarks, present_, samples_);
 }
 
 RunResult InProcessTeam::finish() {
@@ -290,6 +324,12 @@ RunResult InProcessTeam::finish() {
   if (!robots_.empty() && robots_.front().robot().tracks().enabled()) {
     out.metrics.tracks_scored = true;
     out.metrics.tracks = tracks_.finish();
+    out.metrics.tracks_established = tracks_established_.finish();
+    out.metrics.tracks_true_pose_scored = true_poses_;
+    if (true_poses_) {
+      out.metrics.tracks_true_pose = true_pose_scorer_.finish();
+      out.metrics.tracks_true_pose_established = true_pose_established_.finish();
+    }
   }
   out.frames = acc_.frames();
   out.robot_ids = acc_.robot_ids();

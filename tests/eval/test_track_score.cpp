@@ -59,6 +59,41 @@ TEST(TrackScorer, ScoresAgainstTheTruthAsWorkedOutByHand) {
   EXPECT_NEAR(m.nees_mean, (10 * (0.01 + dv2) + 10 * 0.01) / 0.01 / 20, 1e-9);
   // 1 + dv2 / 0.01 = 2.91 and 1 are both inside [0.484, 11.143].
   EXPECT_NEAR(m.nees_in_band, 1.0, 1e-12);
+  // One unbroken track over 2 s.
+  EXPECT_EQ(m.segments, 1);
+  EXPECT_NEAR(m.mean_segment_s, 2.0, 1e-9);
+}
+
+// A track seen 8 times (frames 0-7), gone at frame 8, started again at frame 9 and
+// seen 5 times: two segments; from the fifth sighting on, frames 4-7 and 13. The
+// first four sightings of each are 1 m off, the rest 0.1 m.
+TEST(TrackScorer, SegmentsAndTheEstablishedPartOfEachBurst) {
+  TrackScorer all, established(TrackScorer::kEstablishedSightings);
+  for (int k = 0; k <= 13; ++k) {
+    std::vector<TrackSample> tracks;
+    const int sightings = k <= 7 ? k + 1 : k - 8;
+    if (k != 8) {
+      TrackSample s;
+      s.landmark_id = 0;
+      s.sightings = sightings;
+      s.x.head<2>() = Eigen::Vector2d(sightings < 5 ? 1.0 : 0.1, 0.0);
+      s.P = Eigen::Matrix4d::Identity();
+      tracks.push_back(s);
+    }
+    all.add(kDt * k, {Eigen::Vector2d::Zero()}, {1}, tracks);
+    established.add(kDt * k, {Eigen::Vector2d::Zero()}, {1}, tracks);
+  }
+  const TrackMetrics a = all.finish(), e = established.finish();
+  EXPECT_EQ(a.samples, 13);
+  EXPECT_EQ(a.segments, 2);
+  EXPECT_NEAR(a.mean_segment_s, (0.7 + 0.4) / 2, 1e-9);
+  EXPECT_NEAR(a.position_rms_m, std::sqrt((8 * 1.0 + 5 * 0.01) / 13), 1e-12);
+  EXPECT_EQ(e.samples, 5);
+  EXPECT_EQ(e.segments, 2);
+  EXPECT_NEAR(e.mean_segment_s, (0.3 + 0.0) / 2, 1e-9);
+  EXPECT_NEAR(e.position_rms_m, 0.1, 1e-12);
+  EXPECT_TRUE(tracks_json(established.finish())["speed_rms_mps"].is_null());
+  EXPECT_EQ(tracks_json(e)["segments"], 2);
 }
 
 TEST(TrackScorer, AStopNotFoundBeforeTheTrackEndsCountsUnfound) {

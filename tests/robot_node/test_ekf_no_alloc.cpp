@@ -145,7 +145,7 @@ INSTANTIATE_TEST_SUITE_P(BothCovarianceForms, EkfNoAlloc, ::testing::Combine(::t
                          });
 
 // A mover track's frame: the IMM's mixing, prediction (several steps when frames
-// were missed), updates and restarts, and its read-outs.
+// were missed), updates, outliers held back and restarts, and its read-outs.
 TEST(MoverTrackNoAlloc, FramesAllocateNothing) {
   MoverTrack track;
   std::mt19937_64 rng(17);
@@ -156,19 +156,25 @@ TEST(MoverTrackNoAlloc, FramesAllocateNothing) {
   track.start(Eigen::Vector2d(3.0, 1.0), Eigen::Matrix2d::Identity() * 0.01, Eigen::Vector2d(3.0, 1.0), 0.0);
   long allocations = -1;
   double sum = 0.0;
-  int restarts = 0;
+  int restarts = 0, outliers = 0;
   {
     NoAllocRegion guard;
     for (int k = 1; k <= 400; ++k) {
       track.predict(k * 0.1 + (k % 50 == 0 ? 0.5 : 0.0));
-      s.z = {3.2 + 0.05 * uni(rng), 0.3 + (k % 97 == 0 ? 1.5 : 0.02 * uni(rng))};
-      restarts += track.update(s).restarted ? 1 : 0;
+      // A jump of the bearing at k = 97 and 194 (held back, then followed), one at
+      // k = 291 alone (held back).
+      const bool jumped = (k >= 97 && k < 291 && (k / 97) % 2 == 1) || k == 291;
+      s.z = {3.2 + 0.05 * uni(rng), 0.3 + (jumped ? 1.5 : 0.0) + 0.02 * uni(rng)};
+      const TrackUpdate u = track.update(s);
+      restarts += u.restarted ? 1 : 0;
+      outliers += u.outlier ? 1 : 0;
       sum += track.mean()(0) + track.covariance()(0, 0) + (track.validated() ? 1.0 : 0.0);
     }
     allocations = test::allocations_in_region();
   }
   EXPECT_EQ(allocations, 0);
-  EXPECT_GT(restarts, 0);  // the restart path ran inside the region
+  EXPECT_EQ(restarts, 2);  // the restart path ran inside the region: to the jump and back
+  EXPECT_EQ(outliers, 3);
   EXPECT_TRUE(std::isfinite(sum));
 }
 

@@ -186,6 +186,42 @@ TEST_F(RobotTracks, TracksNeverMoveTheRobotNorItsMap) {
   EXPECT_EQ(a.filter().covariance(), b.filter().covariance());
 }
 
+// The frame's operations (Robot::track_ops) replayed on a pool of one's own with the
+// robot's own pose reproduce its tracks bit for bit; with the true pose (the robot
+// stands at the origin) they are the tracks of a perfectly localised observer.
+TEST_F(RobotTracks, ReplayingTheFramesOperationsReproducesTheTracks) {
+  const RobotOptions o = test::robot_options(Mode::kEla);
+  Robot r(o, 1);
+  MoverTracks same(o.tracking, o.ekf.max_landmark_id), truth(o.tracking, o.ekf.max_landmark_id);
+  int compared = 0, ops = 0;
+  double true_pose_gap = 0.0;
+  run(&r, 13, [&](int, const Robot& robot, const Vec2&) {
+    ops += static_cast<int>(robot.track_ops().size());
+    TrackSighting base;
+    base.R = robot.filter().measurement_cov();
+    base.pose = robot.estimate().pose();
+    base.pose_cov = robot.estimate().pose_cov();
+    same.apply(robot.track_ops(), base, robot.clock_s());
+    TrackSighting exact;
+    exact.R = base.R;
+    truth.apply(robot.track_ops(), exact, robot.clock_s());
+    ASSERT_EQ(same.ids(), robot.tracks().ids());
+    ASSERT_EQ(truth.ids(), robot.tracks().ids());
+    for (const int id : robot.tracks().ids()) {
+      EXPECT_EQ(same.track(id).mean(), robot.tracks().track(id).mean());
+      EXPECT_EQ(same.track(id).covariance(), robot.tracks().track(id).covariance());
+      true_pose_gap = std::max(true_pose_gap, (truth.track(id).mean() - same.track(id).mean()).norm());
+      ++compared;
+    }
+  });
+  EXPECT_GT(compared, 20);
+  EXPECT_GT(ops, compared);
+  // The robot's pose is well known here: the true pose changes the tracks by
+  // centimetres at most, and changes them (the pose covariance is no longer considered).
+  EXPECT_GT(true_pose_gap, 0.0);
+  EXPECT_LT(true_pose_gap, 0.05);
+}
+
 TEST_F(RobotTracks, TheClockFollowsTheStampsAndAResetEndsEveryTrack) {
   Robot r(test::robot_options(Mode::kEla), 1);
   bool had_track = false;

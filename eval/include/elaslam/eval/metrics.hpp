@@ -94,7 +94,13 @@ struct RunMetrics {
   // The robots' tracks of moving landmarks against the truth (track_score.hpp):
   // in-process runs with robot.tracking on (a recorded log carries no tracks).
   bool tracks_scored = false;
-  TrackMetrics tracks;
+  TrackMetrics tracks;              // every sample
+  TrackMetrics tracks_established;  // samples from a track's fifth sighting on
+  // The same tracks replayed with each observer's true pose and no pose
+  // covariance (the robot's own sightings, starts and ends): the tracking's own
+  // error, without the observer's localisation error.
+  bool tracks_true_pose_scored = false;
+  TrackMetrics tracks_true_pose, tracks_true_pose_established;
 };
 
 /// Per-frame row of frames.csv.

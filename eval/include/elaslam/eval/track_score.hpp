@@ -23,6 +23,7 @@ struct TrackSample {
   Eigen::Vector4d x = Eigen::Vector4d::Zero();  // (p_x, p_y, v_x, v_y) in W [m, m/s]
   Eigen::Matrix4d P = Eigen::Matrix4d::Zero();  // its covariance
   bool stopped = false;                          // the track's verdict: at rest
+  std::int64_t sightings = 0;  // sightings since the track (re)started (fewer than at the last frame: a new track)
 };
 
 /// Scores over every scored track sample of a run. Counts of 0 leave their
@@ -47,10 +48,21 @@ struct TrackMetrics {
   std::int64_t nees_samples = 0;
   double nees_mean = 0.0;
   double nees_in_band = 0.0;    // the share inside the two-sided 95 % band of chi-square, 4 dof
+  // Continuity: a segment is one robot's unbroken track of one landmark (a sample at
+  // every frame, no restart in between).
+  std::int64_t segments = 0;
+  double mean_segment_s = 0.0;  // mean time from a segment's first sample to its last
 };
 
 class TrackScorer {
  public:
+  /// Scores the samples of tracks with at least `min_sightings` sightings: 0 scores
+  /// every sample; kEstablishedSightings scores a burst of sightings from its fifth
+  /// on (MoverTrack::sightings counts the first), once the track is past its start
+  /// from a zero velocity.
+  static constexpr std::int64_t kEstablishedSightings = 5;
+  explicit TrackScorer(std::int64_t min_sightings = 0) : min_sightings_(min_sightings) {}
+
   /// Adds one frame: its time [s], the true landmark positions by id (truth[id],
   /// present[id] != 0 where known) and every track's sample at this frame.
   void add(double time_s, const std::vector<Eigen::Vector2d>& truth, const std::vector<std::uint8_t>& present,
@@ -61,12 +73,16 @@ class TrackScorer {
   struct Open {  // a true stop not yet found by one robot's track
     double since_s = 0.0;
   };
+  std::int64_t min_sightings_ = 0;
   double last_time_s_ = 0.0;
   bool have_last_ = false;
   std::vector<Eigen::Vector2d> last_truth_;
   std::vector<std::uint8_t> last_present_;
   std::vector<std::uint8_t> was_moving_;  // by landmark id: moving at the last frame
   std::map<std::pair<int, int>, Open> open_stops_;  // (robot, landmark) -> stop waiting for its verdict
+  std::map<std::pair<int, int>, std::int64_t> last_sightings_;  // (robot, landmark) -> sightings, last frame
+  std::int64_t segments_ = 0;
+  double segment_time_s_ = 0.0;
   std::int64_t n_ = 0, n_moving_ = 0, n_nees_ = 0, nees_in_ = 0;
   double pos2_ = 0.0, speed2_ = 0.0, heading2_ = 0.0, nees_ = 0.0;
   std::int64_t found_stopped_ = 0, found_and_at_rest_ = 0, at_rest_ = 0;

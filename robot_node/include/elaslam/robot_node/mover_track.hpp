@@ -73,6 +73,15 @@ struct MoverTrackOptions {
   /// whose noise is too large is conservative, not wrong: no lower bound).
   int validation_sightings = 10;
   double validation_probability = 0.95;
+  /// The track's own noise scale, from its innovations: each sighting's noise (the
+  /// pose's included) is multiplied by lambda = mean NIS / 2 of the unscaled
+  /// innovations, averaged with weight 1 / noise_memory_sightings, held within
+  /// [1, max_noise_scale]. A consistent track keeps lambda near 1; one whose
+  /// sightings are noisier than stated (a pose error correlated over frames, a
+  /// detector's offset) widens its own noise. Off: lambda 1.
+  bool adapt_noise = true;
+  double noise_memory_sightings = 10.0;
+  double max_noise_scale = 100.0;
 };
 
 /// One range-bearing sighting of the tracked landmark and what it was taken from.
@@ -86,7 +95,8 @@ struct TrackSighting {
 /// What one sighting did to the track.
 struct TrackUpdate {
   double d2 = 0.0;          // combined innovation's nu' S^-1 nu (2 dof)
-  bool restarted = false;   // no model explained it: the track started again there
+  bool outlier = false;     // no model explained it: held back, the track unchanged
+  bool restarted = false;   // the second such sighting in a row, agreeing with the first: the track started again from them
 };
 
 class MoverTrack {
@@ -105,7 +115,10 @@ class MoverTrack {
   /// Mixes the models and predicts each to time t [s]; t before the track's time is
   /// ignored (0 s). Several sightings at one time: predict once, update each.
   void predict(double t);
-  /// Corrects every model with the sighting and updates the model probabilities.
+  /// Corrects every model with the sighting and updates the model probabilities. A
+  /// sighting no model explains (d2 above the chi-square quantile of
+  /// restart_probability in every model) is held back; a second in a row that
+  /// agrees with it restarts the track from the two.
   TrackUpdate update(const TrackSighting& s);
 
   bool active() const { return active_; }
@@ -123,8 +136,17 @@ class MoverTrack {
   const Eigen::Vector2d& anchor() const { return anchor_; }
   /// The last validation_sightings innovations are consistent (chi-square band).
   bool validated() const;
+  /// Sightings taken since the track (re)started, the one it started at included.
   std::int64_t sightings() const { return sightings_; }
   std::int64_t restarts() const { return restarts_; }
+  /// The noise scale lambda now (MoverTrackOptions::adapt_noise).
+  double noise_scale() const { return noise_scale_; }
+  /// Sightings no model explained (TrackUpdate::outlier).
+  std::int64_t outliers() const { return outliers_; }
+  /// A second sighting has fitted the track since it (re)started: a single
+  /// sighting (a misread, a wrong association) is not a track yet.
+  static constexpr std::int64_t kConfirmingSightings = 2;
+  bool confirmed() const { return sightings_ >= kConfirmingSightings; }
 
   /// The model's transition over dt [s] (dt <= max_step_s): x' = F x + c, noise Q.
   /// Public for the tests (the discretisation against the continuous model).
@@ -135,6 +157,7 @@ class MoverTrack {
  private:
   static int index(MotionModel m) { return static_cast<int>(m); }
   void predict_model(int j, double dt);
+  TrackUpdate unexplained(const TrackSighting& s, TrackUpdate out);
 
   MoverTrackOptions options_;
   double restart_d2_ = 0.0;
@@ -149,7 +172,15 @@ class MoverTrack {
   std::array<double, kMotionModels> mu_{};
   std::array<double, kMaxValidationSightings> window_{};
   int window_count_ = 0, window_next_ = 0;
-  std::int64_t sightings_ = 0, restarts_ = 0;
+  std::int64_t sightings_ = 0, restarts_ = 0, outliers_ = 0;
+  // The last sighting no model explained, held back (unexplained()): its world
+  // position, covariance and time.
+  double mean_nis_ = 2.0;     // running mean of the unscaled combined innovations' d2
+  double noise_scale_ = 1.0;  // lambda
+  bool pending_ = false;
+  Eigen::Vector2d pending_p_ = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d pending_P_ = Eigen::Matrix2d::Zero();
+  double pending_t_ = 0.0;
 };
 
 }  // namespace elaslam

@@ -27,13 +27,24 @@ struct TrackingOptions {
   MoverTrackOptions track;
 };
 
+/// One operation of a frame on the tracks (Robot queues them while it judges the
+/// frame's sightings and applies them at the frame's end, MoverTracks::apply).
+struct TrackOp {
+  enum class Kind : std::uint8_t { kBegin, kSee, kEnd } kind = Kind::kSee;
+  int id = -1;
+  RangeBearing z;
+  Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // kBegin; kSee: where a new track anchors
+  bool may_begin = false;  // kSee: the landmark was found or told moving before
+};
+
 struct TrackCounters {
   std::int64_t started = 0;   // tracks started
   std::int64_t returned = 0;  // ... ended because the landmark became STATIC again
   std::int64_t lost = 0;      // ... ended unseen for lost_after_s
   std::int64_t ended = 0;     // ... ended otherwise (a reset of the robot's map, a relocalisation)
   std::int64_t updates = 0;   // sightings fed to tracks
-  std::int64_t restarts = 0;  // sightings no model explained (MoverTrack::update)
+  std::int64_t outliers = 0;  // sightings no model explained, held back (MoverTrack::update)
+  std::int64_t restarts = 0;  // ... a second in a row that agreed with the first: the track started again
   std::int64_t full = 0;      // tracks not started: every slot taken
 };
 
@@ -58,6 +69,11 @@ class MoverTracks {
   void expire(double t);
   /// Ends every track (counted in `ended`).
   void clear();
+  /// Applies one frame's operations in order at time t [s], each sighting taken
+  /// with `base`'s pose, pose covariance and noise (its z replaced by the op's);
+  /// then the tracks unseen lately end (expire) and every other one is predicted
+  /// to t: a track's estimate is always of the last frame's time.
+  void apply(const std::vector<TrackOp>& ops, const TrackSighting& base, double t);
 
   bool has(int id) const { return slot_of(id) >= 0; }
   /// id's track; has(id) must hold.

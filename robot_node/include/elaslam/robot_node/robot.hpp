@@ -186,6 +186,10 @@ class Robot {
   /// The moving landmarks' tracks (robot.tracking, docs/tracking.md): consider
   /// estimates that never correct the robot.
   const MoverTracks& tracks() const { return tracks_; }
+  /// The last frame's operations on the tracks, in the order applied: an evaluator
+  /// replays them on tracks of its own fed the true pose, which separates tracking
+  /// error from localisation error (team_run).
+  const std::vector<TrackOp>& track_ops() const { return track_ops_; }
   /// [s] the robot's clock: the frames' stamps since its first frame (step_seconds).
   double clock_s() const { return clock_s_; }
   const Relocalisation& last_relocalisation() const { return relocalisation_; }
@@ -225,13 +229,6 @@ class Robot {
   /// frame (apply_track_ops) with the robot's pose and covariance then: reading the
   /// covariance mid-frame would settle the filter's pending covariance steps early
   /// and change its rounding, and tracks must change nothing the robot estimates.
-  struct TrackOp {
-    enum class Kind : std::uint8_t { kBegin, kSee, kEnd } kind = Kind::kSee;
-    int id = -1;
-    RangeBearing z;
-    Eigen::Vector2d anchor = Eigen::Vector2d::Zero();  // kBegin; kSee: where a new track anchors
-    bool may_begin = false;  // kSee: the landmark was found or told moving before
-  };
   void queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const Eigen::Vector2d& anchor, bool may_begin);
   void apply_track_ops();
   /// A free slot in the filter: true when there is one or one was made by evicting
@@ -282,7 +279,7 @@ class Robot {
   int trouble_frame_ = -1;  // last frame all of whose judged landmarks failed, or found inconsistent
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   MoverTracks tracks_;  // the moving landmarks' tracks (not in the state file: a restart starts none)
-  std::vector<TrackOp> track_ops_;  // this frame's (reserved: two per observation)
+  std::vector<TrackOp> track_ops_;  // the last frame's (reserved: two per observation)
   double clock_s_ = 0.0;  // [s] clock_s()
   ElaGate gate_;  // this frame's verdicts and gate records
   ConsistencyMonitor monitor_;  // NIS of the corrections over a window of frames
