@@ -136,6 +136,7 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
                     {"detectable", m.detectable}};
   j["timing"] = {{"frame_us_p50", m.frame_us_p50}, {"frame_us_p99", m.frame_us_p99}, {"frame_us_max", m.frame_us_max}};
   if (m.tracks_scored) j["tracks"] = tracks_json(m.tracks);
+  if (m.global_tracks_scored) j["global_tracks"] = tracks_json(m.global_tracks);
   j["final_map"] = {{"static", r.final_map.size()}, {"moving", r.final_moving.size()}};
   j["source"] = info.source;
   j["config"] = yaml_text_to_json(info.effective_config);

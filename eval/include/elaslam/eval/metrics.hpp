@@ -92,9 +92,12 @@ struct RunMetrics {
   int flagged = 0, true_positives = 0, detectable = 0;
   std::int64_t frame_us_p50 = 0, frame_us_p99 = 0, frame_us_max = 0;
   // The robots' tracks of moving landmarks against the truth (track_score.hpp):
-  // in-process runs with robot.tracking on (a recorded log carries no tracks).
+  // in-process runs with robot.tracking on; recorded logs with TRACKS_<r> in them.
   bool tracks_scored = false;
   TrackMetrics tracks;
+  // main_robot's fused tracks (GLOBAL_TRACKS) against the truth: recorded logs.
+  bool global_tracks_scored = false;
+  TrackMetrics global_tracks;
 };
 
 /// Per-frame row of frames.csv.
