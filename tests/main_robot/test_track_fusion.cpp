@@ -192,6 +192,41 @@ TEST(MainNodeTracks, EveryKindOfBadTracksIsRefusedAndCounted) {
   EXPECT_EQ(node.track_fusion().robot_frame(1), 4);
 }
 
+// GIVEN robot 1 followed at incarnation 100 with a track of landmark 7
+// WHEN TRACKS of another incarnation arrive, then a POSE of a new incarnation (a
+// restart without its state)
+// THEN the other incarnation's tracks are refused as stale; the restart drops the
+// robot's tracks (those of before are gone) and its new incarnation's are taken.
+TEST(MainNodeTracks, TracksFollowTheRobotsIncarnation) {
+  MainNode node(team_of_three());
+  pose_estimate_t p = test::pose_msg(1, 0);
+  p.incarnation = 100;
+  ASSERT_EQ(node.on_pose(p), 0);
+  track_list_t m = test::tracks_msg(1, 0, {test::track_of(7, 1, 2, 0.5, 0)});
+  m.incarnation = 100;
+  ASSERT_TRUE(node.on_tracks(m));
+  track_list_t other = test::tracks_msg(1, 1, {test::track_of(7, 9, 9, 0, 0)});
+  other.incarnation = 99;
+  std::string why;
+  EXPECT_FALSE(node.on_tracks(other, &why));
+  EXPECT_NE(why.find("incarnation"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kStale], 1);
+  ASSERT_TRUE(node.make_global_tracks(0, 1));
+  ASSERT_EQ(node.global_tracks().num_tracks, 1);
+  EXPECT_EQ(node.global_tracks().tracks[0].x, 1.0);
+  p.incarnation = 200;  // restarted
+  p.frame = 1;
+  node.on_pose(p);
+  EXPECT_EQ(node.counters().restarts, 1);
+  EXPECT_EQ(node.track_fusion().robot_frame(1), -1);
+  EXPECT_TRUE(node.make_global_tracks(0, 1)) << "the last fused track ended: one empty list";
+  EXPECT_EQ(node.global_tracks().num_tracks, 0);
+  m.incarnation = 200;
+  m.frame = 1;
+  EXPECT_TRUE(node.on_tracks(m));
+  EXPECT_EQ(node.track_fusion().robot_frame(1), 1);
+}
+
 // More fused tracks than one GLOBAL_TRACKS holds: the first kMaxGlobalTracks by id go
 // out, the rest are counted.
 TEST(MainNodeTracks, FusedTracksBeyondTheMessagesCapacityAreCounted) {
