@@ -8,7 +8,6 @@
 #include <nlohmann/json.hpp>
 
 #include "elaslam/common/contract.hpp"
-#include "elaslam/common/cov.hpp"
 #include "elaslam/common/faults.hpp"
 #include "elaslam/common/track_checks.hpp"
 
