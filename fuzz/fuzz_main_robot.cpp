@@ -2,8 +2,8 @@
 // libFuzzer target: every message handler of main_robot, as the process runs them
 // (MainPorts on a NodeShell: decode, validate, apply, publish notices, resync
 // requests and the global map), with config/paper.yaml. An input is a burst of
-// LMAP_EVENT, LMAP_EVENTS, LMAP_SNAPSHOT and POSE_<r> messages (fuzz_input.hpp; POSE of robots 1,
-// 2, 3 and 7). The node is made anew per input. After each input the global map, the status
+// LMAP_EVENT, LMAP_EVENTS, LMAP_SNAPSHOT, POSE_<r> and TRACKS_<r> messages (fuzz_input.hpp; POSE of
+// robots 1, 2, 3 and 7, TRACKS of robots 1 and 2). The node is made anew per input. After each input the global map, the status
 // and the state file's text must still be producible, and the state must load back.
 #include <cstdint>
 #include <cstdio>
@@ -23,10 +23,11 @@ using namespace elaslam;
 
 const GlobalMapOptions& options() { return fuzz::main_options(); }
 
-// LMAP_EVENTS last: the indices of the corpora written before it keep their channels.
+// LMAP_EVENTS and then TRACKS_<r> last: the indices of the corpora written before
+// them keep their channels.
 const std::string kChannels[] = {channels::lmap_event(), channels::lmap_snapshot(), channels::pose(1),
                                  channels::pose(2),      channels::pose(3),         channels::pose(7),
-                                 channels::lmap_events()};
+                                 channels::lmap_events(), channels::tracks(1),      channels::tracks(2)};
 
 }  // namespace
 

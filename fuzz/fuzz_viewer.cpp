@@ -2,7 +2,7 @@
 // libFuzzer target: every input of the viewer, as the process runs them (ViewPorts on
 // a NodeShell: decode, check, apply), with config/paper.yaml's limits. An input is a
 // burst of RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_1,
-// CANDIDATES_1 and GROUND_TRUTH messages (fuzz_input.hpp). The state is made anew
+// CANDIDATES_1, GROUND_TRUTH, TRACKS_1 and GLOBAL_TRACKS messages (fuzz_input.hpp). The state is made anew
 // per input. After each input the page's state must be valid JSON
 // whose landmarks and robots are finite.
 #include <cmath>
@@ -30,9 +30,11 @@ viewer::ViewLimits limits() {
   return l;
 }
 
+// TRACKS_1 and GLOBAL_TRACKS last: the indices of the corpora written before them keep their channels.
 const std::string kChannels[] = {channels::run_info(),       channels::pose(1),         channels::pose(2),
                                  channels::pose(3),          channels::global_map(),    channels::dynamic_notice(),
-                                 channels::status_robot(1),  channels::candidates(1),   channels::ground_truth()};
+                                 channels::status_robot(1),  channels::candidates(1),   channels::ground_truth(),
+                                 channels::tracks(1),        channels::global_tracks()};
 
 void check_finite(const nlohmann::json& j, const char* what) {
   for (const char* k : {"x", "y"})

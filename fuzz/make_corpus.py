@@ -10,8 +10,8 @@ and state files.
 
 Writes OUT/fuzz_robot_node/ (robot 1's inputs: SENSOR_1, DYNAMIC_NOTICE, GLOBAL_MOVING,
 LMAP_RESYNC, POSE_1), OUT/fuzz_main_robot/ (LMAP_EVENT, LMAP_SNAPSHOT, POSE_1, POSE_2,
-POSE_3, POSE_7, LMAP_EVENTS), OUT/fuzz_viewer/ (RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE,
-STATUS_ROBOT_1, CANDIDATES_1, GROUND_TRUTH), each a few windows of consecutive frames from the first frame on;
+POSE_3, POSE_7, LMAP_EVENTS, TRACKS_1, TRACKS_2), OUT/fuzz_viewer/ (RUN_INFO, POSE_1-3, GLOBAL_MAP, DYNAMIC_NOTICE,
+STATUS_ROBOT_1, CANDIDATES_1, GROUND_TRUTH, TRACKS_1, GLOBAL_TRACKS), each a few windows of consecutive frames from the first frame on;
 OUT/fuzz_state/ (the state files with fuzz_state's selector byte: raw and sealed
 robot state, main state, and robot 1's state from a run with the team's map on
 (robot.team_map.fuse, main.team_map_period_frames), sealed); OUT/fuzz_mrclam/ (tests/dataset/data/tiny, robot 1). The
@@ -28,9 +28,10 @@ sys.path.insert(0, os.path.join(_here, "..", "tools"))
 from elaslam_tool import add_version, need, parse_args, run_in_venv  # noqa: E402
 
 ROBOT = ["SENSOR_1", "DYNAMIC_NOTICE", "GLOBAL_MOVING", "LMAP_RESYNC", "POSE_1"]
-MAIN = ["LMAP_EVENT", "LMAP_SNAPSHOT", "POSE_1", "POSE_2", "POSE_3", "POSE_7", "LMAP_EVENTS"]  # fuzz_main_robot's order
+MAIN = ["LMAP_EVENT", "LMAP_SNAPSHOT", "POSE_1", "POSE_2", "POSE_3", "POSE_7", "LMAP_EVENTS", "TRACKS_1",
+        "TRACKS_2"]  # fuzz_main_robot's order
 VIEWER = ["RUN_INFO", "POSE_1", "POSE_2", "POSE_3", "GLOBAL_MAP", "DYNAMIC_NOTICE", "STATUS_ROBOT_1", "CANDIDATES_1",
-          "GROUND_TRUTH"]
+          "GROUND_TRUTH", "TRACKS_1", "GLOBAL_TRACKS"]
 MRCLAM = ["Barcodes.dat", "Landmark_Groundtruth.dat", "Robot1_Odometry.dat", "Robot1_Groundtruth.dat",
           "Robot1_Measurement.dat"]
 # Windows of SENSOR_1 / POSE frames: [first, last) counted in robot 1's frames.

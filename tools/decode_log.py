@@ -61,6 +61,7 @@ def main() -> int:
              (r"LMAP_EVENT", T.landmark_event_t), (r"LMAP_EVENTS", T.lmap_events_t), (r"LMAP_SNAPSHOT", T.lmap_snapshot_t),
              (r"LMAP_RESYNC", T.resync_request_t), (r"GLOBAL_MAP", T.global_map_t), (r"GLOBAL_MOVING", T.global_map_t),
              (r"TEAM_MAP_\d+", T.global_map_t), (r"CANDIDATES_\d+", T.candidate_list_t),
+             (r"TRACKS_\d+", T.track_list_t), (r"GLOBAL_TRACKS", T.global_tracks_t),
              (r"DYNAMIC_NOTICE", T.dynamic_notice_t), (r"STATUS_.*", T.node_status_t)]
     if hasattr(T, "run_info_t"):
         types.append((r"RUN_INFO.*", T.run_info_t))
@@ -93,6 +94,9 @@ def main() -> int:
         g = last["GLOBAL_MAP"]
         print(f"last GLOBAL_MAP chunk: frame {g.frame}, version {g.version}, chunk {g.chunk + 1} of {g.num_chunks}, "
               f"ids [{g.id_begin}, {g.id_end}): {g.num_landmarks} static, {g.num_moving} moving")
+    if "GLOBAL_TRACKS" in last:
+        g = last["GLOBAL_TRACKS"]
+        print(f"last GLOBAL_TRACKS: frame {g.frame}, {g.num_tracks} fused tracks ({g.num_omitted} left out)")
     return 1 if errors else 0
 
 

@@ -81,6 +81,10 @@ nlohmann::json metrics_of(const LogData& d, const AssembledRun& x, const RunInfo
     j["config_note"] = d.run_info ? "the frame source's section only (RUN_INFO); pass --config for the nodes' sections"
                                   : "unknown: no RUN_INFO in the log and no --config";
   j["run_info"] = d.run_info ? run_info_json(*d.run_info) : nlohmann::json(nullptr);
+  // The robots' tracks (TRACKS_<r>) and main's fused ones (GLOBAL_TRACKS): null when
+  // the log has none.
+  if (!x.r.metrics.tracks_scored) j["tracks"] = nullptr;
+  if (!x.r.metrics.global_tracks_scored) j["global_tracks"] = nullptr;
   add_log_figures(d, x, &j);
   *accounts = account_run_frames(d, x, &j);
   return j;

@@ -15,7 +15,12 @@ open that in Foxglove (docs/tools.md, "Foxglove"). Channels (topics):
   /map               foxglove.SceneUpdate     the global map (GLOBAL_MAP, CANDIDATES_<r>):
                                               landmarks as spheres coloured by status
                                               (static blue, moving red, candidate grey),
-                                              3-sigma covariance ellipses, id labels
+                                              3-sigma covariance ellipses, id labels;
+                                              the tracks of moving landmarks (TRACKS_<r>,
+                                              GLOBAL_TRACKS) as arrows of 1 s of motion
+                                              coloured by model (static grey, bounded
+                                              amber, constant velocity violet), the fused
+                                              ones thicker
   /robots            foxglove.SceneUpdate     each robot's heading arrow, 3-sigma ellipse
   /tf                foxglove.FrameTransforms map -> robot<r> at each POSE_<r>
   /robot<r>/pose     foxglove.PoseInFrame     POSE_<r>, frame "map"
@@ -75,11 +80,15 @@ SIGMA = 3.0                  # ellipses at 3 sigma, as the viewer draws them
 FAULT_INCONSISTENT = 8       # node_status_t.FAULT_INCONSISTENT
 # Channel groups the bridge reads (channels.hpp's channel_group; the ctest channel_tables
 # checks them against its handlers' channels): 0 team-wide (STATUS_*, DYNAMIC_NOTICE),
-# 2 GLOBAL_MAP, 3 observers (GROUND_TRUTH, CANDIDATES_<r>), 4 POSE_<r>.
-GROUPS = (0, 2, 3, 4)
+# 1 the robots' outputs (TRACKS_<r>), 2 GLOBAL_MAP and GLOBAL_TRACKS, 3 observers
+# (GROUND_TRUTH, CANDIDATES_<r>), 4 POSE_<r>.
+GROUPS = (0, 1, 2, 3, 4)
 ROBOT_COLOURS = [(0.12, 0.47, 0.71), (1.0, 0.50, 0.05), (0.17, 0.63, 0.17), (0.58, 0.40, 0.74),
                  (0.55, 0.34, 0.29), (0.89, 0.47, 0.76), (0.50, 0.50, 0.50), (0.74, 0.74, 0.13)]
 STATUS_COLOURS = {"static": (0.16, 0.38, 0.85), "moving": (0.85, 0.15, 0.12), "candidate": (0.55, 0.55, 0.55)}
+# Track arrows by the likeliest model (track_t: STATIC 0, BOUNDED 1, CONSTANT_VELOCITY 2), as the viewer colours them.
+TRACK_COLOURS = {0: (0.42, 0.45, 0.50), 1: (0.72, 0.53, 0.04), 2: (0.49, 0.23, 0.93)}
+TRACK_SECONDS = 1.0  # an arrow is this long in motion
 
 
 def json_schema(name, props):
@@ -174,6 +183,13 @@ class Scene:
         return self.m.SpherePrimitive(pose=self.pose(x, y, 0.0, z), size=self.m.Vector3(x=size, y=size, z=size),
                                       color=self.colour(rgb))
 
+    def track_arrow(self, x, y, vx, vy, model, fused):
+        """A track: an arrow from its position along TRACK_SECONDS of its velocity."""
+        return self.m.ArrowPrimitive(pose=self.pose(x, y, math.atan2(vy, vx), 0.05),
+                                     shaft_length=max(0.01, TRACK_SECONDS * math.hypot(vx, vy)),
+                                     shaft_diameter=0.06 if fused else 0.03, head_length=0.15,
+                                     head_diameter=0.16 if fused else 0.1, color=self.colour(TRACK_COLOURS[model]))
+
     def label(self, x, y, text, rgb=(0.1, 0.1, 0.1)):
         return self.m.TextPrimitive(pose=self.pose(x, y, 0.0, 0.3), billboard=True, font_size=12.0,
                                     scale_invariant=True, color=self.colour(rgb), text=text)
@@ -211,6 +227,8 @@ class Bridge:
         self.truth_landmarks = []
         self.landmarks = {}      # id -> [x, y, cxx, cxy, cyy, status]; status static | moving | gone
         self.candidates = {}     # r -> (frame, [(id, x, y, cxx, cxy, cyy)])
+        self.tracks = {}         # r -> (frame, [(id, x, y, vx, vy, model)]) of its last TRACKS_<r>
+        self.fused_tracks = (-1, [])  # the same of the last GLOBAL_TRACKS
         self.map_frame, self.map_dirty, self.map_sent = -1, False, 0.0
         self.truth_dirty, self.truth_sent = False, 0.0
         self.notices_seen = collections.OrderedDict()
@@ -224,6 +242,8 @@ class Bridge:
         self.handlers = [(re.compile(r"POSE_(\d+)"), T.pose_estimate_t, self.on_pose),
                          (re.compile(r"GLOBAL_MAP"), T.global_map_t, self.on_global_map),
                          (re.compile(r"CANDIDATES_(\d+)"), T.candidate_list_t, self.on_candidates),
+                         (re.compile(r"TRACKS_(\d+)"), T.track_list_t, self.on_tracks),
+                         (re.compile(r"GLOBAL_TRACKS"), T.global_tracks_t, self.on_global_tracks),
                          (re.compile(r"GROUND_TRUTH"), T.ground_truth_t, self.on_truth),
                          (re.compile(r"DYNAMIC_NOTICE"), T.dynamic_notice_t, self.on_notice),
                          (re.compile(r"STATUS_(ROBOT_\d+|MAIN|SIM)"), T.node_status_t, self.on_status)]
@@ -364,6 +384,36 @@ class Bridge:
         self.map_dirty = True
         return None
 
+    @staticmethod
+    def track_rows(tracks, n):
+        """[(id, x, y, vx, vy, model)] of a message's tracks; None when one is out of range or not finite."""
+        rows = []
+        for t in tracks[:max(0, n)]:
+            if not 0 <= t.id < MAX_LANDMARK_ID or not finite(t.x, t.y, t.vx, t.vy) or t.likeliest not in TRACK_COLOURS \
+                    or max(abs(t.x), abs(t.y), abs(t.vx), abs(t.vy)) > WORLD_BOUND_M:
+                return None
+            rows.append((t.id, t.x, t.y, t.vx, t.vy, t.likeliest))
+        return rows
+
+    def on_tracks(self, m, rid):
+        r = int(rid)
+        if m.robot_id != r or not 1 <= r <= MAX_ROBOTS:
+            return "robot id differs from the channel's"
+        rows = self.track_rows(m.tracks, m.num_tracks)
+        if rows is None:
+            return "a track out of range or not finite"
+        self.tracks[r] = (m.frame, rows)
+        self.map_dirty = True
+        return None
+
+    def on_global_tracks(self, m):
+        rows = self.track_rows(m.tracks, m.num_tracks)
+        if rows is None:
+            return "a fused track out of range or not finite"
+        self.fused_tracks = (m.frame, rows)
+        self.map_dirty = True
+        return None
+
     def on_truth(self, m):
         n = max(0, m.num_robots)
         self.truth[m.frame] = {rid: (q.x, q.y, q.theta) for rid, q in zip(m.robot_ids[:n], m.robots[:n])
@@ -430,6 +480,13 @@ class Bridge:
             labels.append(s.label(x + 0.25, y + 0.25, str(i), rgb))
         ents = [s.entity(stamp, f"landmarks/{k}", spheres=v) for k, v in by.items()]
         ents += [s.entity(stamp, "landmarks/ellipses", spheres=discs), s.entity(stamp, "landmarks/labels", texts=labels)]
+        # Tracks of moving landmarks: each robot's and main's fused ones, while not 20 frames stale.
+        robot_arrows = [s.track_arrow(x, y, vx, vy, model, False) for r in sorted(self.tracks)
+                        if self.map_frame - self.tracks[r][0] <= 20 for _, x, y, vx, vy, model in self.tracks[r][1]]
+        frame, fused = self.fused_tracks
+        fused_arrows = [s.track_arrow(x, y, vx, vy, model, True) for _, x, y, vx, vy, model in fused
+                        if self.map_frame - frame <= 20]
+        ents += [s.entity(stamp, "tracks/robots", arrows=robot_arrows), s.entity(stamp, "tracks/fused", arrows=fused_arrows)]
         self.ch_map.log(s.m.SceneUpdate(entities=ents), log_time=time.time_ns())
         self.map_dirty, self.map_sent = False, now_s
 

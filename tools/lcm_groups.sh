@@ -3,7 +3,8 @@
 # (team.channel_groups; grouped_lcm_transport.hpp, channels.hpp). Each group of
 # channels has its own port, the team's base port + the group's number:
 #   0 team-wide (DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO), 1 the
-#   robots' outputs (LMAP_EVENT(S), LMAP_SNAPSHOT), 2 GLOBAL_MAP, 3 observers
+#   robots' outputs (LMAP_EVENT(S), LMAP_SNAPSHOT, TRACKS_<r>), 2 GLOBAL_MAP and
+#   GLOBAL_TRACKS, 3 observers
 #   (GROUND_TRUTH, CANDIDATES_<r>), 4 POSE_<r>, 4+r robot r's inputs (SENSOR_<r>,
 #   TEAM_MAP_<r>).
 # lcm-logger and lcm-logplayer open one URL each: one per group. The numbers and
@@ -16,8 +17,8 @@
 #   lcm_groups_in_check LOG      0/1: a node's --check output says channel groups are on
 #   lcm_group_of CHANNEL         the group of a channel (without a suffix)
 LCM_GROUP_TEAM=0      # DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO, any other name
-LCM_GROUP_OUTPUTS=1   # LMAP_EVENT, LMAP_EVENTS, LMAP_SNAPSHOT
-LCM_GROUP_MAP=2       # GLOBAL_MAP
+LCM_GROUP_OUTPUTS=1   # LMAP_EVENT, LMAP_EVENTS, LMAP_SNAPSHOT, TRACKS_<r>
+LCM_GROUP_MAP=2       # GLOBAL_MAP, GLOBAL_TRACKS
 LCM_GROUP_OBSERVERS=3 # GROUND_TRUTH, CANDIDATES_<r>
 LCM_GROUP_POSES=4     # POSE_<r>
 LCM_GROUP_ROBOT=4     # + r: SENSOR_<r>, TEAM_MAP_<r>
@@ -52,9 +53,10 @@ lcm_group_of() {
   done
   if _lcm_robot_of "$1" POSE_ >/dev/null; then echo "$LCM_GROUP_POSES"; return; fi
   if _lcm_robot_of "$1" CANDIDATES_ >/dev/null; then echo "$LCM_GROUP_OBSERVERS"; return; fi
+  if _lcm_robot_of "$1" TRACKS_ >/dev/null; then echo "$LCM_GROUP_OUTPUTS"; return; fi
   case "$1" in
     LMAP_EVENT | LMAP_EVENTS | LMAP_SNAPSHOT) echo "$LCM_GROUP_OUTPUTS" ;;
-    GLOBAL_MAP) echo "$LCM_GROUP_MAP" ;;
+    GLOBAL_MAP | GLOBAL_TRACKS) echo "$LCM_GROUP_MAP" ;;
     GROUND_TRUTH) echo "$LCM_GROUP_OBSERVERS" ;;
     *) echo "$LCM_GROUP_TEAM" ;;
   esac

@@ -11,6 +11,7 @@
 #include "elaslam/common/contract.hpp"
 #include "elaslam/common/cov.hpp"
 #include "elaslam/common/quantile.hpp"
+#include "elaslam/common/track_checks.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/logs/log_summary.hpp"
@@ -61,6 +62,27 @@ void on_map(const global_map_t& g, std::int64_t received, LogData* d) {
   d->first_map_receive.emplace(g.frame, received);
 }
 
+/// A logged TRACKS_<r> or GLOBAL_TRACKS that a receiver would take (track_checks.hpp);
+/// else counted (channel, reason).
+template <typename Msg, typename Check>
+bool tracks_hold(const LogEvent& ev, const Msg& m, LogData* d, Check check) {
+  Refusal reason = Refusal::kMalformed;
+  if (check(m, d->limits, contract::kMaxLandmarkIdLimit, &reason).empty()) return true;
+  ++d->invalid[ev.channel][to_string(reason)];
+  return false;
+}
+
+template <typename Track>
+TrackSample sample_of(const Track& t, int robot) {
+  TrackSample s;
+  s.robot = robot;
+  s.landmark_id = t.id;
+  s.x << t.x, t.y, t.vx, t.vy;
+  s.P = read_cov_upper(t.cov);
+  s.stopped = t.stopped != 0;
+  return s;
+}
+
 const PoseRecord* pose_of(const LogData& d, int frame, int robot_id) {
   const auto poses = d.poses.find(frame);
   if (poses == d.poses.end()) return nullptr;
@@ -108,6 +130,30 @@ void add_log_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
     FrameData& f = d->truth[m.frame];
     set_truth(m, &f);
     f.time_s = static_cast<double>(m.utime) * 1e-6;
+    std::vector<std::uint8_t>& present = d->truth_present[m.frame];
+    present.assign(f.true_landmarks.size(), 0);
+    for (int i = 0; i < contract::bounded(m.num_landmarks, static_cast<int>(m.landmarks.size())); ++i) {
+      const int id = m.landmarks[static_cast<std::size_t>(i)].id;
+      if (id >= 0 && id < static_cast<int>(present.size())) present[static_cast<std::size_t>(id)] = 1;
+    }
+  } else if (channels::robot_of(ch, channels::kTracksPrefix, sfx) > 0) {
+    track_list_t m;
+    if (!decode(ev, &m, d) || !tracks_hold(ev, m, d, check_track_list)) return;
+    ++d->track_messages;
+    if (!d->tracks_taken.insert({m.frame, m.robot_id}).second) return;  // a later copy of its frame
+    std::vector<TrackSample>& out = d->robot_tracks[m.frame];
+    for (int k = 0; k < m.num_tracks; ++k) {
+      const track_t& t = m.tracks[static_cast<std::size_t>(k)];
+      out.push_back(sample_of(t, m.robot_id));
+      out.back().sightings = t.sightings;
+    }
+  } else if (ch == channels::global_tracks(sfx)) {
+    global_tracks_t m;
+    if (!decode(ev, &m, d) || !tracks_hold(ev, m, d, check_global_tracks)) return;
+    ++d->global_track_messages;
+    if (d->global_tracks.count(m.frame) > 0) return;  // the first of its frame
+    std::vector<TrackSample>& out = d->global_tracks[m.frame];
+    for (int k = 0; k < m.num_tracks; ++k) out.push_back(sample_of(m.tracks[static_cast<std::size_t>(k)], 0));
   } else if (ch == channels::global_map(sfx)) {
     global_map_t m;
     if (decode(ev, &m, d) && holds(ev, m, d) && d->map_assembly.add(m)) on_map(d->map_assembly.map(), ev.timestamp, d);
@@ -218,7 +264,31 @@ AssembledRun assemble_run(LogData& d) {
   }
   x.r.final_truth = d.truth.rbegin()->second.true_landmarks;
   x.r.truly_moving = d.truth.rbegin()->second.truly_moving;
+  score_log_tracks(d, &x.r.metrics);
   return x;
+}
+
+void score_log_tracks(const LogData& d, RunMetrics* m) {
+  TrackScorer robots, established(TrackScorer::kEstablishedSightings), fused;
+  const std::vector<TrackSample> none;
+  const std::vector<std::uint8_t> nothing;
+  const auto at = [](const auto& by_frame, int k, const auto& otherwise) -> decltype(otherwise) {
+    const auto it = by_frame.find(k);
+    return it != by_frame.end() ? it->second : otherwise;
+  };
+  for (const auto& [k, f] : d.truth) {
+    const std::vector<std::uint8_t>& present = at(d.truth_present, k, nothing);
+    robots.add(f.time_s, f.true_landmarks, present, at(d.robot_tracks, k, none));
+    established.add(f.time_s, f.true_landmarks, present, at(d.robot_tracks, k, none));
+    fused.add(f.time_s, f.true_landmarks, present, at(d.global_tracks, k, none));
+  }
+  m->tracks_scored = d.track_messages > 0;
+  if (m->tracks_scored) {
+    m->tracks = robots.finish();
+    m->tracks_established = established.finish();
+  }
+  m->global_tracks_scored = d.global_track_messages > 0;
+  if (m->global_tracks_scored) m->global_tracks = fused.finish();
 }
 
 std::string reported_mode(const LogData& d, bool* disagree) {

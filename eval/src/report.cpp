@@ -145,6 +145,7 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
       j["tracks"]["true_pose"]["established"] = tracks_json(m.tracks_true_pose_established);
     }
   }
+  if (m.global_tracks_scored) j["global_tracks"] = tracks_json(m.global_tracks);
   j["final_map"] = {{"static", r.final_map.size()}, {"moving", r.final_moving.size()}};
   j["source"] = info.source;
   j["config"] = yaml_text_to_json(info.effective_config);

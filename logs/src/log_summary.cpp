@@ -118,6 +118,7 @@ ChannelClass classify(const std::string& ch) {
   if (int r = channels::robot_of(ch, channels::kStatusRobotPrefix); r > 0) return {Kind::kStatusRobot, r, "node_status_t"};
   if (int r = channels::robot_of(ch, channels::kTeamMapPrefix); r > 0) return {Kind::kOther, r, "global_map_t"};
   if (int r = channels::robot_of(ch, channels::kCandidatesPrefix); r > 0) return {Kind::kOther, r, "candidate_list_t"};
+  if (int r = channels::robot_of(ch, channels::kTracksPrefix); r > 0) return {Kind::kOther, r, "track_list_t"};
   if (ch == channels::status_main() || ch == channels::status_sim()) return {Kind::kStatus, -1, "node_status_t"};
   if (ch == channels::ground_truth()) return {Kind::kGroundTruth, -1, "ground_truth_t"};
   if (ch == channels::lmap_event()) return {Kind::kLmapEvent, -1, "landmark_event_t"};
@@ -126,6 +127,7 @@ ChannelClass classify(const std::string& ch) {
   if (ch == channels::lmap_resync()) return {Kind::kOther, -1, "resync_request_t"};
   if (ch == channels::global_map()) return {Kind::kGlobalMap, -1, "global_map_t"};
   if (ch == channels::global_moving()) return {Kind::kOther, -1, "global_map_t"};
+  if (ch == channels::global_tracks()) return {Kind::kOther, -1, "global_tracks_t"};
   if (ch == channels::dynamic_notice()) return {Kind::kDynamicNotice, -1, "dynamic_notice_t"};
   if (ch == channels::run_info()) return {Kind::kRunInfo, -1, "run_info_t"};
   return {};

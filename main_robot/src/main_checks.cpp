@@ -2,6 +2,7 @@
 #include "elaslam/main_robot/main_checks.hpp"
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/track_checks.hpp"
 
 namespace elaslam::main_checks {
 
@@ -114,6 +115,13 @@ std::string pose(const pose_estimate_t& m, const MessageLimits& lim, Refusal* re
   if (m.event_seq < 0 || m.event_seq > kMaxSeq) return contract::got("event_seq not in [0, 2^62]", m.event_seq);
   if (m.snapshot_chunks < 0) return contract::got("snapshot_chunks is negative", m.snapshot_chunks);
   return check_pose(m, lim, &r);
+}
+
+std::string tracks(const track_list_t& m, const MessageLimits& lim, int max_landmark_id, Refusal* reason) {
+  Refusal dummy = Refusal::kMalformed;
+  Refusal& r = reason ? *reason : dummy;
+  if (std::string p = robot(m.robot_id, lim, &r); !p.empty()) return p;
+  return check_track_list(m, lim, max_landmark_id, &r);
 }
 
 }  // namespace elaslam::main_checks

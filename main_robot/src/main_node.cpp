@@ -23,6 +23,7 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options), publisher_(
   resyncs_.reserve(kMaxTeamRobots * 4);
   taken_.reserve(kMaxTeamRobots * 4);
   alert_.reserve(kAlertCapacity);  // check_team's lines go in without allocating
+  global_tracks_.tracks.resize(contract::kMaxGlobalTracks);  // num_tracks says how many count
 }
 
 std::string MainNode::validate(const landmark_event_t& m, Refusal* reason) const {
@@ -39,6 +40,10 @@ std::string MainNode::validate(const lmap_events_t& m, Refusal* reason) const {
 
 std::string MainNode::validate(const pose_estimate_t& m, Refusal* reason) const {
   return main_checks::pose(m, map_.options().limits, reason);
+}
+
+std::string MainNode::validate(const track_list_t& m, Refusal* reason) const {
+  return main_checks::tracks(m, map_.options().limits, map_.max_landmark_id(), reason);
 }
 
 // The newest frame known of the robot (else of the team, when the robot is new): a
@@ -83,6 +88,7 @@ void MainNode::restarted(int robot_id, std::int64_t incarnation, int frame) {
   ++counters_.restarts;
   const auto r = static_cast<std::size_t>(robot_id - 1);
   completion_.restart(robot_id);
+  fusion_.forget(robot_id);  // the tracks of its earlier incarnation
   frame_guard_[r].clear();
   event_guard_[r].clear();
   snapshot_guard_[r].clear();
@@ -318,6 +324,65 @@ int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {
   if (out.let_go_frame >= 0 && map_.missed_events(m.robot_id, out.let_go_event_seq)) ++counters_.gaps;
   if (map_.stream(m.robot_id).gap_pending) request_resync(m.robot_id, resync_request_t::GAP);  // (rate-limited)
   return out.finished;
+}
+
+bool MainNode::on_tracks(const track_list_t& m, std::string* why) {
+  Refusal reason = Refusal::kMalformed;
+  const auto refuse = [&](Refusal r, const std::string& problem) {
+    ++counters_.tracks_refused;
+    return refused(r, problem, why);
+  };
+  if (std::string problem = validate(m, &reason); !problem.empty()) return refuse(reason, problem);
+  // The incarnation main follows (its POSE went out first), or any while none is
+  // known yet; a new incarnation shows first in its POSE, which starts the robot over.
+  const std::int64_t followed = map_.stream(m.robot_id).incarnation;
+  if (followed != 0 && m.incarnation != followed)
+    return refuse(Refusal::kStale, "tracks of incarnation " + std::to_string(m.incarnation) + ", robot " +
+                                       std::to_string(m.robot_id) + " is followed at " + std::to_string(followed));
+  // A frame far ahead would hold back every later message of the robot as not newer.
+  const int last = std::max(map_.stream(m.robot_id).last_frame, completion_.robot_frame(m.robot_id));
+  if (last >= 0 && m.frame > last + map_.options().max_frame_gap)
+    return refuse(Refusal::kFrameWindow,
+                  contract::got("tracks' frame more than max_frame_gap ahead of robot " + std::to_string(m.robot_id) +
+                                    "'s last " + std::to_string(last),
+                                m.frame));
+  if (m.frame <= fusion_.robot_frame(m.robot_id)) {
+    ++counters_.stale_tracks;
+    return true;
+  }
+  fusion_.take(m);
+  ++counters_.tracks;
+  return true;
+}
+
+bool MainNode::make_global_tracks(std::int64_t now_utime, int frame) {
+  const std::vector<FusedTrack>& fused = fusion_.fuse(stamp(frame));
+  const int total = static_cast<int>(fused.size());
+  const int n = std::min(total, contract::kMaxGlobalTracks);
+  if (total == 0 && global_tracks_.num_tracks + global_tracks_.num_omitted == 0) return false;
+  for (int k = 0; k < n; ++k) {
+    const FusedTrack& f = fused[static_cast<std::size_t>(k)];
+    global_track_t& g = global_tracks_.tracks[static_cast<std::size_t>(k)];
+    g.id = f.estimate.id;
+    g.x = f.estimate.x(0);
+    g.y = f.estimate.x(1);
+    g.vx = f.estimate.x(2);
+    g.vy = f.estimate.x(3);
+    write_cov_upper(g.cov, f.estimate.P);
+    for (std::size_t i = 0; i < f.estimate.probabilities.size(); ++i)
+      g.probabilities[i] = static_cast<float>(f.estimate.probabilities[i]);
+    g.likeliest = static_cast<std::int8_t>(f.likeliest());
+    g.stopped = f.stopped() ? 1 : 0;
+    g.contributors = static_cast<std::int16_t>(f.contributors);
+  }
+  global_tracks_.utime = now_utime;
+  global_tracks_.frame = stamp(frame);
+  global_tracks_.incarnation = incarnation_;
+  global_tracks_.num_tracks = static_cast<std::int16_t>(n);
+  global_tracks_.num_omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
+  ++counters_.global_tracks_published;
+  counters_.global_tracks_omitted += global_tracks_.num_omitted;
+  return true;
 }
 
 int MainNode::stamp(int frame) const {

@@ -21,7 +21,16 @@ std::string final_summary(const MainNode& node) {
                 (long long)node.map().version(), (long long)c.maps_published, (long long)c.map_chunks,
                 (long long)c.moving_sets, (long long)c.stale_poses, (long long)c.runs_started,
                 (long long)c.occupied, (long long)node.map().rounds_left_out(), (long long)c.state_damaged);
-  return buf;
+  std::string out = buf;
+  if (c.tracks + c.tracks_refused > 0) {  // robots sent tracks of moving landmarks
+    std::snprintf(buf, sizeof buf,
+                  "main_robot: tracks=%lld tracks_refused=%lld stale_tracks=%lld global_tracks=%lld "
+                  "global_tracks_omitted=%lld\n",
+                  (long long)c.tracks, (long long)c.tracks_refused, (long long)c.stale_tracks,
+                  (long long)c.global_tracks_published, (long long)c.global_tracks_omitted);
+    out += buf;
+  }
+  return out;
 }
 
 }  // namespace elaslam

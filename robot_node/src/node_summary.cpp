@@ -33,6 +33,14 @@ std::string final_summary(const RobotNode& node, const FrameStages& st) {
   out += "robot_node " + std::to_string(node.robot_id()) + ": stages_us p50/p99/max receive=" +
          p50_p99_max(st.receive) + " frame=" + p50_p99_max(st.frame) + " outputs=" + p50_p99_max(st.outputs) +
          " pose=" + p50_p99_max(st.pose) + "\n";
+  if (const TrackCounters& k = node.robot().tracks().counters(); k.started > 0) {  // movers were tracked
+    std::snprintf(buf, sizeof buf,
+                  "robot_node %d: tracks started=%lld returned=%lld lost=%lld ended=%lld full=%lld "
+                  "omitted_from_messages=%lld\n",
+                  node.robot_id(), (long long)k.started, (long long)k.returned, (long long)k.lost, (long long)k.ended,
+                  (long long)k.full, (long long)c.tracks_omitted);
+    out += buf;
+  }
   if (node.robot().options().team_map_fuse) {  // robot.team_map: what the other robots' map did
     const TeamCounters& t = node.robot().team_counters();
     std::snprintf(buf, sizeof buf,

@@ -17,6 +17,11 @@ void grow_moving(lmap_snapshot_t* m, int n) {
   m->moving_frames.resize(static_cast<std::size_t>(n));
 }
 
+// track_t's model constants and probabilities are MotionModel's.
+static_assert(static_cast<int>(MotionModel::kStatic) == track_t::STATIC &&
+              static_cast<int>(MotionModel::kBounded) == track_t::BOUNDED &&
+              static_cast<int>(MotionModel::kConstantVelocity) == track_t::CONSTANT_VELOCITY && kMotionModels == 3);
+
 }  // namespace
 
 RobotMessages::RobotMessages(const RobotOptions& options, int robot_id)
@@ -33,11 +38,13 @@ RobotMessages::RobotMessages(const RobotOptions& options, int robot_id)
   prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, max_id, max_id, &chunk_sizes_, &chunks_);
   spans_.reserve(chunks_.size());
   candidates_.candidates.resize(contract::kMaxCandidates);  // num_candidates says how many count
+  tracks_.tracks.resize(contract::kMaxTracks);              // num_tracks says how many count
 }
 
 void RobotMessages::begin_frame() {
   snapshot_ready_ = false;
   candidates_ready_ = false;
+  tracks_ready_ = false;
   events_.clear();
   num_batches_ = 0;
 }
@@ -134,6 +141,41 @@ void RobotMessages::fill_candidates(const Robot& robot, int frame, std::int64_t 
   candidates_.num_candidates = static_cast<std::int16_t>(n);
   candidates_.num_omitted = static_cast<std::int16_t>(omitted);
   candidates_ready_ = true;
+}
+
+void RobotMessages::fill_tracks(const Robot& robot, int frame, std::int64_t now_utime) {
+  // Confirmed tracks only: one sighting (a misread, a wrong association) is not a
+  // track yet (MoverTrack::confirmed).
+  const MoverTracks& pool = robot.tracks();
+  int total = 0, n = 0;
+  for (const int id : pool.ids()) {
+    const MoverTrack& t = pool.track(id);
+    if (!t.confirmed()) continue;
+    ++total;
+    if (n == contract::kMaxTracks) continue;
+    track_t& m = tracks_.tracks[static_cast<std::size_t>(n++)];
+    const TrackVector x = t.mean();
+    m.id = id;
+    m.x = x(0);
+    m.y = x(1);
+    m.vx = x(2);
+    m.vy = x(3);
+    write_cov_upper(m.cov, t.covariance());
+    for (int i = 0; i < kMotionModels; ++i)
+      m.probabilities[i] = static_cast<float>(t.probabilities()[static_cast<std::size_t>(i)]);
+    m.likeliest = static_cast<std::int8_t>(t.likeliest());
+    m.stopped = t.stopped() ? 1 : 0;
+    m.validated = t.validated() ? 1 : 0;
+    m.sightings = static_cast<std::int32_t>(std::min<std::int64_t>(t.sightings(), INT32_MAX));
+  }
+  if (total == 0 && tracks_.num_tracks + tracks_.num_omitted == 0) return;
+  tracks_.utime = now_utime;
+  tracks_.frame = frame;
+  tracks_.robot_id = static_cast<std::int16_t>(robot_id_);
+  tracks_.incarnation = incarnation_;
+  tracks_.num_tracks = static_cast<std::int16_t>(n);
+  tracks_.num_omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
+  tracks_ready_ = true;
 }
 
 int RobotMessages::make_snapshot(const Robot& robot, int frame, std::int64_t now_utime) {

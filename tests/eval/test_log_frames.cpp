@@ -4,9 +4,13 @@
 // evaluated and why, the run's facts and the frame accounting, on hand-made events.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -14,9 +18,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "../support/messages.hpp"
 #include "elaslam/common/channels.hpp"
 #include "elaslam/eval/log_frames.hpp"
 #include "elaslam/global_map_t.hpp"
+#include "elaslam/global_tracks_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
@@ -182,6 +188,68 @@ TEST(LogFrames, WhatANodeWouldRefuseOrCannotDecodeIsCountedNotEvaluated) {
   // A later copy of a robot's POSE of a frame is a duplicate: the first one counts.
   add_log_event(event(channels::pose(1), kT0 + 9'000, pose(1, 0)), "", &d);
   EXPECT_EQ(d.poses.at(0).at(1).received_us, kT0 + 5'000);
+}
+
+// The recorded tracks: five frames in which landmark 1 moves along x at 0.5 m/s;
+// robot 1's TRACKS put it 0.1 m ahead, robot 2's 0.2 m, both with its true velocity;
+// main's GLOBAL_TRACKS put it where it is. A second TRACKS_1 of frame 2 (far off) is
+// a later copy and not scored; one with a NaN velocity is counted as invalid. Robots:
+// position RMS sqrt((0.1^2 + 0.2^2) / 2) over 10 samples, speed RMS 0 over the 8
+// with a true velocity (every frame but the first); fused: position RMS 0 over 5.
+TEST(LogFrames, TheRobotsTracksAndMainsFusedTracksAreScoredAgainstTheTruth) {
+  LogData d;
+  const auto global = [](int frame, double x) {
+    global_tracks_t m{};
+    m.frame = frame;
+    m.num_tracks = 1;
+    m.tracks.resize(1);
+    global_track_t& g = m.tracks[0];
+    const track_t t = test::track_of(1, x, 5.0, 0.5, 0.0);
+    g.id = 1, g.x = t.x, g.y = t.y, g.vx = t.vx, g.vy = t.vy, g.likeliest = t.likeliest, g.contributors = 0b11;
+    std::copy(std::begin(t.cov), std::end(t.cov), std::begin(g.cov));
+    std::copy(std::begin(t.probabilities), std::end(t.probabilities), std::begin(g.probabilities));
+    return m;
+  };
+  for (int k = 0; k < 5; ++k) {
+    const std::int64_t t = kT0 + k * kPeriod;
+    ground_truth_t g = truth(k);
+    g.landmarks[1].x = 0.05 * k;
+    add_log_event(event(channels::ground_truth(), t, g), "", &d);
+    for (int r = 1; r <= 2; ++r)
+      add_log_event(event(channels::tracks(r), t + 1'000,
+                          test::tracks_msg(r, k, {test::track_of(1, 0.05 * k + 0.1 * r, 5.0, 0.5, 0.0)})),
+                    "", &d);
+    add_log_event(event(channels::global_tracks(), t + 2'000, global(k, 0.05 * k)), "", &d);
+  }
+  add_log_event(event(channels::tracks(1), kT0 + 2 * kPeriod + 3'000,
+                      test::tracks_msg(1, 2, {test::track_of(1, 9.0, 5.0, 0.5, 0.0)})),
+                "", &d);
+  track_list_t bad = test::tracks_msg(1, 3, {test::track_of(1, 0.0, 5.0, 0.5, 0.0)});
+  bad.tracks[0].vx = std::numeric_limits<double>::quiet_NaN();
+  add_log_event(event(channels::tracks(1), kT0 + 3 * kPeriod + 3'000, bad), "", &d);
+  EXPECT_EQ(d.invalid["TRACKS_1"]["malformed"], 1);
+  EXPECT_EQ(d.track_messages, 11);
+
+  const AssembledRun x = assemble_run(d);
+  const RunMetrics& m = x.r.metrics;
+  ASSERT_TRUE(m.tracks_scored);
+  EXPECT_EQ(m.tracks.samples, 10);
+  EXPECT_NEAR(m.tracks.position_rms_m, std::sqrt((0.01 + 0.04) / 2), 1e-9);
+  EXPECT_EQ(m.tracks.moving_samples, 8);
+  EXPECT_NEAR(m.tracks.speed_rms_mps, 0.0, 1e-9);
+  ASSERT_TRUE(m.global_tracks_scored);
+  EXPECT_EQ(m.global_tracks.samples, 5);
+  EXPECT_NEAR(m.global_tracks.position_rms_m, 0.0, 1e-12);
+  const RunInfo info{"ela", 0.0, 0.0, 0, "run.lcmlog", "", "evaluate"};
+  const nlohmann::json j = metrics_json(info, x.r);
+  EXPECT_EQ(j["tracks"]["samples"], 10);
+  EXPECT_EQ(j["global_tracks"]["samples"], 5);
+
+  // A log without tracks scores none.
+  LogData plain = three_frames();
+  const AssembledRun y = assemble_run(plain);
+  EXPECT_FALSE(y.r.metrics.tracks_scored);
+  EXPECT_FALSE(y.r.metrics.global_tracks_scored);
 }
 
 TEST(LogFrames, TheRunsFactsComeFromTheLogBeforeTheCommandLine) {

@@ -13,6 +13,8 @@
 #include "elaslam/common/channels.hpp"
 #include "elaslam/common/contract.hpp"
 #include "elaslam/candidate_list_t.hpp"
+#include "elaslam/global_tracks_t.hpp"
+#include "elaslam/track_list_t.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
@@ -194,6 +196,48 @@ TEST(LcmTypes, CandidateListsFitOneDatagram) {
   EXPECT_EQ(m.getEncodedSize(), empty + 52);
   contract::set_count(&m.candidates, &m.num_candidates, contract::kMaxCandidates);
   EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
+}
+
+// TRACKS_<r> and GLOBAL_TRACKS: the header and per-track sizes contract::kMaxTracks
+// and kMaxGlobalTracks are worked out from; a full message fits one snapshot-sized
+// datagram and one more track would not; a track round-trips (the covariance's upper
+// triangle in floats).
+TEST(LcmTypes, TrackListsFitOneDatagram) {
+  track_list_t m{};
+  EXPECT_EQ(m.getEncodedSize(), contract::kTrackListHeaderBytes);
+  contract::set_count(&m.tracks, &m.num_tracks, 1);
+  EXPECT_EQ(m.getEncodedSize(), contract::kTrackListHeaderBytes + contract::kTrackBytes);
+  contract::set_count(&m.tracks, &m.num_tracks, contract::kMaxTracks);
+  EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
+  contract::set_count(&m.tracks, &m.num_tracks, contract::kMaxTracks + 1);
+  EXPECT_GT(m.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxTracks is the most that fits";
+  global_tracks_t g{};
+  EXPECT_EQ(g.getEncodedSize(), contract::kGlobalTracksHeaderBytes);
+  contract::set_count(&g.tracks, &g.num_tracks, 1);
+  EXPECT_EQ(g.getEncodedSize(), contract::kGlobalTracksHeaderBytes + contract::kGlobalTrackBytes);
+  contract::set_count(&g.tracks, &g.num_tracks, contract::kMaxGlobalTracks);
+  EXPECT_LE(g.getEncodedSize(), contract::kMaxChunkBytes);
+  contract::set_count(&g.tracks, &g.num_tracks, contract::kMaxGlobalTracks + 1);
+  EXPECT_GT(g.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxGlobalTracks is the most that fit";
+
+  contract::set_count(&m.tracks, &m.num_tracks, 2);
+  m.robot_id = 3;
+  m.tracks[1].id = 41;
+  m.tracks[1].vy = -0.25;
+  m.tracks[1].cov[4] = 0.5f;  // yy
+  m.tracks[1].probabilities[2] = 0.75f;
+  m.tracks[1].likeliest = track_t::CONSTANT_VELOCITY;
+  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_GT(m.encode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  track_list_t d{};
+  ASSERT_GT(d.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  ASSERT_EQ(d.num_tracks, 2);
+  EXPECT_EQ(d.robot_id, 3);
+  EXPECT_EQ(d.tracks[1].id, 41);
+  EXPECT_EQ(d.tracks[1].vy, -0.25);
+  EXPECT_EQ(d.tracks[1].cov[4], 0.5f);
+  EXPECT_EQ(d.tracks[1].probabilities[2], 0.75f);
+  EXPECT_EQ(d.tracks[1].likeliest, track_t::CONSTANT_VELOCITY);
 }
 
 // LMAP_EVENTS: a 32-byte header (fingerprint included) and 83 bytes per event, the

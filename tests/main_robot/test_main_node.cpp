@@ -6,6 +6,7 @@
 // counters. Every expectation is worked out by hand from the messages sent.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -219,12 +220,14 @@ class FakeShell {
     if constexpr (std::is_same_v<Msg, landmark_event_t>) on_event = handle;
     if constexpr (std::is_same_v<Msg, lmap_events_t>) on_events = handle;
     if constexpr (std::is_same_v<Msg, lmap_snapshot_t>) on_snapshot = handle;
+    if constexpr (std::is_same_v<Msg, track_list_t>) on_tracks = handle;
     channels.push_back(channel);
     return 1;
   }
   template <class Msg>
   void publish(const std::string& channel, const Msg& m) {
     seen.push_back(channel + " " + std::to_string(m.frame));
+    if constexpr (std::is_same_v<Msg, global_tracks_t>) last_tracks = m;
   }
   void publish(const std::string& channel, const resync_request_t& m) {  // (no frame: the robot asked)
     seen.push_back(channel + " robot " + std::to_string(m.robot_id));
@@ -240,6 +243,8 @@ class FakeShell {
   std::function<void(const landmark_event_t&, const std::string&)> on_event;
   std::function<void(const lmap_events_t&, const std::string&)> on_events;
   std::function<void(const lmap_snapshot_t&, const std::string&)> on_snapshot;
+  std::function<void(const track_list_t&, const std::string&)> on_tracks;
+  global_tracks_t last_tracks{};  // the last GLOBAL_TRACKS published
 
  private:
   std::string suffix_;
@@ -257,7 +262,8 @@ TEST(MainNodePorts, TheMapOfAFrameGoesOutWhenTheFrameIsFinished) {
   FakeShell shell;
   MainPorts<FakeShell> ports(shell, node);
   ASSERT_TRUE(ports.open());
-  const std::vector<std::string> inputs = {"LMAP_EVENT", "LMAP_EVENTS", "LMAP_SNAPSHOT", channels::any_pose()};
+  const std::vector<std::string> inputs = {"LMAP_EVENT", "LMAP_EVENTS", "LMAP_SNAPSHOT", channels::any_pose(),
+                                           channels::any_tracks()};
   EXPECT_EQ(shell.channels, inputs);
   constexpr std::int64_t ms = 1000;
   const std::int64_t t0 = shell.now;
@@ -308,6 +314,86 @@ TEST(MainNodePorts, TheMapOfAFrameGoesOutWhenTheFrameIsFinished) {
   EXPECT_EQ(c.moving_sets, 3);
   EXPECT_EQ(c.notices_sent, 1);
   EXPECT_EQ(c.stale_poses, 1);
+}
+
+// GIVEN robots 1 and 2 tracking landmark 7 (and robot 2 also landmark 9)
+// WHEN their TRACKS of frame 0 arrive (after their POSEs of frame 0: the map of
+// frame 0 went out already) and then their POSEs of frame 1
+// THEN GLOBAL_TRACKS goes out right after the GLOBAL_MAP of frame 1, with landmark 7
+// fused from both (contributors 1 and 2, between the two estimates) and 9 from
+// robot 2 alone; when the robots' tracks end, one empty GLOBAL_TRACKS follows, then
+// none.
+TEST(MainNodePorts, FusedTracksGoOutWithEveryGlobalMap) {
+  MainNode node(team_of_three());
+  FakeShell shell;
+  MainPorts<FakeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  auto sent = [&] {
+    std::vector<std::string> s;
+    s.swap(shell.seen);
+    return s;
+  };
+  // The publication after `map` in `out`, "" when none.
+  auto after = [](const std::vector<std::string>& out, const std::string& map) {
+    for (std::size_t i = 0; i + 1 < out.size(); ++i)
+      if (out[i] == map) return out[i + 1];
+    return std::string();
+  };
+  auto has = [](const std::vector<std::string>& out, const std::string& what) {
+    return std::find(out.begin(), out.end(), what) != out.end();
+  };
+  shell.on_pose(pose(1, 0, 0), "POSE_1");
+  shell.on_pose(pose(2, 0, 0), "POSE_2");
+  std::vector<std::string> out = sent();
+  EXPECT_TRUE(has(out, "GLOBAL_MAP 0"));
+  EXPECT_FALSE(has(out, "GLOBAL_TRACKS 0")) << "no tracks yet";
+  shell.on_tracks(test::tracks_msg(1, 0, {test::track_of(7, 1.0, 2.0, 0.5, 0.0)}), "TRACKS_1");
+  shell.on_tracks(test::tracks_msg(2, 0, {test::track_of(9, -3.0, 0.0, 0.0, 0.2, 0.02, 0.01, {0.8f, 0.1f, 0.1f}),
+                                          test::track_of(7, 1.2, 2.0, 0.3, 0.0, 0.04, 0.01)}),
+                  "TRACKS_2");
+  EXPECT_TRUE(sent().empty()) << "tracks go out with the next map";
+  shell.on_pose(pose(1, 1, 0), "POSE_1");
+  shell.on_pose(pose(2, 1, 0), "POSE_2");
+  out = sent();
+  EXPECT_EQ(after(out, "GLOBAL_MAP 1"), "GLOBAL_TRACKS 1");
+  const global_tracks_t& g = shell.last_tracks;
+  ASSERT_EQ(g.num_tracks, 2);
+  EXPECT_EQ(g.num_omitted, 0);
+  const global_track_t& a = g.tracks[0];
+  EXPECT_EQ(a.id, 7);
+  EXPECT_EQ(a.contributors, 0b11);
+  EXPECT_GT(a.x, 1.0);  // between the two, nearer robot 1's (smaller position variance)
+  EXPECT_LT(a.x, 1.1);
+  EXPECT_GT(a.vx, 0.3);
+  EXPECT_LT(a.vx, 0.5);
+  // Robot 1's position and robot 2's velocity are the surer (0.01 against 0.04): the
+  // fusion (w = 1/2 by symmetry) has variances 1/62.5 = 0.016, trace 0.064, below
+  // either alone's 0.1; x = 0.016 (50 * 1.0 + 12.5 * 1.2) = 1.04.
+  EXPECT_NEAR(a.x, 1.04, 1e-6);
+  EXPECT_NEAR(a.cov[0] + a.cov[4] + a.cov[7] + a.cov[9], 0.064, 1e-6);
+  EXPECT_EQ(a.likeliest, track_t::CONSTANT_VELOCITY);
+  const global_track_t& b = g.tracks[1];
+  EXPECT_EQ(b.id, 9);
+  EXPECT_EQ(b.contributors, 0b10);
+  EXPECT_EQ(b.x, -3.0);
+  EXPECT_EQ(b.likeliest, track_t::STATIC);
+  EXPECT_EQ(b.stopped, 1);
+  // The tracks end: one empty GLOBAL_TRACKS, then none.
+  shell.on_tracks(test::tracks_msg(1, 1, {}), "TRACKS_1");
+  shell.on_tracks(test::tracks_msg(2, 1, {}), "TRACKS_2");
+  shell.on_pose(pose(1, 2, 0), "POSE_1");
+  shell.on_pose(pose(2, 2, 0), "POSE_2");
+  out = sent();
+  EXPECT_EQ(after(out, "GLOBAL_MAP 2"), "GLOBAL_TRACKS 2");
+  EXPECT_EQ(shell.last_tracks.num_tracks, 0);
+  shell.on_pose(pose(1, 3, 0), "POSE_1");
+  shell.on_pose(pose(2, 3, 0), "POSE_2");
+  out = sent();
+  EXPECT_TRUE(has(out, "GLOBAL_MAP 3"));
+  EXPECT_FALSE(has(out, "GLOBAL_TRACKS 3"));
+  EXPECT_TRUE(shell.refused.empty());
+  EXPECT_EQ(node.counters().tracks, 4);
+  EXPECT_EQ(node.counters().global_tracks_published, 2);
 }
 
 }  // namespace

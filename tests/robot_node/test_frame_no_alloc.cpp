@@ -23,6 +23,7 @@ namespace {
 
 struct Tally {
   long frames = 0, missed = 0, events[5] = {0, 0, 0, 0, 0}, notices = 0, snapshots = 0, team_chunks = 0;
+  long tracks = 0, global_tracks = 0;  // TRACKS_<r> taken by main, GLOBAL_TRACKS made
 };
 
 TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
@@ -99,9 +100,11 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
         }
         if (node.snapshot_ready())
           for (int c = 0; c < node.num_snapshot_chunks(); ++c) main.on_snapshot(node.snapshot_chunk(c)), ++t.snapshots;
+        if (node.tracks_ready() && main.on_tracks(node.tracks_msg())) ++t.tracks;
         for (const auto& n : main.take_notices(0))
           for (auto& r : robots) r.on_notice(n), ++t.notices;
         const int chunks = main.make_global_map(0);
+        if (main.make_global_tracks(0)) ++t.global_tracks;
         for (int c = 0; c < chunks; ++c)
           for (auto& r : robots) r.on_global_map(main.map_chunk(c));
         if (main.team_map_due(static_cast<int>(f / static_cast<std::size_t>(R))))
@@ -159,6 +162,10 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       EXPECT_GT(started, 10);
       EXPECT_GT(updates, 50);
       EXPECT_GT(ended, 0);
+      // ... sent (TRACKS_<r>), checked and fused by main (GLOBAL_TRACKS).
+      EXPECT_GT(t.tracks, 10);
+      EXPECT_GT(t.global_tracks, 10);
+      EXPECT_EQ(main.counters().tracks_refused, 0);
     }
   }
 }

@@ -3,14 +3,17 @@
 // touching the filter; duplicated and reordered frames are refused; gaps are bridged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <random>
 
 #include <Eigen/Geometry>
 
 #include "elaslam/robot_node/robot_node.hpp"
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/cov.hpp"
 #include "scene.hpp"
 
 namespace elaslam {
@@ -207,6 +210,104 @@ TEST_F(RobotNodeInput, CandidatesAreSentWhileThereAreSomeThenOnceEmpty) {
   RobotNode quiet(off, 2);
   ASSERT_EQ(quiet.on_sensor(frame(0), 0), RobotNode::Verdict::kProcessed);
   EXPECT_FALSE(quiet.candidates_ready());
+}
+
+// The robot's confirmed tracks (MoverTrack::confirmed), in the pool's order: what
+// TRACKS_<r> carries.
+std::vector<int> confirmed_ids(const MoverTracks& pool) {
+  std::vector<int> ids;
+  for (const int id : pool.ids())
+    if (pool.track(id).confirmed()) ids.push_back(id);
+  return ids;
+}
+
+// TRACKS_<r>: a robot among six landmarks, one of which (2) moves at 0.8 m/s from
+// frame 20 to 50 and then rests: while the robot tracks it, every frame's TRACKS
+// lists exactly Robot::tracks()'s confirmed tracks (id, mean, covariance, model
+// probabilities, flags); one empty list follows the track's end, then none.
+TEST(RobotNodeTracks, TracksAreSentWhileThereAreSomeThenOnceEmpty) {
+  RobotNode node(test::robot_options(Mode::kEla), 2);
+  std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  const Eigen::Vector2d start = lms[2];
+  std::mt19937_64 rng(7);
+  int sent = 0, empty = 0, quiet_after_empty = 0;
+  bool was_tracking = false;
+  for (int f = 0; f < 120; ++f) {
+    lms[2] = start + 0.08 * (std::clamp(f, 20, 50) - 20) * Eigen::Vector2d(0.0, 1.0);
+    sensor_frame_t m = to_msg(test::frame_from(f, Pose2{}, Pose2{}, lms, test::all_ids(6), &rng), 2);
+    m.utime = 1'700'000'000'000'000 + std::int64_t{100000} * f;
+    ASSERT_EQ(node.on_sensor(m, 5000 + f), RobotNode::Verdict::kProcessed) << f;
+    const MoverTracks& pool = node.robot().tracks();
+    const std::vector<int> ids = confirmed_ids(pool);
+    const bool tracking = !ids.empty();
+    if (!tracking && !was_tracking) {
+      EXPECT_FALSE(node.tracks_ready()) << f;
+      if (empty > 0) ++quiet_after_empty;
+      continue;
+    }
+    ASSERT_TRUE(node.tracks_ready()) << f;
+    const track_list_t& t = node.tracks_msg();
+    EXPECT_EQ(t.robot_id, 2);
+    EXPECT_EQ(t.frame, f);
+    EXPECT_EQ(t.utime, 5000 + f);
+    EXPECT_EQ(t.incarnation, node.incarnation());
+    EXPECT_EQ(t.num_omitted, 0);
+    ASSERT_EQ(t.num_tracks, static_cast<int>(ids.size())) << f;
+    if (t.num_tracks == 0) ++empty;
+    for (int k = 0; k < t.num_tracks; ++k) {
+      const track_t& m = t.tracks[static_cast<std::size_t>(k)];
+      ASSERT_EQ(m.id, ids[static_cast<std::size_t>(k)]);
+      const MoverTrack& want = pool.track(m.id);
+      EXPECT_EQ(m.x, want.mean()(0));
+      EXPECT_EQ(m.y, want.mean()(1));
+      EXPECT_EQ(m.vx, want.mean()(2));
+      EXPECT_EQ(m.vy, want.mean()(3));
+      EXPECT_NEAR((read_cov_upper(m.cov) - want.covariance()).norm(), 0.0, 1e-6 * want.covariance().norm());
+      for (std::size_t i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(m.probabilities[i], static_cast<float>(want.probabilities()[i]));
+      EXPECT_EQ(m.likeliest, static_cast<int>(want.likeliest()));
+      EXPECT_EQ(m.stopped != 0, want.stopped());
+      EXPECT_EQ(m.validated != 0, want.validated());
+      EXPECT_EQ(m.sightings, want.sightings());
+      if (m.id == 2 && f >= 30 && f < 50) {
+        EXPECT_LT((Eigen::Vector2d(m.x, m.y) - lms[2]).norm(), 0.2) << f;
+      }
+    }
+    ++sent;
+    was_tracking = tracking;
+  }
+  EXPECT_GT(sent, 20);  // the mover was tracked for seconds
+  EXPECT_EQ(empty, 1);  // one empty list when its track ended (RETURN)
+  EXPECT_GT(quiet_after_empty, 5);
+}
+
+// More tracks than one datagram holds: the first contract::kMaxTracks go out, the
+// rest are counted, in the message and in the node's counters.
+TEST(RobotNodeTracks, TracksBeyondTheMessagesCapacityAreCounted) {
+  RobotNode node(test::robot_options(Mode::kEla), 2);
+  const int n = 2 * (contract::kMaxTracks + 3);
+  std::vector<Eigen::Vector2d> lms = test::ring(n, 3.0);
+  const std::vector<Eigen::Vector2d> start = lms;
+  std::mt19937_64 rng(3);
+  int most = 0;
+  std::int64_t omitted = 0;
+  for (int f = 0; f < 60; ++f) {
+    // Every other landmark (the rest hold the robot's pose) moves outward at 0.8 m/s from frame 20.
+    for (int i = 0; i < n; i += 2)
+      lms[static_cast<std::size_t>(i)] = start[static_cast<std::size_t>(i)] * (1.0 + 0.08 / 3.0 * (std::max(f, 20) - 20));
+    sensor_frame_t m = to_msg(test::frame_from(f, Pose2{}, Pose2{}, lms, test::all_ids(n), &rng), 2);
+    m.utime = 1'700'000'000'000'000 + std::int64_t{100000} * f;
+    ASSERT_EQ(node.on_sensor(m, 0), RobotNode::Verdict::kProcessed) << f;
+    if (!node.tracks_ready()) continue;
+    const track_list_t& t = node.tracks_msg();
+    const int held = static_cast<int>(confirmed_ids(node.robot().tracks()).size());
+    EXPECT_EQ(t.num_tracks, std::min(held, contract::kMaxTracks));
+    EXPECT_EQ(t.num_omitted, held - t.num_tracks);
+    omitted += t.num_omitted;
+    most = std::max(most, held);
+  }
+  ASSERT_GT(most, contract::kMaxTracks) << "the scene must track more movers than fit";
+  EXPECT_GT(omitted, 0);
+  EXPECT_EQ(node.counters().tracks_omitted, omitted);
 }
 
 TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {

@@ -11,6 +11,7 @@
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/lmap_events_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/track_list_t.hpp"
 
 namespace elaslam::test {
 
@@ -50,6 +51,34 @@ inline pose_estimate_t pose_msg(int robot, int frame, double var = 1e-4) {
   p.frame = frame;
   p.cov[0][0] = p.cov[1][1] = p.cov[2][2] = var;
   return p;
+}
+
+/// A track of landmark `id` at (x, y) moving at (vx, vy), covariance diag(pos_var,
+/// pos_var, vel_var, vel_var), model probabilities (static, bounded, constant velocity).
+inline track_t track_of(int id, double x, double y, double vx, double vy, double pos_var = 0.01, double vel_var = 0.04,
+                        std::vector<float> probabilities = {0.1f, 0.2f, 0.7f}) {
+  track_t t{};
+  t.id = id;
+  t.x = x;
+  t.y = y;
+  t.vx = vx;
+  t.vy = vy;
+  t.cov[0] = t.cov[4] = static_cast<float>(pos_var);  // xx, yy
+  t.cov[7] = t.cov[9] = static_cast<float>(vel_var);  // vxvx, vyvy
+  for (std::size_t i = 0; i < 3; ++i) t.probabilities[i] = probabilities[i];
+  t.likeliest = track_t::CONSTANT_VELOCITY;
+  t.sightings = 10;
+  return t;
+}
+
+/// Robot `robot`'s TRACKS of `frame`.
+inline track_list_t tracks_msg(int robot, int frame, const std::vector<track_t>& tracks) {
+  track_list_t m{};
+  m.robot_id = static_cast<std::int16_t>(robot);
+  m.frame = frame;
+  m.num_tracks = static_cast<std::int16_t>(tracks.size());
+  m.tracks = tracks;
+  return m;
 }
 
 }  // namespace elaslam::test

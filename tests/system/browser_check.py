@@ -2,13 +2,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """The viewer's page in a real browser (headless Chromium, driven over the Chrome
 DevTools Protocol with websocket-client): loads URL, reads the page's test hooks
-(window.viewerStats: states received, frame, robots and landmarks drawn, transport)
+(window.viewerStats: states received, frame, robots, landmarks and track arrows drawn,
+transport)
 twice, SECONDS apart, and saves a screenshot. Prints one JSON line:
 {"transport", "rate" (states per second received between the looks), "frame0",
-"frame1", "robots", "landmarks", "errors" (script exceptions)}.
+"frame1", "robots", "landmarks", "arrows" (tracks drawn), "errors" (script exceptions)}.
 
     browser_check.py URL --out SHOT.png [--seconds S] [--settle S]
-        [--min-rate R] [--robots N] [--min-landmarks N] [--advancing]
+        [--min-rate R] [--robots N] [--min-landmarks N] [--arrows N] [--advancing]
 Exit 0 when every check given holds (and the page threw nothing), 1 otherwise, 77
 when chromium is missing.
 """
@@ -57,6 +58,7 @@ def main():
     ap.add_argument("--min-rate", type=float)
     ap.add_argument("--robots", type=int)
     ap.add_argument("--min-landmarks", type=int)
+    ap.add_argument("--arrows", type=int, help="track arrows drawn (robots' and fused) at the second look")
     ap.add_argument("--advancing", action="store_true", help="the frame must advance between the looks")
     ap.add_argument("--window", default="1600,1000", help="the page's viewport, W,H")
     args = ap.parse_args()
@@ -101,7 +103,7 @@ def main():
         return 1
     result = {"transport": s1.get("transport"), "rate": round((s1["states"] - s0["states"]) / args.seconds, 1),
               "frame0": s0["frame"], "frame1": s1["frame"], "robots": s1["robots"], "landmarks": s1["landmarks"],
-              "errors": errors}
+              "arrows": s1.get("arrows"), "errors": errors}
     print(json.dumps(result))
     bad = []
     if errors:
@@ -112,6 +114,8 @@ def main():
         bad.append(f"{result['robots']} robots drawn, not {args.robots}")
     if args.min_landmarks is not None and result["landmarks"] < args.min_landmarks:
         bad.append(f"{result['landmarks']} landmarks drawn, fewer than {args.min_landmarks}")
+    if args.arrows is not None and result["arrows"] != args.arrows:
+        bad.append(f"{result['arrows']} track arrows drawn, not {args.arrows}")
     if args.advancing and not result["frame1"] > result["frame0"]:
         bad.append(f"the frame did not advance ({result['frame0']} -> {result['frame1']})")
     for b in bad:

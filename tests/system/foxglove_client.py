@@ -19,7 +19,7 @@ Checks (exit 1 when one fails, 0 when all pass):
     robot's first pose to 1 s before its last, whole seconds of receive time): every
     second has at least --min-rate (9) poses of every robot;
   - /robot<r>/stats carries a NEES (ground truth on the bus) and pose sigmas; /map
-    messages arrive and name landmarks;
+    messages arrive and name landmarks and the tracks' entities (tracks/robots, tracks/fused);
   - --churn N: meanwhile N other clients connect, subscribe to everything, read a
     little and drop their connection without a close frame, one after another.
 --flowing FILE is written once every robot's 20th pose has arrived (the test then
@@ -224,6 +224,8 @@ def main():
     bridge = json.loads(s.last["/bridge"]) if "/bridge" in s.last else {}
     if len(s.times.get("/map", [])) < 3 or b"landmarks/static" not in s.last.get("/map", b""):
         fails.append(f"/map: {len(s.times.get('/map', []))} messages, the last without landmarks/static")
+    if b"tracks/robots" not in s.last.get("/map", b"") or b"tracks/fused" not in s.last.get("/map", b""):
+        fails.append("/map: the last without the tracks' entities (tracks/robots, tracks/fused)")
     if not closed:
         fails.append(f"the server did not close the connection within {args.timeout} s (the team should have ended)")
     if args.churn and churned["churned"] < args.churn:

@@ -3,7 +3,8 @@
 # System test: the live team (separate processes over LCM in a private network
 # namespace, recorded by lcm-logger) runs end to end, every robot publishes a pose
 # for every frame, and its metrics agree with the in-process run of the same
-# scenario and seed. Exit 77 (skip) when namespaces are not available.
+# scenario and seed; the recorded tracks of moving landmarks (the robots' and main's
+# fused ones) are scored. Exit 77 (skip) when namespaces are not available.
 # With --hosts (test system_hosts): run_team.sh --hosts, one network namespace per
 # process (simulator, main_robot, each robot, lcm-logger) joined by a bridge, LCM with
 # TTL 1 across it, as separate onboard computers would be.
@@ -101,6 +102,12 @@ if missing == 0 and live["frames"] == 150:  # whole-run figures average over the
 else:
     print(f"note: {missing} POSEs and {150 - live['frames']} GROUND_TRUTHs missing from the recording "
           "(the recorder's loss): compared frame by frame")
+# The recorded tracks of moving landmarks (TRACKS_<r>, GLOBAL_TRACKS) are scored: at
+# 50 % dynamism the robots track movers for most of the run.
+for key in ("tracks", "global_tracks"):
+    t = live.get(key)
+    if t is None or t["samples"] < 100 or t["position_rms_m"] is None:
+        fails.append(f"metrics.json {key}: {t}")
 # Provenance: what ran, from the log and the config.
 if live["config"] is None or live["config"]["scenario"]["dynamism_percent"] != 50:
     fails.append(f"metrics.json config: {live['config'] and live['config']['scenario']}")

@@ -65,7 +65,14 @@ if [ "${1:-}" = "--inside" ]; then
   # The viewer has taken in the whole log: its state equals the log's last poses and map.
   wait_for 20 "the viewer's state equal to the log's last POSEs and GLOBAL_MAP" \
     state_is_log_end "$URL" "$BUILD" "$LOG" "$OUT/state_end.json" || rc=1
-  "$ROOT/.venv/bin/python" "$HERE/browser_check.py" "$URL/" --out "$OUT/after.png" --seconds 0.5 --robots 3 || rc=1
+  # Every track the state holds (the robots' and main's fused) is drawn as an arrow.
+  arrows=$(python3 -c 'import json, sys
+s = json.load(open(sys.argv[1]))
+print(sum(len(r.get("tracks", [])) for r in s["robots"] if r["x"] is not None) + len(s["global_tracks"]))' \
+    "$OUT/state_end.json")
+  echo "viewer: $arrows tracks in the state at the log's end"
+  "$ROOT/.venv/bin/python" "$HERE/browser_check.py" "$URL/" --out "$OUT/after.png" --seconds 0.5 --robots 3 \
+    --arrows "$arrows" || rc=1
   curl -sf "$URL/state.json" > "$OUT/state.json"
   code=$(curl -s -o /dev/null -w '%{http_code}' "$URL/no-such-page")
   kill -INT "$VIEWER"; wait "$VIEWER" || { echo "viewer: exited with an error"; cat "$OUT/viewer.err"; exit 1; }

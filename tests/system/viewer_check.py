@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """The viewer's /state.json against the log it was shown (system_viewer): the last
 POSE_<r> of each robot, the GLOBAL_MAP assembled from its chunks (each chunk stands
-for its id range) and the highest frame, all as the viewer must have drawn them.
+for its id range), the last TRACKS_<r> of each robot and the last GLOBAL_TRACKS (when
+at most 20 frames old) and the highest frame, all as the viewer must have drawn them.
 
     viewer_check.py --build-dir DIR LOG STATE_JSON
 Exit 0 when they agree, 1 (saying what differs) when not.
@@ -23,6 +24,7 @@ def main():
     log_path, state_path = [a for i, a in enumerate(args) if a != "--build-dir" and (i == 0 or args[i - 1] != "--build-dir")]
     T = load_lcm_types(build, __file__)
     poses, lms, moving, frame = {}, {}, set(), -1
+    tracks, fused = {}, None
     for ev in lcm.EventLog(log_path, "r"):
         if re.fullmatch(r"POSE_\d+", ev.channel):
             p = T.pose_estimate_t.decode(ev.data)
@@ -39,6 +41,13 @@ def main():
                     moving.add(l.id)
             moving.update(m.moving_ids)
             frame = max(frame, m.frame)
+        elif re.fullmatch(r"TRACKS_\d+", ev.channel):
+            t = T.track_list_t.decode(ev.data)
+            tracks[t.robot_id] = t
+            frame = max(frame, t.frame)
+        elif ev.channel == "GLOBAL_TRACKS":
+            fused = T.global_tracks_t.decode(ev.data)
+            frame = max(frame, fused.frame)
         elif ev.channel == "GROUND_TRUTH":
             frame = max(frame, T.ground_truth_t.decode(ev.data).frame)
     state = json.load(open(state_path))
@@ -63,6 +72,14 @@ def main():
     for i in static_ids & set(drawn):
         if max(abs(drawn[i]["x"] - lms[i].x), abs(drawn[i]["y"] - lms[i].y)) > 1e-9:
             bad.append(f"landmark {i} at ({drawn[i]['x']}, {drawn[i]['y']}) against ({lms[i].x}, {lms[i].y})")
+    def ids(msg):
+        return sorted(t.id for t in msg.tracks) if msg is not None and frame - msg.frame <= 20 else []
+    for rid, r in robots.items():
+        want = ids(tracks.get(rid))
+        if sorted(t["id"] for t in r.get("tracks", [])) != want:
+            bad.append(f"robot {rid}: tracks {[t['id'] for t in r.get('tracks', [])]} against the log's {want}")
+    if sorted(t["id"] for t in state["global_tracks"]) != ids(fused):
+        bad.append(f"fused tracks {[t['id'] for t in state['global_tracks']]} against the log's {ids(fused)}")
     print(f"viewer_check: frame {frame}, {len(poses)} robots, {len(static_ids)} static and {len(drawn_moving)} "
           f"moving landmarks drawn ({len(moving)} moving in the map)")
     for b in bad:

@@ -2,7 +2,8 @@
 """tools/decode_log.py on a recording made here (run by tests/tools/decode_log_check.sh
 with the .venv's python): one event on a channel of every name and per-robot prefix of
 common/include/elaslam/common/channels.hpp is counted as decoded and the run exits 0;
-a corrupt event on one of them (here TEAM_MAP_2, CANDIDATES_1 and LMAP_RESYNC in turn)
+a corrupt event on one of them (here TEAM_MAP_2, CANDIDATES_1, LMAP_RESYNC, TRACKS_1 and
+GLOBAL_TRACKS in turn)
 is counted as failed and the run exits 1; a log with no elaslam channel exits 1.
 
     decode_log_check.py --root SRC --build BUILD --work DIR
@@ -23,12 +24,20 @@ def messages(T):
     gmap = enc(T.global_map_t, frame=3, version=1, num_chunks=1, id_end=10)
     cand = T.landmark_estimate_t()
     cand.id, cand.x, cand.y, cand.cov = 7, 1.5, -2.0, [[0.1, 0.0], [0.0, 0.1]]
+    track = T.track_t()
+    track.id, track.x, track.y, track.vx, track.vy = 7, 1.5, -2.0, 0.5, 0.0
+    track.cov, track.probabilities = [0.01, 0, 0, 0, 0.01, 0, 0, 0.04, 0, 0.04], [0.1, 0.2, 0.7]
+    fused = T.global_track_t()
+    fused.id, fused.x, fused.y, fused.contributors = 7, 1.5, -2.0, 3
+    fused.cov, fused.probabilities = track.cov, track.probabilities
     return [
         ("SENSOR_1", enc(T.sensor_frame_t, robot_id=1, frame=3)),
         ("POSE_1", enc(T.pose_estimate_t, robot_id=1, frame=3, x=1.25)),
         ("STATUS_ROBOT_1", enc(T.node_status_t, node_kind=T.node_status_t.ROBOT, node_id=1)),
         ("TEAM_MAP_2", gmap),
         ("CANDIDATES_1", enc(T.candidate_list_t, robot_id=1, frame=3, num_candidates=1, candidates=[cand])),
+        ("TRACKS_1", enc(T.track_list_t, robot_id=1, frame=3, num_tracks=1, tracks=[track])),
+        ("GLOBAL_TRACKS", enc(T.global_tracks_t, frame=3, num_tracks=1, tracks=[fused])),
         ("GROUND_TRUTH", enc(T.ground_truth_t, frame=3)),
         ("LMAP_EVENT", enc(T.landmark_event_t, robot_id=1, frame=3)),
         ("LMAP_EVENTS", enc(T.lmap_events_t, robot_id=1, frame=3)),
@@ -87,11 +96,12 @@ def main():
     for ch, _ in events:
         if got.get(ch) != (1, 0):
             fails.append(f"{ch}: 1 decoded expected, got {got.get(ch)}")
-    for brief in ("last POSE_1: frame 3, x 1.250", "run info: source test, scenario made up"):
+    for brief in ("last POSE_1: frame 3, x 1.250", "run info: source test, scenario made up",
+                  "last GLOBAL_TRACKS: frame 3, 1 fused tracks (0 left out)"):
         if brief not in out:
             fails.append(f"'{brief}' not in the output\n{out}")
 
-    for ch in ("TEAM_MAP_2", "CANDIDATES_1", "LMAP_RESYNC"):
+    for ch in ("TEAM_MAP_2", "CANDIDATES_1", "LMAP_RESYNC", "TRACKS_1", "GLOBAL_TRACKS"):
         bad = os.path.join(a.work, f"bad_{ch}.lcmlog")
         write_log(lcm, bad, events + [(ch, b"\x00" * 40)])
         rc, out, err = decode(a, bad)

@@ -372,6 +372,11 @@ TEST_F(Auth, ARobotMayPublishOnlyItsOwnChannelsAndItsOwnEvents) {
   EXPECT_EQ(open(robot1, seal(main, "TEAM_MAP_1", pose)), Verdict::kAccepted);
   EXPECT_EQ(open(main, seal(robot2, "CANDIDATES_1", pose)), Verdict::kWrongSender);  // robot 1's alone
   EXPECT_EQ(open(main, seal(robot1, "CANDIDATES_1", pose)), Verdict::kAccepted);
+  EXPECT_EQ(open(main, seal(robot2, "TRACKS_1", pose)), Verdict::kWrongSender);  // robot 1's alone
+  EXPECT_EQ(open(main, seal(sim, "TRACKS_1", pose)), Verdict::kWrongSender);
+  EXPECT_EQ(open(main, seal(robot1, "TRACKS_1", pose)), Verdict::kAccepted);
+  EXPECT_EQ(open(robot1, seal(robot2, "GLOBAL_TRACKS", pose)), Verdict::kWrongSender);  // main's alone
+  EXPECT_EQ(open(robot1, seal(main, "GLOBAL_TRACKS", pose)), Verdict::kAccepted);
   EXPECT_EQ(open(main, seal(robot2, "SENSOR_2", pose)), Verdict::kWrongSender);
   EXPECT_EQ(open(main, seal(sim, "SENSOR_2", pose)), Verdict::kAccepted);
   EXPECT_EQ(open(main, seal(sim, "LMAP_EVENT", encoded(event(1)))), Verdict::kWrongSender);

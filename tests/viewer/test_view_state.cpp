@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // ViewState: what the viewer draws, from the bus's messages; bad ones change nothing.
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <vector>
@@ -268,6 +270,99 @@ TEST(ViewState, CandidatesAreDrawnUnlessTheMapHasThemStatic) {
   for (int f = 12; f < 12 + ViewState::kCandidateFrames + 1; ++f) ASSERT_TRUE(v.on_pose(pose(2, f, 0, 0)));
   EXPECT_EQ(statuses(v).count(6), 0u);  // robot 1 went quiet: its list is stale
   EXPECT_FALSE(v.on_candidates(candidates(1, 40, {999})));
+}
+
+track_t track(int id, double x, double vx, std::int8_t model = track_t::CONSTANT_VELOCITY) {
+  track_t t{};
+  t.id = id, t.x = x, t.y = 1.0, t.vx = vx, t.vy = 0.0;
+  t.cov[0] = t.cov[4] = 0.01f;  // xx, yy
+  t.cov[7] = t.cov[9] = 0.04f;  // vxvx, vyvy
+  t.probabilities[0] = 0.1f, t.probabilities[1] = 0.2f, t.probabilities[2] = 0.7f;
+  t.likeliest = model;
+  t.validated = 1;
+  return t;
+}
+
+track_list_t tracks(int robot, int frame, std::vector<track_t> ts) {
+  track_list_t m{};
+  m.robot_id = static_cast<std::int16_t>(robot);
+  m.frame = frame;
+  m.num_tracks = static_cast<std::int16_t>(ts.size());
+  m.tracks = std::move(ts);
+  return m;
+}
+
+global_tracks_t fused(int frame, std::vector<track_t> ts, std::int16_t contributors) {
+  global_tracks_t m{};
+  m.frame = frame;
+  for (const track_t& t : ts) {
+    global_track_t g{};
+    g.id = t.id, g.x = t.x, g.y = t.y, g.vx = t.vx, g.vy = t.vy, g.likeliest = t.likeliest;
+    std::copy(std::begin(t.cov), std::end(t.cov), std::begin(g.cov));
+    std::copy(std::begin(t.probabilities), std::end(t.probabilities), std::begin(g.probabilities));
+    g.contributors = contributors;
+    m.tracks.push_back(g);
+  }
+  m.num_tracks = static_cast<std::int16_t>(m.tracks.size());
+  return m;
+}
+
+// A robot's tracks and main's fused ones are in the state as sent (position,
+// velocity, model, the fused ones' contributors), the newest list replacing the
+// last; a bad message of either kind is refused and changes nothing; a list more
+// than kCandidateFrames frames old is not drawn.
+TEST(ViewState, TracksAndFusedTracksAreKeptCheckedAndAged) {
+  ViewState v;
+  ASSERT_TRUE(v.on_pose(pose(2, 10, 0, 0)));
+  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(4, 1.0, 0.5), track(6, 2.0, 0.0, track_t::STATIC)})));
+  ASSERT_TRUE(v.on_global_tracks(fused(10, {track(4, 1.1, 0.4)}, 0b11)));
+  nlohmann::json j = state(v);
+  ASSERT_EQ(j["robots"].size(), 1u);
+  const nlohmann::json& rt = j["robots"][0]["tracks"];
+  ASSERT_EQ(rt.size(), 2u);
+  EXPECT_EQ(rt[0]["id"], 4);
+  EXPECT_EQ(rt[0]["x"], 1.0);
+  EXPECT_EQ(rt[0]["vx"], 0.5);
+  EXPECT_EQ(rt[0]["model"], "constant_velocity");
+  EXPECT_EQ(rt[0]["validated"], true);
+  EXPECT_EQ(rt[1]["model"], "static");
+  ASSERT_EQ(j["global_tracks"].size(), 1u);
+  EXPECT_EQ(j["global_tracks"][0]["x"], 1.1);
+  EXPECT_EQ(j["global_tracks"][0]["contributors"], nlohmann::json({1, 2}));
+
+  // Bad ones: refused, counted, nothing changed.
+  const long long bad = v.bad_messages();
+  track_list_t nan_speed = tracks(2, 11, {track(4, 1.0, std::numeric_limits<double>::quiet_NaN())});
+  EXPECT_FALSE(v.on_tracks(nan_speed));
+  track_list_t not_psd = tracks(2, 11, {track(4, 1.0, 0.5)});
+  not_psd.tracks[0].cov[2] = 1.0f;  // xvx far beyond sqrt(var x * var vx) = 0.02
+  EXPECT_FALSE(v.on_tracks(not_psd));
+  track_list_t far_id = tracks(2, 11, {track(300, 1.0, 0.5)});  // max_landmark_id 256
+  EXPECT_FALSE(v.on_tracks(far_id));
+  track_list_t bad_robot = tracks(17, 11, {track(4, 1.0, 0.5)});
+  EXPECT_FALSE(v.on_tracks(bad_robot));
+  global_tracks_t bad_sum = fused(11, {track(4, 1.0, 0.5)}, 0b1);
+  bad_sum.tracks[0].probabilities[2] = 0.9f;  // sums to 1.2
+  EXPECT_FALSE(v.on_global_tracks(bad_sum));
+  global_tracks_t nobody = fused(11, {track(4, 1.0, 0.5)}, 0);
+  EXPECT_FALSE(v.on_global_tracks(nobody));
+  global_tracks_t twice = fused(11, {track(4, 1.0, 0.5), track(4, 1.0, 0.5)}, 0b1);
+  EXPECT_FALSE(v.on_global_tracks(twice));
+  EXPECT_EQ(v.bad_messages(), bad + 7);
+  EXPECT_EQ(state(v)["robots"][0]["tracks"], rt);
+  EXPECT_EQ(state(v)["global_tracks"], j["global_tracks"]);
+
+  // The newest list replaces the last; an older one is ignored.
+  ASSERT_TRUE(v.on_tracks(tracks(2, 12, {track(6, 2.5, 0.1)})));
+  ASSERT_TRUE(v.on_tracks(tracks(2, 11, {track(9, 0.0, 0.1)})));
+  j = state(v);
+  ASSERT_EQ(j["robots"][0]["tracks"].size(), 1u);
+  EXPECT_EQ(j["robots"][0]["tracks"][0]["id"], 6);
+  // Stale lists are not drawn.
+  for (int f = 13; f < 13 + ViewState::kCandidateFrames + 1; ++f) ASSERT_TRUE(v.on_pose(pose(2, f, 0, 0)));
+  j = state(v);
+  EXPECT_TRUE(j["robots"][0]["tracks"].empty());
+  EXPECT_TRUE(j["global_tracks"].empty());
 }
 
 }  // namespace

@@ -87,14 +87,15 @@ bool sender_may_publish(std::int16_t id, const std::string& channel, const std::
   if (base == kLmapEvent || base == kLmapEvents || base == kLmapSnapshot)
     return is_robot(id) && size >= kRobotIdOffset + 2 &&
            static_cast<std::int16_t>(get_be(payload + kRobotIdOffset, 2)) == id;
-  if (base == kGlobalMap || base == kGlobalMoving || base == kDynamicNotice || base == kStatusMain || base == kLmapResync ||
-      robot_of(base, kTeamMapPrefix) > 0)
+  if (base == kGlobalMap || base == kGlobalMoving || base == kGlobalTracks || base == kDynamicNotice ||
+      base == kStatusMain || base == kLmapResync || robot_of(base, kTeamMapPrefix) > 0)
     return id == kSenderMain;
   if (base == kGroundTruth || base == kRunInfo || base == kStatusSim || robot_of(base, kSensorPrefix) > 0)
     return id == kSenderSimulator;
   if (const int r = robot_of(base, kPosePrefix); r > 0) return id == r;
   if (const int r = robot_of(base, kStatusRobotPrefix); r > 0) return id == r;
   if (const int r = robot_of(base, kCandidatesPrefix); r > 0) return id == r;
+  if (const int r = robot_of(base, kTracksPrefix); r > 0) return id == r;
   return true;  // another channel (a tool's, a test's): any sender of the team
 }
 

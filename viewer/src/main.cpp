@@ -3,7 +3,7 @@
 // listener and serves a page that draws the global map, the robots and their health,
 // pushed over Server-Sent Events; /state.json is the same state for scripts.
 // Reads RUN_INFO, POSE_<r>, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_<r>,
-// CANDIDATES_<r> and GROUND_TRUTH (viewer/STATE_SCHEMA.md).
+// CANDIDATES_<r>, TRACKS_<r>, GLOBAL_TRACKS and GROUND_TRUTH (viewer/STATE_SCHEMA.md).
 //   viewer [--config FILE] [--port P] [--bind ADDR] [--token-file FILE] [--http-netns PATH]
 //          [--rate HZ] [--max-clients N] [--lcm-url URL] [--channel-suffix S] [--key-file FILE]
 //   viewer --make-token FILE

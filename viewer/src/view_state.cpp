@@ -9,6 +9,7 @@
 
 #include "elaslam/common/contract.hpp"
 #include "elaslam/common/faults.hpp"
+#include "elaslam/common/track_checks.hpp"
 
 namespace elaslam::viewer {
 namespace {
@@ -220,7 +221,68 @@ bool ViewState::on_candidates(const candidate_list_t& m) {
   return true;
 }
 
-nlohmann::json ViewState::robot_json(int id, const Robot& r, double now_s) {
+bool ViewState::on_tracks(const track_list_t& m) {
+  ++messages_;
+  MessageLimits l;
+  l.world_bound = limits_.world_bound_m;
+  Refusal reason = Refusal::kMalformed;
+  if (!check_track_list(m, l, limits_.max_landmark_id, &reason).empty()) return bad("TRACKS invalid");
+  Robot& r = robot(m.robot_id);
+  if (m.frame < r.tracks_frame && r.tracks_frame - m.frame < 1000) return true;  // older than what we have
+  r.tracks_frame = m.frame;
+  r.tracks.clear();
+  for (int k = 0; k < m.num_tracks; ++k) {
+    const track_t& t = m.tracks[static_cast<std::size_t>(k)];
+    r.tracks.push_back({t.id, t.x, t.y, t.vx, t.vy, t.cov[0], t.cov[1], t.cov[4],
+                        {t.probabilities[0], t.probabilities[1], t.probabilities[2]}, t.likeliest, t.stopped != 0,
+                        t.validated != 0, 1 << (m.robot_id - 1)});
+  }
+  see_frame(m.frame);
+  return true;
+}
+
+bool ViewState::on_global_tracks(const global_tracks_t& m) {
+  ++messages_;
+  MessageLimits l;
+  l.world_bound = limits_.world_bound_m;
+  Refusal reason = Refusal::kMalformed;
+  if (!check_global_tracks(m, l, limits_.max_landmark_id, &reason).empty()) return bad("GLOBAL_TRACKS invalid");
+  if (m.frame < global_tracks_frame_ && global_tracks_frame_ - m.frame < 1000) return true;  // older than what we have
+  global_tracks_frame_ = m.frame;
+  global_tracks_.clear();
+  for (int k = 0; k < m.num_tracks; ++k) {
+    const global_track_t& t = m.tracks[static_cast<std::size_t>(k)];
+    global_tracks_.push_back({t.id, t.x, t.y, t.vx, t.vy, t.cov[0], t.cov[1], t.cov[4],
+                              {t.probabilities[0], t.probabilities[1], t.probabilities[2]}, t.likeliest,
+                              t.stopped != 0, false, t.contributors});
+  }
+  see_frame(m.frame);
+  return true;
+}
+
+nlohmann::json ViewState::track_json(const Track& t, bool fused) {
+  static const char* const kModels[] = {"static", "bounded", "constant_velocity"};
+  nlohmann::json o = {{"id", t.id},
+                      {"x", t.x},
+                      {"y", t.y},
+                      {"vx", t.vx},
+                      {"vy", t.vy},
+                      {"cov", {t.cxx, t.cxy, t.cyy}},
+                      {"model", kModels[t.likeliest]},
+                      {"probabilities", {t.probabilities[0], t.probabilities[1], t.probabilities[2]}},
+                      {"stopped", t.stopped}};
+  if (fused) {
+    nlohmann::json by = nlohmann::json::array();
+    for (int r = 0; r < kMaxRobots; ++r)
+      if (t.contributors & (1 << r)) by.push_back(r + 1);
+    o["contributors"] = std::move(by);
+  } else {
+    o["validated"] = t.validated;
+  }
+  return o;
+}
+
+nlohmann::json ViewState::robot_json(int id, const Robot& r, double now_s) const {
   nlohmann::json o;
   o["id"] = id;
   o["frame"] = r.frame;
@@ -237,6 +299,10 @@ nlohmann::json ViewState::robot_json(int id, const Robot& r, double now_s) {
     o["truth"] = nullptr;
   }
   o["truth_trail"] = trail_json(r.truth_trail);
+  nlohmann::json tracks = nlohmann::json::array();
+  if (r.tracks_frame >= 0 && frame_ - r.tracks_frame <= kCandidateFrames)
+    for (const Track& t : r.tracks) tracks.push_back(track_json(t, false));
+  o["tracks"] = std::move(tracks);
   if (!r.has_status) {
     o["health"] = nullptr;
     return o;
@@ -320,6 +386,10 @@ std::string ViewState::to_json(double now_s, const std::string& viewer_counters_
     if (r.has_pose || r.has_status || r.has_truth) robots.push_back(robot_json(id, r, now_s));
   j["robots"] = std::move(robots);
   j["landmarks"] = landmarks_json();
+  nlohmann::json fused = nlohmann::json::array();
+  if (global_tracks_frame_ >= 0 && frame_ - global_tracks_frame_ <= kCandidateFrames)
+    for (const Track& t : global_tracks_) fused.push_back(track_json(t, true));
+  j["global_tracks"] = std::move(fused);
   nlohmann::json truth = nlohmann::json::array();
   for (const TruthLandmark& t : truth_landmarks_)
     truth.push_back({{"id", t.id}, {"x", t.x}, {"y", t.y}, {"moving", t.moving}});

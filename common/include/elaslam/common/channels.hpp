@@ -18,7 +18,8 @@ inline constexpr std::string_view kSensorPrefix = "SENSOR_", kPosePrefix = "POSE
                                   kDynamicNotice = "DYNAMIC_NOTICE", kStatusMain = "STATUS_MAIN",
                                   kStatusSim = "STATUS_SIM", kRunInfo = "RUN_INFO", kTeamMapPrefix = "TEAM_MAP_",
                                   kGlobalMoving = "GLOBAL_MOVING",
-                                  kCandidatesPrefix = "CANDIDATES_";
+                                  kCandidatesPrefix = "CANDIDATES_", kTracksPrefix = "TRACKS_",
+                                  kGlobalTracks = "GLOBAL_TRACKS";
 
 inline std::string sensor(int robot_id, const std::string& suffix = "") {
   return std::string(kSensorPrefix) + std::to_string(robot_id) + suffix;
@@ -34,6 +35,10 @@ inline std::string team_map(int robot_id, const std::string& suffix = "") {
 inline std::string candidates(int robot_id, const std::string& suffix = "") {
   return std::string(kCandidatesPrefix) + std::to_string(robot_id) + suffix;
 }
+/// Robot r's tracks of its moving landmarks (track_list_t), for main_robot and the viewer.
+inline std::string tracks(int robot_id, const std::string& suffix = "") {
+  return std::string(kTracksPrefix) + std::to_string(robot_id) + suffix;
+}
 inline std::string status_robot(int robot_id, const std::string& suffix = "") {
   return std::string(kStatusRobotPrefix) + std::to_string(robot_id) + suffix;
 }
@@ -43,6 +48,7 @@ inline std::string any_sensor(const std::string& suffix = "") { return "SENSOR_[
 inline std::string any_pose(const std::string& suffix = "") { return "POSE_[0-9]+" + suffix; }
 inline std::string any_status_robot(const std::string& suffix = "") { return "STATUS_ROBOT_[0-9]+" + suffix; }
 inline std::string any_candidates(const std::string& suffix = "") { return "CANDIDATES_[0-9]+" + suffix; }
+inline std::string any_tracks(const std::string& suffix = "") { return "TRACKS_[0-9]+" + suffix; }
 
 /// The robot id of a per-robot channel "<prefix><id><suffix>" (SENSOR_, POSE_,
 /// STATUS_ROBOT_; id a positive decimal of at most 6 digits), -1 when `channel` is
@@ -66,6 +72,8 @@ inline std::string lmap_events(const std::string& suffix = "") { return std::str
 inline std::string lmap_snapshot(const std::string& suffix = "") { return std::string(kLmapSnapshot) + suffix; }
 inline std::string lmap_resync(const std::string& suffix = "") { return std::string(kLmapResync) + suffix; }
 inline std::string global_map(const std::string& suffix = "") { return std::string(kGlobalMap) + suffix; }
+/// The team's fused tracks of its moving landmarks (global_tracks_t), sent with every GLOBAL_MAP.
+inline std::string global_tracks(const std::string& suffix = "") { return std::string(kGlobalTracks) + suffix; }
 /// GLOBAL_MAP's moving lists alone (global_map_t without landmarks), sent with every
 /// GLOBAL_MAP: what a robot reads of the global map (they repair lost notices).
 inline std::string global_moving(const std::string& suffix = "") { return std::string(kGlobalMoving) + suffix; }
@@ -77,9 +85,9 @@ inline std::string run_info(const std::string& suffix = "") { return std::string
 /// The team's channel names without a robot id, and the prefixes of the per-robot ones.
 inline constexpr std::string_view kTeamNames[] = {kGroundTruth,  kLmapEvent,     kLmapEvents, kLmapSnapshot,
                                                   kLmapResync,   kGlobalMap,     kGlobalMoving, kDynamicNotice,
-                                                  kStatusMain,   kStatusSim,     kRunInfo};
+                                                  kStatusMain,   kStatusSim,     kRunInfo,    kGlobalTracks};
 inline constexpr std::string_view kRobotPrefixes[] = {kSensorPrefix, kPosePrefix, kStatusRobotPrefix, kTeamMapPrefix,
-                                                      kCandidatesPrefix};
+                                                      kCandidatesPrefix, kTracksPrefix};
 
 /// `channel` without `suffix` in *base; false when it does not end with `suffix`.
 inline bool strip_suffix(std::string_view channel, std::string_view suffix, std::string_view* base) {
@@ -104,9 +112,9 @@ inline bool is_team_channel(std::string_view channel, std::string_view suffix = 
 /// woken only by the groups it reads. By reader:
 /// - kGroupTeam: DYNAMIC_NOTICE, GLOBAL_MOVING, LMAP_RESYNC, STATUS_*, RUN_INFO and
 ///   any other name (everyone; small messages);
-/// - kGroupOutputs: LMAP_EVENT(S), LMAP_SNAPSHOT (main_robot): one port, so one
-///   socket: a robot's events and snapshot of a frame arrive in the order sent;
-/// - kGroupMap: GLOBAL_MAP (the viewer; the robots read GLOBAL_MOVING);
+/// - kGroupOutputs: LMAP_EVENT(S), LMAP_SNAPSHOT, TRACKS_<r> (main_robot): one port,
+///   so one socket: a robot's events and snapshot of a frame arrive in the order sent;
+/// - kGroupMap: GLOBAL_MAP, GLOBAL_TRACKS (the viewer; the robots read GLOBAL_MOVING);
 /// - kGroupObservers: GROUND_TRUTH, CANDIDATES_<r> (the viewer and recorders only);
 /// - kGroupPoses: POSE_<r> (main_robot, a lockstep simulator, the viewer): the POSE
 ///   goes out before the frame's events and says what follows it (event_seq,
@@ -129,10 +137,11 @@ inline int channel_group(std::string_view channel, std::string_view suffix = "")
   }
   if (robot_of(channel, kPosePrefix, suffix) > 0) return kGroupPoses;
   if (robot_of(channel, kCandidatesPrefix, suffix) > 0) return kGroupObservers;
+  if (robot_of(channel, kTracksPrefix, suffix) > 0) return kGroupOutputs;
   std::string_view base;
   if (!strip_suffix(channel, suffix, &base)) return kGroupTeam;
   if (base == kLmapEvent || base == kLmapEvents || base == kLmapSnapshot) return kGroupOutputs;
-  if (base == kGlobalMap) return kGroupMap;
+  if (base == kGlobalMap || base == kGlobalTracks) return kGroupMap;
   if (base == kGroundTruth) return kGroupObservers;
   return kGroupTeam;
 }

@@ -13,6 +13,13 @@
 // first are "not started"; a frame it processed whose POSE is not in the log is the
 // recorder's loss ("missing from the log"), told apart by POSE.frames_processed.
 //
+// Tracks (docs/tracking.md "On the wire"): each robot's first valid TRACKS_<r> of a
+// frame and main's first valid GLOBAL_TRACKS of a frame are scored against that
+// frame's ground truth (eval/track_score.hpp) into metrics.json `tracks` and
+// `global_tracks` (null when the log has none). GLOBAL_TRACKS of frame k goes out
+// with the GLOBAL_MAP of k and fuses the robots' tracks that reached main by then
+// (mostly those of frame k - 1): it is scored as it would be drawn at frame k.
+//
 // Latency: POSE_<r> receive time in the log (lcm-logger's timestamp) minus its
 // source_utime (the SENSOR frame's publish time), `latency_us`; the robot's own
 // publish time of the POSE (its utime) minus source_utime, `pose_publish_latency_us`
@@ -40,6 +47,7 @@
 #include "elaslam/eval/frame_data.hpp"
 #include "elaslam/eval/report.hpp"
 #include "elaslam/eval/run_result.hpp"
+#include "elaslam/eval/track_score.hpp"
 #include "elaslam/logs/frame_accounting.hpp"
 #include "elaslam/logs/log_auth.hpp"
 #include "elaslam/logs/log_reader.hpp"
@@ -63,6 +71,13 @@ struct MapRecord {
 /// What the log holds, by frame and by robot, as read.
 struct LogData {
   std::map<int, FrameData> truth;                       // frame -> truth part
+  std::map<int, std::vector<std::uint8_t>> truth_present;  // frame -> present[id]: the truth lists landmark id
+  // Tracks as TrackScorer's samples (TrackSample::robot: the robot id; 0 for main's
+  // fused tracks): frame -> the first valid TRACKS_<r> of each robot, and the first
+  // valid GLOBAL_TRACKS.
+  std::map<int, std::vector<TrackSample>> robot_tracks, global_tracks;
+  std::set<std::pair<int, int>> tracks_taken;  // (frame, robot): a robot's TRACKS of that frame taken
+  long track_messages = 0, global_track_messages = 0;  // valid ones read
   std::map<int, std::map<int, PoseRecord>> poses;       // frame -> robot -> pose
   std::map<int, std::int64_t> sensor_utime;             // frame -> latest SENSOR utime
   std::map<int, std::vector<int>> observed;             // frame -> observed ids
@@ -123,7 +138,11 @@ struct AssembledRun {
 
 /// `d` (read_log's, with ground truth) as a run: frame times start at 0 at the first
 /// frame; each frame's map is the first GLOBAL_MAP stamped with it, else the newest
-/// older one.
+/// older one. The logged tracks are scored (score_log_tracks).
+/// The logged tracks against the truth, frame by frame (times as assemble_run makes
+/// them): the robots' into m->tracks, main's fused ones into m->global_tracks, each
+/// scored (tracks_scored, global_tracks_scored) when the log holds any such message.
+void score_log_tracks(const LogData& d, RunMetrics* m);
 AssembledRun assemble_run(LogData& d);
 
 /// The robots' mode as they report it (STATUS_ROBOT): "" when they did not report

@@ -92,7 +92,7 @@ struct RunMetrics {
   int flagged = 0, true_positives = 0, detectable = 0;
   std::int64_t frame_us_p50 = 0, frame_us_p99 = 0, frame_us_max = 0;
   // The robots' tracks of moving landmarks against the truth (track_score.hpp):
-  // in-process runs with robot.tracking on (a recorded log carries no tracks).
+  // in-process runs with robot.tracking on; recorded logs with TRACKS_<r> in them.
   bool tracks_scored = false;
   TrackMetrics tracks;              // every sample
   TrackMetrics tracks_established;  // samples from a track's fifth sighting on
@@ -101,6 +101,9 @@ struct RunMetrics {
   // error, without the observer's localisation error.
   bool tracks_true_pose_scored = false;
   TrackMetrics tracks_true_pose, tracks_true_pose_established;
+  // main_robot's fused tracks (GLOBAL_TRACKS) against the truth: recorded logs.
+  bool global_tracks_scored = false;
+  TrackMetrics global_tracks;
 };
 
 /// Per-frame row of frames.csv.

@@ -13,6 +13,7 @@
 #include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
+#include "elaslam/track_list_t.hpp"
 
 namespace elaslam::main_checks {
 
@@ -29,5 +30,9 @@ std::string snapshot(const lmap_snapshot_t& m, const MessageLimits& l, int max_l
 /// POSE_<r> as main reads it: what it announces (event_seq, snapshot_chunks) and
 /// check_pose.
 std::string pose(const pose_estimate_t& m, const MessageLimits& l, Refusal* reason);
+/// TRACKS_<r>: the robot in limits.team and check_track_list (ids below
+/// `max_landmark_id`, each once; finite numbers, covariances positive semi-definite
+/// within limits, model probabilities in [0, 1] summing to 1).
+std::string tracks(const track_list_t& m, const MessageLimits& l, int max_landmark_id, Refusal* reason);
 
 }  // namespace elaslam::main_checks

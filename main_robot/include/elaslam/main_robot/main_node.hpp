@@ -3,7 +3,8 @@
 // POSE pass the checks (main_checks.hpp and the robot's incarnation, frame and seq
 // windows), go to the GlobalMap, and tell FrameCompletion what is in; MapPublisher
 // fills GLOBAL_MAP, GLOBAL_MOVING and TEAM_MAP_<r>; MainNode ties them together, fills
-// DYNAMIC_NOTICE, LMAP_RESYNC and STATUS_MAIN, and keeps the counters and faults. The
+// DYNAMIC_NOTICE, LMAP_RESYNC and STATUS_MAIN; TrackFusion fuses the robots' TRACKS
+// into GLOBAL_TRACKS; MainNode keeps the counters and faults. The
 // main_robot process and the in-process team run share it, and both wire it to the
 // message layer with MainPorts (main_ports.hpp).
 #pragma once
@@ -15,15 +16,18 @@
 
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
+#include "elaslam/global_tracks_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/main_robot/frame_completion.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/main_robot/map_publisher.hpp"
+#include "elaslam/main_robot/track_fusion.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/resync_request_t.hpp"
+#include "elaslam/track_list_t.hpp"
 
 namespace elaslam {
 
@@ -49,6 +53,11 @@ struct MainCounters {
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
   std::int64_t state_damaged = 0;        // a damaged state file was moved aside at start (map_state.hpp)
+  std::int64_t tracks = 0;               // TRACKS_<r> messages taken
+  std::int64_t tracks_refused = 0;       // ... refused (invalid, an older incarnation, a frame too far ahead; in rejected_inputs too)
+  std::int64_t stale_tracks = 0;         // ... ignored: not newer than the robot's last one taken (late, repeated)
+  std::int64_t global_tracks_published = 0;  // GLOBAL_TRACKS messages
+  std::int64_t global_tracks_omitted = 0;    // fused tracks left out of them (more than contract::kMaxGlobalTracks), summed
 };
 
 class MainNode {
@@ -64,6 +73,20 @@ class MainNode {
   /// goes through on_event in order, exactly as if it had come alone (each refusal
   /// counted). False when anything was refused; `why` says the first problem.
   bool on_events(const lmap_events_t& msg, std::string* why = nullptr);
+  /// TRACKS_<r>: robot r's tracks of its moving landmarks. Refused (counted per
+  /// reason, in tracks_refused and rejected_inputs; nothing changes) when invalid
+  /// (check_track_list, a robot outside limits.team), of an incarnation other than
+  /// the one main follows, or more than max_frame_gap frames ahead of the robot's
+  /// newest; ignored (stale_tracks) when not newer than its last one taken. Else its
+  /// tracks replace the robot's previous ones in the fusion (TrackFusion).
+  bool on_tracks(const track_list_t& msg, std::string* why = nullptr);
+  /// GLOBAL_TRACKS, stamped like make_global_map: the fused tracks (TrackFusion::fuse
+  /// at that frame), at most contract::kMaxGlobalTracks in ascending id (the rest
+  /// counted in num_omitted and global_tracks_omitted). True when it is to go out:
+  /// while there are fused tracks, and once more when the last has gone.
+  bool make_global_tracks(std::int64_t now_utime, int frame = -1);
+  const global_tracks_t& global_tracks() const { return global_tracks_; }
+  const TrackFusion& track_fusion() const { return fusion_; }
   void count_decode_error() { ++counters_.decode_errors; }
   /// The state file was damaged and moved aside at start (map_state.hpp).
   void count_state_damaged() { ++counters_.state_damaged; }
@@ -150,6 +173,7 @@ class MainNode {
   std::string validate(const lmap_snapshot_t& msg, Refusal* reason = nullptr) const;
   std::string validate(const lmap_events_t& msg, Refusal* reason = nullptr) const;  // the message, not its events
   std::string validate(const pose_estimate_t& msg, Refusal* reason = nullptr) const;
+  std::string validate(const track_list_t& msg, Refusal* reason = nullptr) const;
 
  private:
   /// The frame and seq windows of robot `robot_id` (valid, in the team): "" when the
@@ -176,6 +200,8 @@ class MainNode {
   GlobalMap map_;
   FrameCompletion completion_;
   MapPublisher publisher_;
+  TrackFusion fusion_;
+  global_tracks_t global_tracks_{};  // reserved for contract::kMaxGlobalTracks at construction
   int team_map_frame_ = -1;  // frame of the last team maps
   MainCounters counters_;
   std::vector<Notice> pending_;

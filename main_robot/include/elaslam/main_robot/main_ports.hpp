@@ -23,10 +23,12 @@ struct MainQueues {
   int events = 1000;  // LMAP_EVENTS: one message per robot per frame
   int snapshot = 100;
   int pose = 1000;
+  int tracks = 1000;  // TRACKS_<r>: one message per robot per frame while it tracks movers
 };
 
 /// A MainNode on the message layer (transport/node_shell.hpp): receives LMAP_EVENT,
-/// LMAP_EVENTS, LMAP_SNAPSHOT and every robot's POSE_<r>; publishes DYNAMIC_NOTICE as soon as an
+/// LMAP_EVENTS, LMAP_SNAPSHOT and every robot's POSE_<r> and TRACKS_<r>; publishes
+/// GLOBAL_TRACKS with every GLOBAL_MAP; DYNAMIC_NOTICE as soon as an
 /// event or snapshot produces one, GLOBAL_MAP for frame k as soon as every robot seen
 /// so far has finished k (its POSE marks the end of its frame and says up to which
 /// event seq the frame goes: the frame is finished when those events are applied),
@@ -43,7 +45,8 @@ class MainPorts {
         moving_(channels::global_moving(shell.suffix())),
         notice_(channels::dynamic_notice(shell.suffix())),
         status_(channels::status_main(shell.suffix())),
-        resync_(channels::lmap_resync(shell.suffix())) {
+        resync_(channels::lmap_resync(shell.suffix())),
+        tracks_(channels::global_tracks(shell.suffix())) {
     for (int r = 1; r <= kMaxTeamRobots; ++r) team_map_[static_cast<std::size_t>(r - 1)] = channels::team_map(r, shell.suffix());
   }
 
@@ -60,7 +63,9 @@ class MainPorts {
         queues.snapshot);
     const int p = shell_.template subscribe<pose_estimate_t>(
         channels::any_pose(sfx), [this](const pose_estimate_t& m, const std::string&) { on_pose(m); }, queues.pose);
-    return e > 0 && b > 0 && s > 0 && p > 0;
+    const int t = shell_.template subscribe<track_list_t>(
+        channels::any_tracks(sfx), [this](const track_list_t& m, const std::string&) { on_tracks(m); }, queues.tracks);
+    return e > 0 && b > 0 && s > 0 && p > 0 && t > 0;
   }
 
   /// GLOBAL_MAP now, stamped `frame` (default: the newest frame every robot has finished).
@@ -70,6 +75,7 @@ class MainPorts {
     last_map_utime_ = shell_.now_utime();
     const int n = node_.make_global_map(last_map_utime_, frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
+    if (node_.make_global_tracks(last_map_utime_, frame)) shell_.publish(tracks_, node_.global_tracks());
     const int k = node_.make_moving_set(last_map_utime_, frame);
     if (node_.moving_set_due(k, last_map_utime_))
       for (int i = 0; i < k; ++i) shell_.publish(moving_, node_.map_chunk(i));
@@ -118,6 +124,10 @@ class MainPorts {
   void publish_finished() {
     if (const int done = node_.take_finished(); done >= 0) publish_map(done);
   }
+  void on_tracks(const track_list_t& m) {
+    std::string why;
+    if (!node_.on_tracks(m, &why)) shell_.refuse("tracks refused: " + why);
+  }
   void on_pose(const pose_estimate_t& m) {
     std::string why;
     const int done = node_.on_pose(m, &why);
@@ -136,7 +146,7 @@ class MainPorts {
   Shell& shell_;
   MainNode& node_;
   std::int64_t last_map_utime_ = kNever;  // when the last GLOBAL_MAP went out
-  const std::string map_, moving_, notice_, status_, resync_;  // channel names, built once
+  const std::string map_, moving_, notice_, status_, resync_, tracks_;  // channel names, built once (tracks_: GLOBAL_TRACKS)
   std::array<std::string, kMaxTeamRobots> team_map_;  // TEAM_MAP_<r>
 };
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The Robot's state as the robot's outgoing messages: POSE_<r>, its LMAP_EVENTs
 // (singly and batched in LMAP_EVENTS, numbered by a per-robot seq), LMAP_SNAPSHOT
-// chunks and CANDIDATES_<r>. Every message is a buffer sized at construction for the
+// chunks, CANDIDATES_<r> and TRACKS_<r>. Every message is a buffer sized at construction for the
 // largest map the options allow, so filling them allocates nothing. Each carries the
 // node's incarnation. It reads the Robot and never changes it.
 #pragma once
@@ -17,6 +17,7 @@
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/robot_node/robot.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/track_list_t.hpp"
 
 namespace elaslam {
 
@@ -24,7 +25,7 @@ class RobotMessages {
  public:
   RobotMessages(const RobotOptions& options, int robot_id);
 
-  /// A new frame: no events, no snapshot, no candidates until filled.
+  /// A new frame: no events, no snapshot, no candidates, no tracks until filled.
   void begin_frame();
   /// The Robot's events of its last frame, each with the next seq.
   void fill_events(const Robot& robot, int frame, std::int64_t now_utime);
@@ -32,6 +33,11 @@ class RobotMessages {
   /// candidates in the filter (from their first sighting), while there are some and
   /// once more when the last has gone, so that a viewer clears them.
   void fill_candidates(const Robot& robot, int frame, std::int64_t now_utime);
+  /// TRACKS_<r>: the moving landmarks' tracks (Robot::tracks), at most
+  /// contract::kMaxTracks in the order they started (the rest counted in
+  /// num_omitted), every frame while there are some and once more when the last has
+  /// ended, so that readers clear them.
+  void fill_tracks(const Robot& robot, int frame, std::int64_t now_utime);
   /// The map's snapshot, in chunks that each fit one datagram; returns their count.
   int make_snapshot(const Robot& robot, int frame, std::int64_t now_utime);
   /// This frame sends the snapshot made last.
@@ -52,6 +58,8 @@ class RobotMessages {
   const lmap_snapshot_t& snapshot_chunk(int i) const { return chunks_[static_cast<std::size_t>(i)]; }
   bool candidates_ready() const { return candidates_ready_; }
   const candidate_list_t& candidates() const { return candidates_; }
+  bool tracks_ready() const { return tracks_ready_; }
+  const track_list_t& tracks() const { return tracks_; }
 
   std::int64_t incarnation() const { return incarnation_; }
   void set_incarnation(std::int64_t v) { incarnation_ = v; }
@@ -78,6 +86,8 @@ class RobotMessages {
   int candidates_period_ = 0;
   bool candidates_ready_ = false;
   candidate_list_t candidates_{};  // reserved for contract::kMaxCandidates at construction
+  bool tracks_ready_ = false;
+  track_list_t tracks_{};  // reserved for contract::kMaxTracks at construction
 };
 
 }  // namespace elaslam

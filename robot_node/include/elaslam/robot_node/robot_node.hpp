@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The robot node's message layer, without I/O: a SENSOR frame passes FrameAdmission,
 // runs through the Robot, and leaves as the messages RobotMessages fills (POSE,
-// LMAP_EVENT with a per-robot seq, LMAP_SNAPSHOT, CANDIDATES); main_robot's inputs
+// LMAP_EVENT with a per-robot seq, LMAP_SNAPSHOT, CANDIDATES, TRACKS); main_robot's inputs
 // wait in DeferredInputs for their frame; RobotNode counts, reports faults (STATUS,
 // alerts) and ties these together. The robot_node process and the in-process team
 // run both drive this class, so both behave the same; both wire it to the message
@@ -14,6 +14,7 @@
 
 #include "elaslam/common/histogram.hpp"
 #include "elaslam/candidate_list_t.hpp"
+#include "elaslam/track_list_t.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
 #include "elaslam/landmark_event_t.hpp"
@@ -57,6 +58,7 @@ struct RobotNodeCounters {
   std::int64_t own_drifted_frames = 0;   // frames whose own filter had drifted from the aided one: no MOVING finding
   std::int64_t team_map_chunks = 0;      // TEAM_MAP_<r> chunks applied (robot.team_map.fuse)
   std::int64_t team_map_stale = 0;       // ... ignored: older than one applied
+  std::int64_t tracks_omitted = 0;       // tracks left out of TRACKS_<r> (more than contract::kMaxTracks), summed over frames
 };
 
 class RobotNode {
@@ -134,6 +136,11 @@ class RobotNode {
   /// candidates_period_frames): the robot's candidates, at most contract::kMaxCandidates.
   bool candidates_ready() const { return messages_.candidates_ready(); }
   const candidate_list_t& candidates_msg() const { return messages_.candidates(); }
+  /// True when this frame also produced a TRACKS_<r> message: the robot's tracks of
+  /// its moving landmarks, at most contract::kMaxTracks (the rest in num_omitted and
+  /// counted in RobotNodeCounters::tracks_omitted).
+  bool tracks_ready() const { return messages_.tracks_ready(); }
+  const track_list_t& tracks_msg() const { return messages_.tracks(); }
 
   /// The incarnation every outgoing message carries (landmark_event_t): the start-up
   /// wall clock [us] of a fresh start, kept from the state file on a resume

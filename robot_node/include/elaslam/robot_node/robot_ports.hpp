@@ -50,7 +50,7 @@ struct RobotQueues {
 ///   frame:   RobotNode::on_sensor: the filter, the gate, the outgoing messages filled.
 ///   pose:    the POSE encoded and sent (its utime is stamped just before); first.
 ///   outputs: then this frame's LMAP_EVENTS (or LMAP_EVENTs), snapshot chunks and
-///            CANDIDATES encoded and sent.
+///            CANDIDATES and TRACKS encoded and sent.
 struct FrameStages {
   DurationHistogram receive, frame, outputs, pose;
 };
@@ -71,7 +71,8 @@ class RobotPorts {
         snapshot_(channels::lmap_snapshot(shell.suffix())),
         pose_(channels::pose(node.robot_id(), shell.suffix())),
         status_(channels::status_robot(node.robot_id(), shell.suffix())),
-        candidates_(channels::candidates(node.robot_id(), shell.suffix())) {}
+        candidates_(channels::candidates(node.robot_id(), shell.suffix())),
+        tracks_(channels::tracks(node.robot_id(), shell.suffix())) {}
 
   /// Subscribe the inputs; false when the transport refused.
   bool open(const RobotQueues& queues = {}) {
@@ -148,6 +149,7 @@ class RobotPorts {
       for (const auto& ev : node_.event_msgs()) shell_.publish(event_, ev);
     if (node_.snapshot_ready()) publish_snapshot();
     if (node_.candidates_ready()) shell_.publish(candidates_, node_.candidates_msg());
+    if (node_.tracks_ready()) shell_.publish(tracks_, node_.tracks_msg());
     const std::int64_t sent = shell_.now_utime();
     stages_.receive.add(span_us(msg.utime, received));
     stages_.frame.add(now - received);
@@ -214,7 +216,7 @@ class RobotPorts {
 
   Shell& shell_;
   RobotNode& node_;
-  const std::string event_, events_, snapshot_, pose_, status_, candidates_;  // channel names, built once
+  const std::string event_, events_, snapshot_, pose_, status_, candidates_, tracks_;  // channel names, built once
   typename Shell::SequenceGaps notice_seq_;            // DYNAMIC_NOTICE's seq: lost notices
   std::function<void(const RobotNode&)> after_frame_;
   FrameStages stages_;

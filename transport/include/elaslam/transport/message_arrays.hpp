@@ -5,7 +5,7 @@
 // state (int16_t: 32,767), so LCM's decoder (which resizes the std::vector to the
 // count) never allocates, also for a forged count, which validation then refuses.
 // About 2 MB for a global map input, 3 MB for an events input, 0.7 MB for a sensor
-// input.
+// input, 3.3 MB for a tracks input (TRACKS_<r>, main_robot's).
 #pragma once
 
 #include <cstdint>
@@ -14,6 +14,7 @@
 #include "elaslam/lmap_events_t.hpp"
 #include "elaslam/lmap_snapshot_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "elaslam/track_list_t.hpp"
 
 namespace elaslam::transport {
 
@@ -26,6 +27,7 @@ inline void reserve_arrays(lmap_snapshot_t* m) {
   m->moving_frames.reserve(kMaxCount);
 }
 inline void reserve_arrays(lmap_events_t* m) { m->events.reserve(kMaxCount); }
+inline void reserve_arrays(track_list_t* m) { m->tracks.reserve(kMaxCount); }
 inline void reserve_arrays(global_map_t* m) {
   m->landmarks.reserve(kMaxCount);
   m->moving_ids.reserve(kMaxCount);

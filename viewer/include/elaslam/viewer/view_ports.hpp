@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The viewer's inputs on the message layer (transport/node_shell.hpp): RUN_INFO,
-// POSE_<r>, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_<r>, CANDIDATES_<r> and
-// GROUND_TRUTH into a ViewState, on bounded queues. The viewer process and the fuzz
+// POSE_<r>, GLOBAL_MAP, DYNAMIC_NOTICE, STATUS_ROBOT_<r>, CANDIDATES_<r>, TRACKS_<r>,
+// GLOBAL_TRACKS and GROUND_TRUTH into a ViewState, on bounded queues. The viewer process and the fuzz
 // target (fuzz/fuzz_viewer.cpp) both run this. It publishes nothing.
 #pragma once
 
@@ -33,6 +33,9 @@ class ViewPorts {
                             [this](const node_status_t& m) { state_.on_status(m, now_s()); });
     ok &= on<candidate_list_t>(channels::any_candidates(sfx), 100,
                                [this](const candidate_list_t& m) { state_.on_candidates(m); });
+    ok &= on<track_list_t>(channels::any_tracks(sfx), 100, [this](const track_list_t& m) { state_.on_tracks(m); });
+    ok &= on<global_tracks_t>(channels::global_tracks(sfx), 100,
+                              [this](const global_tracks_t& m) { state_.on_global_tracks(m); });
     ok &= on<ground_truth_t>(channels::ground_truth(sfx), 20, [this](const ground_truth_t& m) { state_.on_truth(m); });
     return ok;
   }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the viewer draws (viewer/STATE_SCHEMA.md): the team's state as the bus tells
 // it, built from RUN_INFO, POSE_<r>, GLOBAL_MAP (its chunks), DYNAMIC_NOTICE,
-// STATUS_ROBOT_<r> and GROUND_TRUTH, and written as one JSON document. A plain
+// STATUS_ROBOT_<r>, CANDIDATES_<r>, TRACKS_<r>, GLOBAL_TRACKS and GROUND_TRUTH, and written as one JSON document. A plain
 // subscriber's state: every message is checked before it is taken (a bad one is
 // counted and changes nothing), and everything kept is bounded (trails, notices,
 // landmark ids below max_landmark_id, robot ids 1..kMaxRobots).
@@ -20,10 +20,12 @@
 #include "elaslam/common/contract.hpp"
 #include "elaslam/dynamic_notice_t.hpp"
 #include "elaslam/global_map_t.hpp"
+#include "elaslam/global_tracks_t.hpp"
 #include "elaslam/ground_truth_t.hpp"
 #include "elaslam/node_status_t.hpp"
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
+#include "elaslam/track_list_t.hpp"
 
 namespace elaslam::viewer {
 
@@ -62,6 +64,12 @@ class ViewState {
   /// robot's list older than kCandidateFrames frames is dropped (it stopped).
   bool on_candidates(const candidate_list_t& m);
   static constexpr int kCandidateFrames = 20;
+  /// A robot's tracks of its moving landmarks (TRACKS_<r>) replace its earlier ones;
+  /// main's fused tracks (GLOBAL_TRACKS) replace the earlier fused ones. Checked as
+  /// main checks them (common/track_checks.hpp); a list older than kCandidateFrames
+  /// frames is not drawn (its sender stopped).
+  bool on_tracks(const track_list_t& m);
+  bool on_global_tracks(const global_tracks_t& m);
 
   /// The state as JSON (viewer/STATE_SCHEMA.md); `viewer_counters` is the
   /// "viewer" object (messages, drops, clients), filled by the program.
@@ -75,6 +83,15 @@ class ViewState {
   long long messages() const { return messages_; }
 
  private:
+  /// One track as drawn: where, how fast, its model.
+  struct Track {
+    int id = -1;
+    double x = 0, y = 0, vx = 0, vy = 0, cxx = 0, cxy = 0, cyy = 0;
+    std::array<double, 3> probabilities{};
+    int likeliest = 0;
+    bool stopped = false, validated = false;
+    int contributors = 0;  // fused tracks: bit r-1, robot r
+  };
   struct Robot {
     bool has_pose = false;
     int frame = -1;
@@ -88,6 +105,8 @@ class ViewState {
     node_status_t status;
     int candidates_frame = -1;
     std::vector<std::array<double, 6>> candidates;  // id, x, y, cxx, cxy, cyy
+    int tracks_frame = -1;
+    std::vector<Track> tracks;
   };
   struct Landmark {
     bool known = false;  // a position was ever received
@@ -114,7 +133,8 @@ class ViewState {
   void push_trail(std::deque<std::array<double, 2>>* t, double x, double y) const;
   // Parts of to_json: each robot's entry; the map's landmarks with the candidates
   // drawn in the places that are not static in the map.
-  static nlohmann::json robot_json(int id, const Robot& r, double now_s);
+  nlohmann::json robot_json(int id, const Robot& r, double now_s) const;
+  static nlohmann::json track_json(const Track& t, bool fused);
   nlohmann::json landmarks_json() const;
 
   ViewLimits limits_;
@@ -126,6 +146,8 @@ class ViewState {
   std::vector<TruthLandmark> truth_landmarks_;
   std::deque<Notice> notices_;
   std::int64_t map_version_ = -1;
+  int global_tracks_frame_ = -1;
+  std::vector<Track> global_tracks_;
   std::map<std::string, long long> bad_by_reason_;  // the "viewer" object shows it
 };
 
