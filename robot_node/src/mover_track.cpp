@@ -177,11 +177,22 @@ Eigen::Matrix3d MoverTrack::switching(double dt) const {
 }
 
 void MoverTrack::predict_model(int j, double dt) {
-  TrackMatrix F, Q;
-  TrackVector c;
-  transition(static_cast<MotionModel>(j), dt, &F, &c, &Q);
-  x_[j] = F * x_[j] + c;
-  P_[j] = F * P_[j] * F.transpose() + Q;
+  // F and Q depend on the step alone (frames come at a steady rate): computed once
+  // per step length; the bounded model's c = (I - F) (anchor, 0) follows the anchor.
+  if (dt != step_cached_) {
+    TrackVector c;
+    for (int m = 0; m < kMotionModels; ++m) transition(static_cast<MotionModel>(m), dt, &F_step_[m], &c, &Q_step_[m]);
+    step_cached_ = dt;
+  }
+  const TrackMatrix& F = F_step_[j];
+  if (static_cast<MotionModel>(j) == MotionModel::kBounded) {
+    TrackVector eq = TrackVector::Zero();
+    eq.head<2>() = anchor_;
+    x_[j] = F * x_[j] + (TrackMatrix::Identity() - F) * eq;
+  } else {
+    x_[j] = F * x_[j];
+  }
+  P_[j] = F * P_[j] * F.transpose() + Q_step_[j];
   P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
 }
 
@@ -267,13 +278,9 @@ TrackUpdate MoverTrack::update(const TrackSighting& s) {
     noise_scale_ = std::clamp(mean_nis_ / 2.0, 1.0, options_.max_noise_scale);
   }
   for (int j = 0; j < kMotionModels; ++j) {
-    // Joseph form: P = (I - K H) P (I - K H)' + K R K', H = [H_l 0].
     const Mat42 K = PHt[j] * S_inv[j];
-    Eigen::Matrix<double, 2, 4> H = Eigen::Matrix<double, 2, 4>::Zero();
-    H.leftCols<2>() = H_l[j];
-    const TrackMatrix IKH = TrackMatrix::Identity() - K * H;
     x_[j] += K * nu[j];
-    P_[j] = IKH * P_[j] * IKH.transpose() + K * R_total[j] * K.transpose();
+    P_[j] -= K * PHt[j].transpose();
     P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
   }
   // Model probabilities (IMM step 3), in the log domain against underflow; a floor

@@ -175,6 +175,9 @@ class MoverTrack {
   std::int64_t sightings_ = 0, restarts_ = 0, outliers_ = 0;
   // The last sighting no model explained, held back (unexplained()): its world
   // position, covariance and time.
+  // Each model's F and Q for the last step length predicted (predict_model).
+  double step_cached_ = -1.0;
+  std::array<TrackMatrix, kMotionModels> F_step_{}, Q_step_{};
   double mean_nis_ = 2.0;     // running mean of the unscaled combined innovations' d2
   double noise_scale_ = 1.0;  // lambda
   bool pending_ = false;
