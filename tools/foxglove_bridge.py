@@ -228,8 +228,10 @@ class Bridge:
         self.truth_landmarks = []
         self.landmarks = {}      # id -> [x, y, cxx, cxy, cyy, status]; status static | moving | gone
         self.candidates = {}     # r -> (frame, [(id, x, y, cxx, cxy, cyy)])
-        self.tracks = {}         # r -> (frame, num_chunks, {chunk}, [(id, x, y, vx, vy, model)]) of its newest TRACKS_<r> frame
-        self.fused_tracks = (-1, 0, set(), [])  # the same of the newest GLOBAL_TRACKS frame
+        # r -> ((frame, utime), num_chunks, {chunk}, [(id, x, y, vx, vy, model)]) of its newest TRACKS_<r>
+        # publication (main may send a frame's GLOBAL_TRACKS twice: a publication is its frame and utime)
+        self.tracks = {}
+        self.fused_tracks = ((-1, 0), 0, set(), [])  # the same of the newest GLOBAL_TRACKS
         self.map_frame, self.map_dirty, self.map_sent = -1, False, 0.0
         self.truth_dirty, self.truth_sent = False, 0.0
         self.notices_seen = collections.OrderedDict()
@@ -403,11 +405,11 @@ class Bridge:
         nothing); a str saying why when m is at odds with the chunks held."""
         if not 1 <= m.num_chunks <= MAX_TRACK_CHUNKS or not 0 <= m.chunk < m.num_chunks:
             return "chunk out of range"
-        frame, num_chunks, chunks, held_rows = held
-        if m.frame < frame:
+        stamp, num_chunks, chunks, held_rows = held
+        if (m.frame, m.utime) < stamp:
             return held
-        if m.frame > frame:
-            return (m.frame, m.num_chunks, {m.chunk}, rows)
+        if (m.frame, m.utime) > stamp:
+            return ((m.frame, m.utime), m.num_chunks, {m.chunk}, rows)
         if m.num_chunks != num_chunks:
             return "num_chunks differs from its frame's other chunks"
         if m.chunk in chunks:
@@ -423,7 +425,7 @@ class Bridge:
         rows = self.track_rows(m.tracks, m.num_tracks)
         if rows is None:
             return "a track out of range or not finite"
-        held = self.add_chunk(self.tracks.get(r, (-1, 0, set(), [])), m, rows)
+        held = self.add_chunk(self.tracks.get(r, ((-1, 0), 0, set(), [])), m, rows)
         if isinstance(held, str):
             return held
         self.tracks[r] = held
@@ -509,8 +511,8 @@ class Bridge:
         ents += [s.entity(stamp, "landmarks/ellipses", spheres=discs), s.entity(stamp, "landmarks/labels", texts=labels)]
         # Tracks of moving landmarks: each robot's and main's fused ones, while not 20 frames stale.
         robot_arrows = [s.track_arrow(x, y, vx, vy, model, False) for r in sorted(self.tracks)
-                        if self.map_frame - self.tracks[r][0] <= 20 for _, x, y, vx, vy, model in self.tracks[r][3]]
-        frame, _, _, fused = self.fused_tracks
+                        if self.map_frame - self.tracks[r][0][0] <= 20 for _, x, y, vx, vy, model in self.tracks[r][3]]
+        (frame, _), _, _, fused = self.fused_tracks
         fused_arrows = [s.track_arrow(x, y, vx, vy, model, True) for _, x, y, vx, vy, model in fused
                         if self.map_frame - frame <= 20]
         ents += [s.entity(stamp, "tracks/robots", arrows=robot_arrows), s.entity(stamp, "tracks/fused", arrows=fused_arrows)]

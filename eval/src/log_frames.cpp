@@ -74,13 +74,19 @@ bool tracks_hold(const LogEvent& ev, const Msg& m, LogData* d, Check check) {
 
 /// A valid chunk of a TRACKS_<r> (`robot`) or GLOBAL_TRACKS (robot 0) publication
 /// whose samples of its frame so far are `out`: true when it is to be taken, a chunk
-/// not taken before (a later copy is skipped). One whose num_chunks differs from its
+/// not taken before (a later copy, or a chunk of a later publication of the frame
+/// (another utime: main repeats a frame's map in a quiet period), is skipped: the
+/// frame's first publication is scored). One whose num_chunks differs from its
 /// publication's other chunks, or that lists a landmark an earlier chunk listed, is
 /// counted (channel, reason) and skipped, as main_robot refuses it.
 template <typename Msg>
 bool take_chunk(const LogEvent& ev, const Msg& m, int robot, LogData::TrackChunks* held,
                 const std::vector<TrackSample>& out, LogData* d) {
-  if (held->num_chunks == 0) held->num_chunks = m.num_chunks;
+  if (held->num_chunks == 0) {
+    held->num_chunks = m.num_chunks;
+    held->utime = m.utime;
+  }
+  if (m.utime != held->utime) return false;
   if (m.num_chunks != held->num_chunks) {
     ++d->invalid[ev.channel][to_string(Refusal::kMalformed)];
     return false;

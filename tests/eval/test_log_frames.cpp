@@ -198,7 +198,8 @@ TEST(LogFrames, WhatANodeWouldRefuseOrCannotDecodeIsCountedNotEvaluated) {
 // they are. A second chunk 0 of robot 1's frame 2 (far off) is a later copy and not
 // scored; one with a NaN velocity, one whose num_chunks differs from its frame's
 // others and a GLOBAL_TRACKS chunk listing a landmark another chunk of its frame
-// listed are counted as invalid. Robots: position RMS sqrt((5 * 0.1^2 + 5 * 0.2^2 +
+// listed are counted as invalid; main's second publication of frame 4 (another
+// utime) is skipped, the frame's first scored. Robots: position RMS sqrt((5 * 0.1^2 + 5 * 0.2^2 +
 // 5 * 0) / 15) over 15 samples, speed RMS 0 over the 8 of landmark 1 with a true
 // velocity (every frame but the first); fused: position RMS 0 over 10.
 TEST(LogFrames, TheRobotsTracksAndMainsFusedTracksAreScoredAgainstTheTruth) {
@@ -244,7 +245,12 @@ TEST(LogFrames, TheRobotsTracksAndMainsFusedTracksAreScoredAgainstTheTruth) {
                 "", &d);  // num_chunks 3 against the frame's 2
   add_log_event(event(channels::global_tracks(), kT0 + 4 * kPeriod + 3'000, global(4, 2, 1, 9.0, 5.0, 0.5)), "",
                 &d);  // landmark 1 is in chunk 1
+  global_tracks_t again = global(4, 0, 1, 9.0, 5.0, 0.5);  // main's second publication of frame 4
+  again.utime = 99;
+  again.num_chunks = 1;
+  add_log_event(event(channels::global_tracks(), kT0 + 4 * kPeriod + 4'000, again), "", &d);
   EXPECT_EQ(d.invalid["TRACKS_1"]["malformed"], 2);
+  EXPECT_EQ(d.invalid["GLOBAL_TRACKS"]["malformed"], 0) << "another publication of a frame is not at odds with it";
   EXPECT_EQ(d.invalid["GLOBAL_TRACKS"]["duplicate_id"], 1);
   EXPECT_EQ(d.track_messages, 17);  // valid chunks read: 15, the copy, the one at odds
 

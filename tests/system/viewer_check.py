@@ -19,11 +19,12 @@ import lcm  # noqa: E402
 
 
 def add_chunk(held, m):
-    """(frame, {landmark ids}) of a tracks publication's chunks so far, with chunk m
-    added: a newer frame starts over, an older one is ignored."""
-    if held is None or m.frame > held[0]:
-        held = (m.frame, set())
-    if m.frame == held[0]:
+    """(frame, {landmark ids}, utime) of a tracks publication's chunks so far, with
+    chunk m added: a newer publication (frame, then utime: main may send a frame's
+    GLOBAL_TRACKS twice) starts over, an older one is ignored."""
+    if held is None or (m.frame, m.utime) > (held[0], held[2]):
+        held = (m.frame, set(), m.utime)
+    if (m.frame, m.utime) == (held[0], held[2]):
         held[1].update(t.id for t in m.tracks)
     return held
 

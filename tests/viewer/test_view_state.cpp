@@ -406,6 +406,14 @@ TEST(ViewState, TracksInTwoChunksAreDrawnTogether) {
   EXPECT_EQ(j["robots"][0]["tracks"][0]["x"], 1.2);
   EXPECT_EQ(ids(j["global_tracks"]), (std::vector<int>{4, 8}));
 
+  // Main's second publication of frame 10 (a later utime: a quiet period's repeated
+  // map), in one chunk: it replaces the first, not refused for its num_chunks.
+  global_tracks_t again = fused(10, {track(6, 2.0, 0.0)}, 0b10);
+  again.utime = 5;
+  ASSERT_TRUE(v.on_global_tracks(again));
+  EXPECT_EQ(ids(state(v)["global_tracks"]), (std::vector<int>{6}));
+  EXPECT_EQ(v.bad_messages(), bad + 5);
+
   ASSERT_TRUE(v.on_tracks(tracks(2, 12, {track(6, 2.5, 0.1)})));
   EXPECT_EQ(ids(state(v)["robots"][0]["tracks"]), (std::vector<int>{6}));
 }

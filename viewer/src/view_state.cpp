@@ -225,7 +225,9 @@ namespace {
 
 // Where a chunk of a tracks message goes (TRACKS_<r>, GLOBAL_TRACKS): kTake when it
 // starts a newer publication (`chunks` reset: nothing held) or adds a chunk not yet
-// held to the one held; kOld when it is of an older publication or held already;
+// held to the one held; kOld when it is of an older publication or held already.
+// A publication is its frame and utime: main may send a frame's GLOBAL_TRACKS
+// twice (a quiet period's repeated map), the later one newer. Else
 // kNumChunks or kTwice when its num_chunks or a landmark id is at odds with the
 // chunks held, nothing changed. A frame more than 1000 behind is a sender that
 // started over.
@@ -233,8 +235,10 @@ enum class Placed { kTake, kOld, kNumChunks, kTwice };
 template <class Msg, class Chunks, class T>
 Placed place_chunk(const Msg& m, int* frame, Chunks* chunks, const std::vector<T>& held) {
   if (m.frame < *frame && *frame - m.frame < 1000) return Placed::kOld;
-  if (m.frame != *frame) {
+  if (m.frame == *frame && m.utime < chunks->utime) return Placed::kOld;
+  if (m.frame != *frame || m.utime != chunks->utime) {
     *frame = m.frame;
+    chunks->utime = m.utime;
     chunks->num_chunks = m.num_chunks;
     chunks->received = 0;
     return Placed::kTake;

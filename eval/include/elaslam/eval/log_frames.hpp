@@ -78,6 +78,7 @@ struct LogData {
   // GLOBAL_TRACKS, each chunk once.
   std::map<int, std::vector<TrackSample>> robot_tracks, global_tracks;
   struct TrackChunks {
+    std::int64_t utime = 0;  // the frame's first publication's (main may send a frame's twice)
     int num_chunks = 0;  // the publication's, from its first chunk read
     unsigned taken = 0;  // bit c: chunk c taken
   };

@@ -89,6 +89,7 @@ class ViewState {
  private:
   /// The chunks held of one tracks publication.
   struct TrackChunks {
+    std::int64_t utime = 0;  // the publication's (with its frame)
     int num_chunks = 0;
     unsigned received = 0;  // bit c: chunk c
   };
