@@ -96,7 +96,8 @@ def main() -> int:
               f"ids [{g.id_begin}, {g.id_end}): {g.num_landmarks} static, {g.num_moving} moving")
     if "GLOBAL_TRACKS" in last:
         g = last["GLOBAL_TRACKS"]
-        print(f"last GLOBAL_TRACKS: frame {g.frame}, {g.num_tracks} fused tracks ({g.num_omitted} left out)")
+        print(f"last GLOBAL_TRACKS chunk: frame {g.frame}, chunk {g.chunk + 1} of {g.num_chunks}, "
+              f"{g.num_tracks} fused tracks ({g.num_omitted} left out)")
     return 1 if errors else 0
 
 

@@ -76,6 +76,7 @@ from lcm_udpm import UdpmReceiver, parse_udpm_url  # noqa: E402
 MAX_ROBOTS = 16              # contract::kMaxRobots
 MAX_LANDMARK_ID = 1 << 16    # ids beyond are refused (memory bound)
 WORLD_BOUND_M = 1e5          # positions beyond are refused
+MAX_TRACK_CHUNKS = 6         # contract::kMaxTrackChunks: chunks of one TRACKS_<r> or GLOBAL_TRACKS
 SIGMA = 3.0                  # ellipses at 3 sigma, as the viewer draws them
 FAULT_INCONSISTENT = 8       # node_status_t.FAULT_INCONSISTENT
 # Channel groups the bridge reads (channels.hpp's channel_group; the ctest channel_tables
@@ -227,8 +228,10 @@ class Bridge:
         self.truth_landmarks = []
         self.landmarks = {}      # id -> [x, y, cxx, cxy, cyy, status]; status static | moving | gone
         self.candidates = {}     # r -> (frame, [(id, x, y, cxx, cxy, cyy)])
-        self.tracks = {}         # r -> (frame, [(id, x, y, vx, vy, model)]) of its last TRACKS_<r>
-        self.fused_tracks = (-1, [])  # the same of the last GLOBAL_TRACKS
+        # r -> ((frame, utime), num_chunks, {chunk}, [(id, x, y, vx, vy, model)]) of its newest TRACKS_<r>
+        # publication (main may send a frame's GLOBAL_TRACKS twice: a publication is its frame and utime)
+        self.tracks = {}
+        self.fused_tracks = ((-1, 0), 0, set(), [])  # the same of the newest GLOBAL_TRACKS
         self.map_frame, self.map_dirty, self.map_sent = -1, False, 0.0
         self.truth_dirty, self.truth_sent = False, 0.0
         self.notices_seen = collections.OrderedDict()
@@ -395,6 +398,26 @@ class Bridge:
             rows.append((t.id, t.x, t.y, t.vx, t.vy, t.likeliest))
         return rows
 
+    @staticmethod
+    def add_chunk(held, m, rows):
+        """The chunks of the newest frame of a tracks publication with chunk m added
+        (a newer frame starts over, an older frame or a chunk held already changes
+        nothing); a str saying why when m is at odds with the chunks held."""
+        if not 1 <= m.num_chunks <= MAX_TRACK_CHUNKS or not 0 <= m.chunk < m.num_chunks:
+            return "chunk out of range"
+        stamp, num_chunks, chunks, held_rows = held
+        if (m.frame, m.utime) < stamp:
+            return held
+        if (m.frame, m.utime) > stamp:
+            return ((m.frame, m.utime), m.num_chunks, {m.chunk}, rows)
+        if m.num_chunks != num_chunks:
+            return "num_chunks differs from its frame's other chunks"
+        if m.chunk in chunks:
+            return held
+        if {r[0] for r in rows} & {r[0] for r in held_rows}:
+            return "a landmark id in two chunks"
+        return (frame, num_chunks, chunks | {m.chunk}, held_rows + rows)
+
     def on_tracks(self, m, rid):
         r = int(rid)
         if m.robot_id != r or not 1 <= r <= MAX_ROBOTS:
@@ -402,7 +425,10 @@ class Bridge:
         rows = self.track_rows(m.tracks, m.num_tracks)
         if rows is None:
             return "a track out of range or not finite"
-        self.tracks[r] = (m.frame, rows)
+        held = self.add_chunk(self.tracks.get(r, ((-1, 0), 0, set(), [])), m, rows)
+        if isinstance(held, str):
+            return held
+        self.tracks[r] = held
         self.map_dirty = True
         return None
 
@@ -410,7 +436,10 @@ class Bridge:
         rows = self.track_rows(m.tracks, m.num_tracks)
         if rows is None:
             return "a fused track out of range or not finite"
-        self.fused_tracks = (m.frame, rows)
+        held = self.add_chunk(self.fused_tracks, m, rows)
+        if isinstance(held, str):
+            return held
+        self.fused_tracks = held
         self.map_dirty = True
         return None
 
@@ -482,8 +511,8 @@ class Bridge:
         ents += [s.entity(stamp, "landmarks/ellipses", spheres=discs), s.entity(stamp, "landmarks/labels", texts=labels)]
         # Tracks of moving landmarks: each robot's and main's fused ones, while not 20 frames stale.
         robot_arrows = [s.track_arrow(x, y, vx, vy, model, False) for r in sorted(self.tracks)
-                        if self.map_frame - self.tracks[r][0] <= 20 for _, x, y, vx, vy, model in self.tracks[r][1]]
-        frame, fused = self.fused_tracks
+                        if self.map_frame - self.tracks[r][0][0] <= 20 for _, x, y, vx, vy, model in self.tracks[r][3]]
+        (frame, _), _, _, fused = self.fused_tracks
         fused_arrows = [s.track_arrow(x, y, vx, vy, model, True) for _, x, y, vx, vy, model in fused
                         if self.map_frame - frame <= 20]
         ents += [s.entity(stamp, "tracks/robots", arrows=robot_arrows), s.entity(stamp, "tracks/fused", arrows=fused_arrows)]

@@ -63,12 +63,20 @@ std::string check_track(const global_track_t& t, const MessageLimits& l, int max
   return "";
 }
 
+std::string check_chunk(int chunk, int num_chunks) {
+  if (num_chunks < 1 || num_chunks > contract::kMaxTrackChunks)
+    return contract::got(contract::outside("num_chunks", 1, contract::kMaxTrackChunks), num_chunks);
+  if (chunk < 0 || chunk >= num_chunks) return contract::got(contract::outside("chunk", 0, num_chunks - 1), chunk);
+  return "";
+}
+
 std::string check_track_list(const track_list_t& m, const MessageLimits& l, int max_landmark_id, Refusal* reason) {
   *reason = Refusal::kMalformed;
   if (m.robot_id < 1 || m.robot_id > contract::kMaxRobots)
     return contract::got(contract::outside("robot_id", 1, contract::kMaxRobots), m.robot_id);
   if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  if (std::string p = check_chunk(m.chunk, m.num_chunks); !p.empty()) return p;
   if (m.num_tracks < 0 || m.num_tracks > contract::kMaxTracks)
     return contract::got(contract::count_outside("num_tracks", contract::kMaxTracks), m.num_tracks);
   if (!contract::count_fits(m.tracks, m.num_tracks)) return contract::got("num_tracks does not match the array", m.num_tracks);
@@ -87,6 +95,7 @@ std::string check_global_tracks(const global_tracks_t& m, const MessageLimits& l
   *reason = Refusal::kMalformed;
   if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
   if (m.frame < -1) return contract::got("frame below -1", m.frame);
+  if (std::string p = check_chunk(m.chunk, m.num_chunks); !p.empty()) return p;
   if (m.num_tracks < 0 || m.num_tracks > contract::kMaxGlobalTracks)
     return contract::got(contract::count_outside("num_tracks", contract::kMaxGlobalTracks), m.num_tracks);
   if (!contract::count_fits(m.tracks, m.num_tracks)) return contract::got("num_tracks does not match the array", m.num_tracks);

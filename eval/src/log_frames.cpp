@@ -72,6 +72,36 @@ bool tracks_hold(const LogEvent& ev, const Msg& m, LogData* d, Check check) {
   return false;
 }
 
+/// A valid chunk of a TRACKS_<r> (`robot`) or GLOBAL_TRACKS (robot 0) publication
+/// whose samples of its frame so far are `out`: true when it is to be taken, a chunk
+/// not taken before (a later copy, or a chunk of a later publication of the frame
+/// (another utime: main repeats a frame's map in a quiet period), is skipped: the
+/// frame's first publication is scored). One whose num_chunks differs from its
+/// publication's other chunks, or that lists a landmark an earlier chunk listed, is
+/// counted (channel, reason) and skipped, as main_robot refuses it.
+template <typename Msg>
+bool take_chunk(const LogEvent& ev, const Msg& m, int robot, LogData::TrackChunks* held,
+                const std::vector<TrackSample>& out, LogData* d) {
+  if (held->num_chunks == 0) {
+    held->num_chunks = m.num_chunks;
+    held->utime = m.utime;
+  }
+  if (m.utime != held->utime) return false;
+  if (m.num_chunks != held->num_chunks) {
+    ++d->invalid[ev.channel][to_string(Refusal::kMalformed)];
+    return false;
+  }
+  if ((held->taken >> m.chunk) & 1u) return false;  // a later copy of the chunk
+  for (int k = 0; k < m.num_tracks; ++k)
+    for (const TrackSample& s : out)
+      if (s.robot == robot && s.landmark_id == m.tracks[static_cast<std::size_t>(k)].id) {
+        ++d->invalid[ev.channel][to_string(Refusal::kDuplicateId)];
+        return false;
+      }
+  held->taken |= 1u << m.chunk;
+  return true;
+}
+
 template <typename Track>
 TrackSample sample_of(const Track& t, int robot) {
   TrackSample s;
@@ -140,8 +170,8 @@ void add_log_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
     track_list_t m;
     if (!decode(ev, &m, d) || !tracks_hold(ev, m, d, check_track_list)) return;
     ++d->track_messages;
-    if (!d->tracks_taken.insert({m.frame, m.robot_id}).second) return;  // a later copy of its frame
     std::vector<TrackSample>& out = d->robot_tracks[m.frame];
+    if (!take_chunk(ev, m, m.robot_id, &d->tracks_chunks[{m.frame, m.robot_id}], out, d)) return;
     for (int k = 0; k < m.num_tracks; ++k) {
       const track_t& t = m.tracks[static_cast<std::size_t>(k)];
       out.push_back(sample_of(t, m.robot_id));
@@ -151,8 +181,8 @@ void add_log_event(const LogEvent& ev, const std::string& sfx, LogData* d) {
     global_tracks_t m;
     if (!decode(ev, &m, d) || !tracks_hold(ev, m, d, check_global_tracks)) return;
     ++d->global_track_messages;
-    if (d->global_tracks.count(m.frame) > 0) return;  // the first of its frame
     std::vector<TrackSample>& out = d->global_tracks[m.frame];
+    if (!take_chunk(ev, m, 0, &d->global_tracks_chunks[m.frame], out, d)) return;
     for (int k = 0; k < m.num_tracks; ++k) out.push_back(sample_of(m.tracks[static_cast<std::size_t>(k)], 0));
   } else if (ch == channels::global_map(sfx)) {
     global_map_t m;

@@ -23,7 +23,10 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options), publisher_(
   resyncs_.reserve(kMaxTeamRobots * 4);
   taken_.reserve(kMaxTeamRobots * 4);
   alert_.reserve(kAlertCapacity);  // check_team's lines go in without allocating
-  global_tracks_.tracks.resize(contract::kMaxGlobalTracks);  // num_tracks says how many count
+  // Every chunk a GLOBAL_TRACKS publication can have, each with room for a full
+  // chunk: making them allocates nothing (num_tracks says how many count).
+  global_tracks_.resize(contract::kMaxTrackChunks);
+  for (auto& c : global_tracks_) c.tracks.resize(contract::kMaxGlobalTracks);
 }
 
 std::string MainNode::validate(const landmark_event_t& m, Refusal* reason) const {
@@ -346,23 +349,28 @@ bool MainNode::on_tracks(const track_list_t& m, std::string* why) {
                   contract::got("tracks' frame more than max_frame_gap ahead of robot " + std::to_string(m.robot_id) +
                                     "'s last " + std::to_string(last),
                                 m.frame));
-  if (m.frame <= fusion_.robot_frame(m.robot_id)) {
-    ++counters_.stale_tracks;
-    return true;
+  std::string problem;
+  switch (fusion_.take(m, &problem, &reason)) {
+    case TrackFusion::Take::kRefused: return refuse(reason, problem);
+    case TrackFusion::Take::kStale: ++counters_.stale_tracks; return true;
+    case TrackFusion::Take::kTaken: break;
   }
-  fusion_.take(m);
   ++counters_.tracks;
   return true;
 }
 
-bool MainNode::make_global_tracks(std::int64_t now_utime, int frame) {
+int MainNode::make_global_tracks(std::int64_t now_utime, int frame) {
+  constexpr int kCapacity = contract::kMaxTrackChunks * contract::kMaxGlobalTracks;
   const std::vector<FusedTrack>& fused = fusion_.fuse(stamp(frame));
   const int total = static_cast<int>(fused.size());
-  const int n = std::min(total, contract::kMaxGlobalTracks);
-  if (total == 0 && global_tracks_.num_tracks + global_tracks_.num_omitted == 0) return false;
+  const int n = std::min(total, kCapacity);
+  // Once more, as one empty chunk, when the last fused track has gone.
+  if (total == 0 && global_tracks_published_ == 0) return num_global_tracks_chunks_ = 0;
+  global_tracks_published_ = total;
   for (int k = 0; k < n; ++k) {
     const FusedTrack& f = fused[static_cast<std::size_t>(k)];
-    global_track_t& g = global_tracks_.tracks[static_cast<std::size_t>(k)];
+    global_tracks_t& chunk = global_tracks_[static_cast<std::size_t>(k / contract::kMaxGlobalTracks)];
+    global_track_t& g = chunk.tracks[static_cast<std::size_t>(k % contract::kMaxGlobalTracks)];
     g.id = f.estimate.id;
     g.x = f.estimate.x(0);
     g.y = f.estimate.x(1);
@@ -375,14 +383,21 @@ bool MainNode::make_global_tracks(std::int64_t now_utime, int frame) {
     g.stopped = f.stopped() ? 1 : 0;
     g.contributors = static_cast<std::int16_t>(f.contributors);
   }
-  global_tracks_.utime = now_utime;
-  global_tracks_.frame = stamp(frame);
-  global_tracks_.incarnation = incarnation_;
-  global_tracks_.num_tracks = static_cast<std::int16_t>(n);
-  global_tracks_.num_omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
+  const int chunks = std::max(1, (n + contract::kMaxGlobalTracks - 1) / contract::kMaxGlobalTracks);
+  const auto omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
+  for (int c = 0; c < chunks; ++c) {
+    global_tracks_t& m = global_tracks_[static_cast<std::size_t>(c)];
+    m.utime = now_utime;
+    m.frame = stamp(frame);
+    m.incarnation = incarnation_;
+    m.chunk = static_cast<std::int16_t>(c);
+    m.num_chunks = static_cast<std::int16_t>(chunks);
+    m.num_omitted = omitted;
+    m.num_tracks = static_cast<std::int16_t>(std::min(contract::kMaxGlobalTracks, n - c * contract::kMaxGlobalTracks));
+  }
   ++counters_.global_tracks_published;
-  counters_.global_tracks_omitted += global_tracks_.num_omitted;
-  return true;
+  counters_.global_tracks_omitted += omitted;
+  return num_global_tracks_chunks_ = chunks;
 }
 
 int MainNode::stamp(int frame) const {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "elaslam/common/contract.hpp"
 #include "elaslam/common/cov.hpp"
 
 namespace elaslam {
@@ -76,40 +77,103 @@ double covariance_intersection(const TrackEstimate& a, const TrackEstimate& b, T
 }
 
 TrackFusion::TrackFusion(int max_age_frames) : max_age_frames_(max_age_frames) {
-  const std::size_t most = static_cast<std::size_t>(contract::kMaxRobots) * contract::kMaxTracks;
+  const std::size_t most = static_cast<std::size_t>(contract::kMaxRobots) * kCapacity;
   order_.reserve(most);
   fused_.reserve(most);
+  for (RobotTracks& r : robots_) {
+    r.fused.tracks.resize(kCapacity);
+    r.arriving.tracks.resize(kCapacity);
+  }
 }
 
-void TrackFusion::take(const track_list_t& m) {
+int TrackFusion::Publication::count() const {
+  int n = 0;
+  for (int c = 0; c < num_chunks; ++c)
+    if ((received >> c) & 1u) n += counts[static_cast<std::size_t>(c)];
+  return n;
+}
+
+TrackFusion::Take TrackFusion::take(const track_list_t& m, std::string* problem, Refusal* reason) {
   RobotTracks& r = robots_[static_cast<std::size_t>(m.robot_id - 1)];
-  r.frame = m.frame;
-  r.count = std::min<int>(m.num_tracks, contract::kMaxTracks);
-  for (int k = 0; k < r.count; ++k) {
+  Publication& a = r.arriving;
+  const auto refuse = [&](Refusal why, std::string text) {
+    if (problem) *problem = std::move(text);
+    if (reason) *reason = why;
+    return Take::kRefused;
+  };
+  if (m.frame < robot_frame(m.robot_id) || (m.frame == r.fused.frame && a.frame != m.frame)) return Take::kStale;
+  if (a.frame == m.frame) {
+    if (m.num_chunks != a.num_chunks)
+      return refuse(Refusal::kMalformed, contract::got("tracks' num_chunks differs from " + std::to_string(a.num_chunks) +
+                                                           " of the publication's other chunks",
+                                                       m.num_chunks));
+    if ((a.received >> m.chunk) & 1u) return Take::kStale;
+  } else {
+    // A newer frame: the publication still arriving (if any) is taken as it came.
+    if (a.frame >= 0) std::swap(r.fused, a);
+    a.frame = m.frame;
+    a.num_chunks = m.num_chunks;
+    a.received = 0;
+  }
+  const int n = std::min<int>(m.num_tracks, contract::kMaxTracks);
+  for (int k = 0; k < n; ++k) {
+    const int id = m.tracks[static_cast<std::size_t>(k)].id;
+    for (int c = 0; c < a.num_chunks; ++c) {
+      if (!((a.received >> c) & 1u)) continue;
+      for (int j = 0; j < a.counts[static_cast<std::size_t>(c)]; ++j)
+        if (a.tracks[static_cast<std::size_t>(c * contract::kMaxTracks + j)].id == id)
+          return refuse(Refusal::kDuplicateId, contract::got("track landmark id listed in two chunks", id));
+    }
+  }
+  for (int k = 0; k < n; ++k) {
     const track_t& t = m.tracks[static_cast<std::size_t>(k)];
-    TrackEstimate& e = r.tracks[static_cast<std::size_t>(k)];
+    TrackEstimate& e = a.tracks[static_cast<std::size_t>(m.chunk * contract::kMaxTracks + k)];
     e.id = t.id;
     e.x << t.x, t.y, t.vx, t.vy;
     e.P = read_cov_upper(t.cov);
     for (std::size_t i = 0; i < e.probabilities.size(); ++i) e.probabilities[i] = t.probabilities[i];
   }
+  a.counts[static_cast<std::size_t>(m.chunk)] = n;
+  a.received |= 1u << m.chunk;
+  if (a.complete()) {
+    std::swap(r.fused, a);
+    a.frame = -1;
+    a.num_chunks = 0;
+    a.received = 0;
+  }
+  return Take::kTaken;
 }
 
 void TrackFusion::forget(int robot_id) {
   RobotTracks& r = robots_[static_cast<std::size_t>(robot_id - 1)];
-  r.frame = -1;
-  r.count = 0;
+  for (Publication* p : {&r.fused, &r.arriving}) {
+    p->frame = -1;
+    p->num_chunks = 0;
+    p->received = 0;
+  }
 }
 
-int TrackFusion::robot_frame(int robot_id) const { return robots_[static_cast<std::size_t>(robot_id - 1)].frame; }
+int TrackFusion::robot_frame(int robot_id) const {
+  const RobotTracks& r = robots_[static_cast<std::size_t>(robot_id - 1)];
+  return std::max(r.fused.frame, r.arriving.frame);
+}
+
+int TrackFusion::robot_tracks(int robot_id) const {
+  return robots_[static_cast<std::size_t>(robot_id - 1)].fused.count();
+}
 
 const std::vector<FusedTrack>& TrackFusion::fuse(int frame) {
   order_.clear();
   for (int r = 0; r < contract::kMaxRobots; ++r) {
-    const RobotTracks& rt = robots_[static_cast<std::size_t>(r)];
-    if (rt.frame < 0 || frame - rt.frame > max_age_frames_) continue;
-    for (int k = 0; k < rt.count; ++k)
-      order_.emplace_back(rt.tracks[static_cast<std::size_t>(k)].id, r * contract::kMaxTracks + k);
+    const Publication& p = robots_[static_cast<std::size_t>(r)].fused;
+    if (p.frame < 0 || frame - p.frame > max_age_frames_) continue;
+    for (int c = 0; c < p.num_chunks; ++c) {
+      if (!((p.received >> c) & 1u)) continue;
+      for (int k = 0; k < p.counts[static_cast<std::size_t>(c)]; ++k) {
+        const int slot = c * contract::kMaxTracks + k;
+        order_.emplace_back(p.tracks[static_cast<std::size_t>(slot)].id, r * kCapacity + slot);
+      }
+    }
   }
   std::sort(order_.begin(), order_.end());  // by landmark, then robot
   fused_.clear();
@@ -118,8 +182,8 @@ const std::vector<FusedTrack>& TrackFusion::fuse(int frame) {
     FusedTrack f;
     bool first = true;
     for (; i < order_.size() && order_[i].first == id; ++i) {
-      const int r = order_[i].second / contract::kMaxTracks, k = order_[i].second % contract::kMaxTracks;
-      const TrackEstimate& e = robots_[static_cast<std::size_t>(r)].tracks[static_cast<std::size_t>(k)];
+      const int r = order_[i].second / kCapacity, k = order_[i].second % kCapacity;
+      const TrackEstimate& e = robots_[static_cast<std::size_t>(r)].fused.tracks[static_cast<std::size_t>(k)];
       if (first) {
         f.estimate = e;
         first = false;

@@ -38,13 +38,16 @@ RobotMessages::RobotMessages(const RobotOptions& options, int robot_id)
   prepare_chunks(grow_static, grow_moving, contract::kMaxChunkBytes, max_id, max_id, &chunk_sizes_, &chunks_);
   spans_.reserve(chunks_.size());
   candidates_.candidates.resize(contract::kMaxCandidates);  // num_candidates says how many count
-  tracks_.tracks.resize(contract::kMaxTracks);              // num_tracks says how many count
+  // Every chunk a publication can have, each with room for a full chunk's tracks:
+  // filling them allocates nothing (num_tracks says how many count).
+  track_chunks_.resize(contract::kMaxTrackChunks);
+  for (auto& c : track_chunks_) c.tracks.resize(contract::kMaxTracks);
 }
 
 void RobotMessages::begin_frame() {
   snapshot_ready_ = false;
   candidates_ready_ = false;
-  tracks_ready_ = false;
+  num_track_chunks_ = 0;
   events_.clear();
   num_batches_ = 0;
 }
@@ -145,15 +148,19 @@ void RobotMessages::fill_candidates(const Robot& robot, int frame, std::int64_t 
 
 void RobotMessages::fill_tracks(const Robot& robot, int frame, std::int64_t now_utime) {
   // Confirmed tracks only: one sighting (a misread, a wrong association) is not a
-  // track yet (MoverTrack::confirmed).
+  // track yet (MoverTrack::confirmed). They go into chunks of contract::kMaxTracks in
+  // the order they started; beyond contract::kMaxTrackChunks chunks they are counted.
+  constexpr int kCapacity = contract::kMaxTrackChunks * contract::kMaxTracks;
   const MoverTracks& pool = robot.tracks();
   int total = 0, n = 0;
   for (const int id : pool.ids()) {
     const MoverTrack& t = pool.track(id);
     if (!t.confirmed()) continue;
     ++total;
-    if (n == contract::kMaxTracks) continue;
-    track_t& m = tracks_.tracks[static_cast<std::size_t>(n++)];
+    if (n == kCapacity) continue;
+    track_list_t& chunk = track_chunks_[static_cast<std::size_t>(n / contract::kMaxTracks)];
+    track_t& m = chunk.tracks[static_cast<std::size_t>(n % contract::kMaxTracks)];
+    ++n;
     const TrackVector x = t.mean();
     m.id = id;
     m.x = x(0);
@@ -168,14 +175,23 @@ void RobotMessages::fill_tracks(const Robot& robot, int frame, std::int64_t now_
     m.validated = t.validated() ? 1 : 0;
     m.sightings = static_cast<std::int32_t>(std::min<std::int64_t>(t.sightings(), INT32_MAX));
   }
-  if (total == 0 && tracks_.num_tracks + tracks_.num_omitted == 0) return;
-  tracks_.utime = now_utime;
-  tracks_.frame = frame;
-  tracks_.robot_id = static_cast<std::int16_t>(robot_id_);
-  tracks_.incarnation = incarnation_;
-  tracks_.num_tracks = static_cast<std::int16_t>(n);
-  tracks_.num_omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
-  tracks_ready_ = true;
+  // Once more, as one empty chunk, when the last track has ended.
+  if (total == 0 && tracks_published_ == 0) return;
+  tracks_published_ = total;
+  const int chunks = std::max(1, (n + contract::kMaxTracks - 1) / contract::kMaxTracks);
+  const auto omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
+  for (int c = 0; c < chunks; ++c) {
+    track_list_t& m = track_chunks_[static_cast<std::size_t>(c)];
+    m.utime = now_utime;
+    m.frame = frame;
+    m.robot_id = static_cast<std::int16_t>(robot_id_);
+    m.incarnation = incarnation_;
+    m.chunk = static_cast<std::int16_t>(c);
+    m.num_chunks = static_cast<std::int16_t>(chunks);
+    m.num_omitted = omitted;
+    m.num_tracks = static_cast<std::int16_t>(std::min(contract::kMaxTracks, n - c * contract::kMaxTracks));
+  }
+  num_track_chunks_ = chunks;
 }
 
 int RobotMessages::make_snapshot(const Robot& robot, int frame, std::int64_t now_utime) {

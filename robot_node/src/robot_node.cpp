@@ -105,7 +105,7 @@ void RobotNode::run_frame(const sensor_frame_t& msg, std::int64_t now_utime) {
   }
   messages_.fill_candidates(robot_, msg.frame, now_utime);
   messages_.fill_tracks(robot_, msg.frame, now_utime);
-  if (messages_.tracks_ready()) counters_.tracks_omitted += messages_.tracks().num_omitted;
+  if (messages_.num_track_chunks() > 0) counters_.tracks_omitted += messages_.track_chunk(0).num_omitted;
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0).count();
   processing_.add(us);
   messages_.fill_pose(robot_, msg, now_utime, s, us, frames_this_run_);

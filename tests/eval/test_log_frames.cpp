@@ -190,22 +190,30 @@ TEST(LogFrames, WhatANodeWouldRefuseOrCannotDecodeIsCountedNotEvaluated) {
   EXPECT_EQ(d.poses.at(0).at(1).received_us, kT0 + 5'000);
 }
 
-// The recorded tracks: five frames in which landmark 1 moves along x at 0.5 m/s;
-// robot 1's TRACKS put it 0.1 m ahead, robot 2's 0.2 m, both with its true velocity;
-// main's GLOBAL_TRACKS put it where it is. A second TRACKS_1 of frame 2 (far off) is
-// a later copy and not scored; one with a NaN velocity is counted as invalid. Robots:
-// position RMS sqrt((0.1^2 + 0.2^2) / 2) over 10 samples, speed RMS 0 over the 8
-// with a true velocity (every frame but the first); fused: position RMS 0 over 5.
+// The recorded tracks: five frames in which landmark 1 moves along x at 0.5 m/s and
+// landmark 0 stands at (5, 0). Robot 1's TRACKS come in two chunks per frame: chunk
+// 0 puts landmark 1 0.1 m ahead, chunk 1 landmark 0 where it is; robot 2's single
+// chunk puts landmark 1 0.2 m ahead; all with the true velocity. Main's GLOBAL_TRACKS
+// come in chunks 0 and 1 of 3 (chunk 2 lost: what came is scored) and put both where
+// they are. A second chunk 0 of robot 1's frame 2 (far off) is a later copy and not
+// scored; one with a NaN velocity, one whose num_chunks differs from its frame's
+// others and a GLOBAL_TRACKS chunk listing a landmark another chunk of its frame
+// listed are counted as invalid; main's second publication of frame 4 (another
+// utime) is skipped, the frame's first scored. Robots: position RMS sqrt((5 * 0.1^2 + 5 * 0.2^2 +
+// 5 * 0) / 15) over 15 samples, speed RMS 0 over the 8 of landmark 1 with a true
+// velocity (every frame but the first); fused: position RMS 0 over 10.
 TEST(LogFrames, TheRobotsTracksAndMainsFusedTracksAreScoredAgainstTheTruth) {
   LogData d;
-  const auto global = [](int frame, double x) {
+  const auto global = [](int frame, int chunk, int id, double x, double y, double vx) {
     global_tracks_t m{};
     m.frame = frame;
+    m.chunk = static_cast<std::int16_t>(chunk);
+    m.num_chunks = 3;
     m.num_tracks = 1;
     m.tracks.resize(1);
     global_track_t& g = m.tracks[0];
-    const track_t t = test::track_of(1, x, 5.0, 0.5, 0.0);
-    g.id = 1, g.x = t.x, g.y = t.y, g.vx = t.vx, g.vy = t.vy, g.likeliest = t.likeliest, g.contributors = 0b11;
+    const track_t t = test::track_of(id, x, y, vx, 0.0);
+    g.id = id, g.x = t.x, g.y = t.y, g.vx = t.vx, g.vy = t.vy, g.likeliest = t.likeliest, g.contributors = 0b11;
     std::copy(std::begin(t.cov), std::end(t.cov), std::begin(g.cov));
     std::copy(std::begin(t.probabilities), std::end(t.probabilities), std::begin(g.probabilities));
     return m;
@@ -215,35 +223,51 @@ TEST(LogFrames, TheRobotsTracksAndMainsFusedTracksAreScoredAgainstTheTruth) {
     ground_truth_t g = truth(k);
     g.landmarks[1].x = 0.05 * k;
     add_log_event(event(channels::ground_truth(), t, g), "", &d);
-    for (int r = 1; r <= 2; ++r)
-      add_log_event(event(channels::tracks(r), t + 1'000,
-                          test::tracks_msg(r, k, {test::track_of(1, 0.05 * k + 0.1 * r, 5.0, 0.5, 0.0)})),
-                    "", &d);
-    add_log_event(event(channels::global_tracks(), t + 2'000, global(k, 0.05 * k)), "", &d);
+    add_log_event(event(channels::tracks(1), t + 1'000,
+                        test::tracks_msg(1, k, {test::track_of(1, 0.05 * k + 0.1, 5.0, 0.5, 0.0)}, 0, 2)),
+                  "", &d);
+    add_log_event(event(channels::tracks(1), t + 1'100, test::tracks_msg(1, k, {test::track_of(0, 5.0, 0.0, 0.0, 0.0)}, 1, 2)),
+                  "", &d);
+    add_log_event(event(channels::tracks(2), t + 1'200,
+                        test::tracks_msg(2, k, {test::track_of(1, 0.05 * k + 0.2, 5.0, 0.5, 0.0)})),
+                  "", &d);
+    add_log_event(event(channels::global_tracks(), t + 2'000, global(k, 0, 0, 5.0, 0.0, 0.0)), "", &d);
+    add_log_event(event(channels::global_tracks(), t + 2'100, global(k, 1, 1, 0.05 * k, 5.0, 0.5)), "", &d);
   }
   add_log_event(event(channels::tracks(1), kT0 + 2 * kPeriod + 3'000,
-                      test::tracks_msg(1, 2, {test::track_of(1, 9.0, 5.0, 0.5, 0.0)})),
+                      test::tracks_msg(1, 2, {test::track_of(1, 9.0, 5.0, 0.5, 0.0)}, 0, 2)),
                 "", &d);
   track_list_t bad = test::tracks_msg(1, 3, {test::track_of(1, 0.0, 5.0, 0.5, 0.0)});
   bad.tracks[0].vx = std::numeric_limits<double>::quiet_NaN();
   add_log_event(event(channels::tracks(1), kT0 + 3 * kPeriod + 3'000, bad), "", &d);
-  EXPECT_EQ(d.invalid["TRACKS_1"]["malformed"], 1);
-  EXPECT_EQ(d.track_messages, 11);
+  add_log_event(event(channels::tracks(1), kT0 + 3 * kPeriod + 3'100,
+                      test::tracks_msg(1, 3, {test::track_of(2, 0.0, 5.0, 0.5, 0.0)}, 2, 3)),
+                "", &d);  // num_chunks 3 against the frame's 2
+  add_log_event(event(channels::global_tracks(), kT0 + 4 * kPeriod + 3'000, global(4, 2, 1, 9.0, 5.0, 0.5)), "",
+                &d);  // landmark 1 is in chunk 1
+  global_tracks_t again = global(4, 0, 1, 9.0, 5.0, 0.5);  // main's second publication of frame 4
+  again.utime = 99;
+  again.num_chunks = 1;
+  add_log_event(event(channels::global_tracks(), kT0 + 4 * kPeriod + 4'000, again), "", &d);
+  EXPECT_EQ(d.invalid["TRACKS_1"]["malformed"], 2);
+  EXPECT_EQ(d.invalid["GLOBAL_TRACKS"]["malformed"], 0) << "another publication of a frame is not at odds with it";
+  EXPECT_EQ(d.invalid["GLOBAL_TRACKS"]["duplicate_id"], 1);
+  EXPECT_EQ(d.track_messages, 17);  // valid chunks read: 15, the copy, the one at odds
 
   const AssembledRun x = assemble_run(d);
   const RunMetrics& m = x.r.metrics;
   ASSERT_TRUE(m.tracks_scored);
-  EXPECT_EQ(m.tracks.samples, 10);
-  EXPECT_NEAR(m.tracks.position_rms_m, std::sqrt((0.01 + 0.04) / 2), 1e-9);
+  EXPECT_EQ(m.tracks.samples, 15);
+  EXPECT_NEAR(m.tracks.position_rms_m, std::sqrt((5 * 0.01 + 5 * 0.04) / 15), 1e-9);
   EXPECT_EQ(m.tracks.moving_samples, 8);
   EXPECT_NEAR(m.tracks.speed_rms_mps, 0.0, 1e-9);
   ASSERT_TRUE(m.global_tracks_scored);
-  EXPECT_EQ(m.global_tracks.samples, 5);
+  EXPECT_EQ(m.global_tracks.samples, 10);
   EXPECT_NEAR(m.global_tracks.position_rms_m, 0.0, 1e-12);
   const RunInfo info{"ela", 0.0, 0.0, 0, "run.lcmlog", "", "evaluate"};
   const nlohmann::json j = metrics_json(info, x.r);
-  EXPECT_EQ(j["tracks"]["samples"], 10);
-  EXPECT_EQ(j["global_tracks"]["samples"], 5);
+  EXPECT_EQ(j["tracks"]["samples"], 15);
+  EXPECT_EQ(j["global_tracks"]["samples"], 10);
 
   // A log without tracks scores none.
   LogData plain = three_frames();

@@ -198,10 +198,12 @@ TEST(LcmTypes, CandidateListsFitOneDatagram) {
   EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
 }
 
-// TRACKS_<r> and GLOBAL_TRACKS: the header and per-track sizes contract::kMaxTracks
-// and kMaxGlobalTracks are worked out from; a full message fits one snapshot-sized
-// datagram and one more track would not; a track round-trips (the covariance's upper
-// triangle in floats).
+// TRACKS_<r> and GLOBAL_TRACKS chunks: the header (38 and 36 bytes with the chunk
+// fields) and per-track sizes contract::kMaxTracks and kMaxGlobalTracks are worked
+// out from; a full chunk fits one snapshot-sized datagram and one more track would
+// not; the chunks of one publication hold a robot's whole default track pool; a
+// chunk round-trips with its place and a track (the covariance's upper triangle in
+// floats).
 TEST(LcmTypes, TrackListsFitOneDatagram) {
   track_list_t m{};
   EXPECT_EQ(m.getEncodedSize(), contract::kTrackListHeaderBytes);
@@ -219,9 +221,16 @@ TEST(LcmTypes, TrackListsFitOneDatagram) {
   EXPECT_LE(g.getEncodedSize(), contract::kMaxChunkBytes);
   contract::set_count(&g.tracks, &g.num_tracks, contract::kMaxGlobalTracks + 1);
   EXPECT_GT(g.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxGlobalTracks is the most that fit";
+  EXPECT_EQ(contract::kTrackListHeaderBytes, 38);
+  EXPECT_EQ(contract::kGlobalTracksHeaderBytes, 36);
+  EXPECT_EQ(contract::kMaxTrackChunks, 6);
+  EXPECT_GE(contract::kMaxTrackChunks * contract::kMaxTracks, contract::kDefaultTrackPool);
+  EXPECT_LT((contract::kMaxTrackChunks - 1) * contract::kMaxTracks, contract::kDefaultTrackPool) << "no chunk more than needed";
 
   contract::set_count(&m.tracks, &m.num_tracks, 2);
   m.robot_id = 3;
+  m.chunk = 4;
+  m.num_chunks = 6;
   m.tracks[1].id = 41;
   m.tracks[1].vy = -0.25;
   m.tracks[1].cov[4] = 0.5f;  // yy
@@ -233,6 +242,8 @@ TEST(LcmTypes, TrackListsFitOneDatagram) {
   ASSERT_GT(d.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
   ASSERT_EQ(d.num_tracks, 2);
   EXPECT_EQ(d.robot_id, 3);
+  EXPECT_EQ(d.chunk, 4);
+  EXPECT_EQ(d.num_chunks, 6);
   EXPECT_EQ(d.tracks[1].id, 41);
   EXPECT_EQ(d.tracks[1].vy, -0.25);
   EXPECT_EQ(d.tracks[1].cov[4], 0.5f);

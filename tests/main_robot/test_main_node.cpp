@@ -227,7 +227,10 @@ class FakeShell {
   template <class Msg>
   void publish(const std::string& channel, const Msg& m) {
     seen.push_back(channel + " " + std::to_string(m.frame));
-    if constexpr (std::is_same_v<Msg, global_tracks_t>) last_tracks = m;
+    if constexpr (std::is_same_v<Msg, global_tracks_t>) {
+      last_tracks = m;
+      tracks_out.push_back(m);
+    }
   }
   void publish(const std::string& channel, const resync_request_t& m) {  // (no frame: the robot asked)
     seen.push_back(channel + " robot " + std::to_string(m.robot_id));
@@ -244,7 +247,8 @@ class FakeShell {
   std::function<void(const lmap_events_t&, const std::string&)> on_events;
   std::function<void(const lmap_snapshot_t&, const std::string&)> on_snapshot;
   std::function<void(const track_list_t&, const std::string&)> on_tracks;
-  global_tracks_t last_tracks{};  // the last GLOBAL_TRACKS published
+  global_tracks_t last_tracks{};  // the last GLOBAL_TRACKS chunk published
+  std::vector<global_tracks_t> tracks_out;  // every GLOBAL_TRACKS chunk published
 
  private:
   std::string suffix_;
@@ -394,6 +398,57 @@ TEST(MainNodePorts, FusedTracksGoOutWithEveryGlobalMap) {
   EXPECT_TRUE(shell.refused.empty());
   EXPECT_EQ(node.counters().tracks, 4);
   EXPECT_EQ(node.counters().global_tracks_published, 2);
+}
+
+// GIVEN robot 1 tracking 15 landmarks (its TRACKS in two chunks: 12 and 3) and robot
+// 2 tracking 5 others, 20 fused tracks in all, more than one GLOBAL_TRACKS chunk
+// holds
+// WHEN the next map goes out
+// THEN GLOBAL_TRACKS follows it in two chunks of that frame (12 and 8, ascending ids
+// across them, chunk 0 and 1 of 2), none omitted.
+TEST(MainNodePorts, MoreFusedTracksThanOneChunkHoldsGoOutInChunks) {
+  MainNode node(team_of_three());
+  FakeShell shell;
+  MainPorts<FakeShell> ports(shell, node);
+  ASSERT_TRUE(ports.open());
+  shell.on_pose(pose(1, 0, 0), "POSE_1");
+  shell.on_pose(pose(2, 0, 0), "POSE_2");
+  std::vector<track_t> first, second, other;
+  for (int id = 0; id < 12; ++id) first.push_back(test::track_of(id, id, 0.0, 0.5, 0.0));
+  for (int id = 12; id < 15; ++id) second.push_back(test::track_of(id, id, 0.0, 0.5, 0.0));
+  for (int id = 20; id < 25; ++id) other.push_back(test::track_of(id, id, 1.0, 0.0, 0.5));
+  shell.on_tracks(test::tracks_msg(1, 0, first, 0, 2), "TRACKS_1");
+  shell.on_tracks(test::tracks_msg(1, 0, second, 1, 2), "TRACKS_1");
+  shell.on_tracks(test::tracks_msg(2, 0, other), "TRACKS_2");
+  shell.seen.clear();
+  shell.on_pose(pose(1, 1, 0), "POSE_1");
+  shell.on_pose(pose(2, 1, 0), "POSE_2");
+  const std::vector<std::string> out = shell.seen;
+  const auto map = std::find(out.begin(), out.end(), "GLOBAL_MAP 1");
+  ASSERT_NE(map, out.end());
+  ASSERT_GE(out.end() - map, 3);
+  EXPECT_EQ(map[1], "GLOBAL_TRACKS 1");
+  EXPECT_EQ(map[2], "GLOBAL_TRACKS 1");
+  ASSERT_EQ(shell.tracks_out.size(), 2u);
+  std::vector<int> ids;
+  for (int c = 0; c < 2; ++c) {
+    const global_tracks_t& g = shell.tracks_out[static_cast<std::size_t>(c)];
+    EXPECT_EQ(g.chunk, c);
+    EXPECT_EQ(g.num_chunks, 2);
+    EXPECT_EQ(g.num_omitted, 0);
+    EXPECT_EQ(g.frame, 1);
+    for (int k = 0; k < g.num_tracks; ++k) ids.push_back(g.tracks[static_cast<std::size_t>(k)].id);
+  }
+  EXPECT_EQ(shell.tracks_out[0].num_tracks, 12);
+  EXPECT_EQ(shell.tracks_out[1].num_tracks, 8);
+  std::vector<int> want;
+  for (int id = 0; id < 15; ++id) want.push_back(id);
+  for (int id = 20; id < 25; ++id) want.push_back(id);
+  EXPECT_EQ(ids, want);
+  EXPECT_TRUE(shell.refused.empty());
+  EXPECT_EQ(node.counters().tracks, 3);
+  EXPECT_EQ(node.counters().global_tracks_published, 1);
+  EXPECT_EQ(node.counters().global_tracks_omitted, 0);
 }
 
 }  // namespace

@@ -106,7 +106,7 @@ TEST(MainNodeTracks, EveryKindOfBadTracksIsRefusedAndCounted) {
   ASSERT_TRUE(node.on_tracks(test::tracks_msg(1, 3, {test::track_of(7, 1, 2, 0.5, 0)})));
   ASSERT_TRUE(node.on_tracks(test::tracks_msg(2, 3, {test::track_of(9, -1, 0, 0, 0)})));
   ASSERT_TRUE(node.make_global_tracks(0, 3));
-  const global_tracks_t before = node.global_tracks();
+  const global_tracks_t before = node.global_tracks(0);
   ASSERT_EQ(before.num_tracks, 2);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   struct Case {
@@ -127,6 +127,11 @@ TEST(MainNodeTracks, EveryKindOfBadTracksIsRefusedAndCounted) {
        Refusal::kMalformed, "num_tracks"},
       {"count beyond the array", [](track_list_t& m) { m.num_tracks = 2; }, Refusal::kMalformed, "num_tracks"},
       {"negative omitted", [](track_list_t& m) { m.num_omitted = -1; }, Refusal::kMalformed, "num_omitted"},
+      {"no chunks", [](track_list_t& m) { m.num_chunks = 0; }, Refusal::kMalformed, "num_chunks"},
+      {"more chunks than the contract's",
+       [](track_list_t& m) { m.num_chunks = contract::kMaxTrackChunks + 1; }, Refusal::kMalformed, "num_chunks"},
+      {"chunk beyond num_chunks", [](track_list_t& m) { m.chunk = 1; }, Refusal::kMalformed, "chunk"},
+      {"negative chunk", [](track_list_t& m) { m.chunk = -1; }, Refusal::kMalformed, "chunk"},
       {"id beyond max_landmark_id", [](track_list_t& m) { m.tracks[0].id = 32; }, Refusal::kMalformed, "landmark id"},
       {"negative id", [](track_list_t& m) { m.tracks[0].id = -1; }, Refusal::kMalformed, "landmark id"},
       {"id twice",
@@ -179,7 +184,7 @@ TEST(MainNodeTracks, EveryKindOfBadTracksIsRefusedAndCounted) {
   EXPECT_EQ(node.counters().tracks, 2);
   // The fused tracks are unchanged.
   ASSERT_TRUE(node.make_global_tracks(0, 3));
-  const global_tracks_t& after = node.global_tracks();
+  const global_tracks_t& after = node.global_tracks(0);
   ASSERT_EQ(after.num_tracks, 2);
   EXPECT_EQ(after.tracks[0].id, 7);
   EXPECT_EQ(after.tracks[0].x, before.tracks[0].x);
@@ -212,38 +217,124 @@ TEST(MainNodeTracks, TracksFollowTheRobotsIncarnation) {
   EXPECT_NE(why.find("incarnation"), std::string::npos) << why;
   EXPECT_EQ(node.counters().refused[Refusal::kStale], 1);
   ASSERT_TRUE(node.make_global_tracks(0, 1));
-  ASSERT_EQ(node.global_tracks().num_tracks, 1);
-  EXPECT_EQ(node.global_tracks().tracks[0].x, 1.0);
+  ASSERT_EQ(node.global_tracks(0).num_tracks, 1);
+  EXPECT_EQ(node.global_tracks(0).tracks[0].x, 1.0);
   p.incarnation = 200;  // restarted
   p.frame = 1;
   node.on_pose(p);
   EXPECT_EQ(node.counters().restarts, 1);
   EXPECT_EQ(node.track_fusion().robot_frame(1), -1);
-  EXPECT_TRUE(node.make_global_tracks(0, 1)) << "the last fused track ended: one empty list";
-  EXPECT_EQ(node.global_tracks().num_tracks, 0);
+  EXPECT_EQ(node.make_global_tracks(0, 1), 1) << "the last fused track ended: one empty chunk";
+  EXPECT_EQ(node.global_tracks(0).num_tracks, 0);
+  EXPECT_EQ(node.global_tracks(0).num_chunks, 1);
   m.incarnation = 200;
   m.frame = 1;
   EXPECT_TRUE(node.on_tracks(m));
   EXPECT_EQ(node.track_fusion().robot_frame(1), 1);
 }
 
-// More fused tracks than one GLOBAL_TRACKS holds: the first kMaxGlobalTracks by id go
-// out, the rest are counted.
-TEST(MainNodeTracks, FusedTracksBeyondTheMessagesCapacityAreCounted) {
+// More fused tracks than one GLOBAL_TRACKS chunk holds: they go out in chunks of
+// kMaxGlobalTracks in ascending id, none omitted; beyond kMaxTrackChunks chunks the
+// rest are counted. Robot 1's 72 tracks (6 chunks) and robot 2's 12 others: 84
+// fused, 72 go out in 6 chunks, 12 are counted.
+TEST(MainNodeTracks, FusedTracksGoOutInChunksAndBeyondTheBoundAreCounted) {
   GlobalMapOptions o = team_of_three();
-  o.max_landmark_id = 64;
+  o.max_landmark_id = 128;
   MainNode node(o);
   std::vector<track_t> one, two;
   for (int id = 0; id < contract::kMaxTracks; ++id) one.push_back(test::track_of(id, id, 0, 0, 0));
   for (int id = 20; id < 20 + contract::kMaxTracks; ++id) two.push_back(test::track_of(id, id, 0, 0, 0));
   ASSERT_TRUE(node.on_tracks(test::tracks_msg(1, 0, one)));
   ASSERT_TRUE(node.on_tracks(test::tracks_msg(2, 0, two)));
-  ASSERT_TRUE(node.make_global_tracks(0, 0));
-  const global_tracks_t& g = node.global_tracks();
-  EXPECT_EQ(g.num_tracks, contract::kMaxGlobalTracks);
-  EXPECT_EQ(g.num_omitted, 2 * contract::kMaxTracks - contract::kMaxGlobalTracks);
-  EXPECT_EQ(g.tracks[0].id, 0);
-  EXPECT_EQ(node.counters().global_tracks_omitted, g.num_omitted);
+  ASSERT_EQ(node.make_global_tracks(0, 0), 2);
+  EXPECT_EQ(node.global_tracks(0).num_tracks, contract::kMaxGlobalTracks);
+  EXPECT_EQ(node.global_tracks(0).tracks[0].id, 0);
+  EXPECT_EQ(node.global_tracks(1).num_tracks, 2 * contract::kMaxTracks - contract::kMaxGlobalTracks);
+  EXPECT_EQ(node.global_tracks(1).tracks[0].id, 20);
+  for (int c = 0; c < 2; ++c) {
+    EXPECT_EQ(node.global_tracks(c).chunk, c);
+    EXPECT_EQ(node.global_tracks(c).num_chunks, 2);
+    EXPECT_EQ(node.global_tracks(c).num_omitted, 0);
+  }
+  EXPECT_EQ(node.counters().global_tracks_omitted, 0);
+
+  const int n = contract::kMaxTrackChunks;
+  for (int c = 0; c < n; ++c) {
+    std::vector<track_t> chunk;
+    for (int k = 0; k < contract::kMaxTracks; ++k) {
+      const int id = c * contract::kMaxTracks + k;
+      chunk.push_back(test::track_of(id, id, 0, 0, 0));
+    }
+    ASSERT_TRUE(node.on_tracks(test::tracks_msg(1, 1, chunk, c, n)));
+  }
+  two.clear();
+  for (int id = 100; id < 100 + contract::kMaxTracks; ++id) two.push_back(test::track_of(id, id, 0, 0, 0));
+  ASSERT_TRUE(node.on_tracks(test::tracks_msg(2, 1, two)));
+  EXPECT_EQ(node.track_fusion().robot_tracks(1), n * contract::kMaxTracks);
+  ASSERT_EQ(node.make_global_tracks(0, 1), n);
+  int sent = 0, previous = -1;
+  for (int c = 0; c < n; ++c) {
+    const global_tracks_t& g = node.global_tracks(c);
+    EXPECT_EQ(g.num_tracks, contract::kMaxGlobalTracks);
+    EXPECT_EQ(g.num_omitted, contract::kMaxTracks);
+    for (int k = 0; k < g.num_tracks; ++k) {
+      EXPECT_GT(g.tracks[static_cast<std::size_t>(k)].id, previous);
+      previous = g.tracks[static_cast<std::size_t>(k)].id;
+      ++sent;
+    }
+  }
+  EXPECT_EQ(sent, n * contract::kMaxGlobalTracks);
+  EXPECT_EQ(previous, n * contract::kMaxTracks - 1) << "robot 2's ids, the highest, are the ones left out";
+  EXPECT_EQ(node.counters().global_tracks_omitted, contract::kMaxTracks);
+}
+
+// A robot's publication in chunks: its tracks are fused once every chunk came. A
+// publication missing a chunk when the next frame's first chunk comes is taken as
+// it came (its tracks are newer than those before); a chunk that comes later is
+// stale, as is a copy of a chunk taken.
+TEST(TrackFusion, ARobotsChunksAreFusedTogether) {
+  TrackFusion fusion(10);
+  using Take = TrackFusion::Take;
+  EXPECT_EQ(fusion.take(test::tracks_msg(1, 0, {test::track_of(3, 0, 0, 1, 0)}, 0, 2)), Take::kTaken);
+  EXPECT_TRUE(fusion.fuse(0).empty()) << "chunk 1 still to come";
+  EXPECT_EQ(fusion.robot_frame(1), 0);
+  EXPECT_EQ(fusion.take(test::tracks_msg(1, 0, {test::track_of(3, 0, 0, 1, 0)}, 0, 2)), Take::kStale);  // a copy
+  EXPECT_EQ(fusion.take(test::tracks_msg(1, 0, {test::track_of(8, 5, 5, 0, 0)}, 1, 2)), Take::kTaken);
+  ASSERT_EQ(fusion.fuse(0).size(), 2u);
+  EXPECT_EQ(fusion.robot_tracks(1), 2);
+
+  // Frame 1: chunk 1 is lost; frame 0's tracks are fused until frame 2 begins.
+  EXPECT_EQ(fusion.take(test::tracks_msg(1, 1, {test::track_of(3, 0.1, 0, 1, 0)}, 0, 2)), Take::kTaken);
+  ASSERT_EQ(fusion.fuse(1).size(), 2u);
+  EXPECT_EQ(fusion.fuse(1)[0].estimate.x(0), 0.0);
+  EXPECT_EQ(fusion.take(test::tracks_msg(1, 2, {test::track_of(3, 0.2, 0, 1, 0)}, 0, 2)), Take::kTaken);
+  const std::vector<FusedTrack>& f = fusion.fuse(2);
+  ASSERT_EQ(f.size(), 1u) << "frame 1 as it came: landmark 3 alone";
+  EXPECT_EQ(f[0].estimate.x(0), 0.1);
+  EXPECT_EQ(fusion.take(test::tracks_msg(1, 1, {test::track_of(8, 5, 5, 0, 0)}, 1, 2)), Take::kStale);  // too late
+  EXPECT_EQ(fusion.fuse(2).size(), 1u);
+}
+
+// GIVEN main holding robot 1's chunk 0 of 2 of frame 5 (landmark 7)
+// WHEN chunk 1 comes claiming 3 chunks, or listing landmark 7 again
+// THEN each is refused (malformed, duplicate id) and counted, and the publication
+// still completes with a good chunk 1.
+TEST(MainNodeTracks, AChunkAtOddsWithItsPublicationIsRefused) {
+  MainNode node(team_of_three());
+  ASSERT_TRUE(node.on_tracks(test::tracks_msg(1, 5, {test::track_of(7, 1, 2, 0.5, 0)}, 0, 2)));
+  std::string why;
+  EXPECT_FALSE(node.on_tracks(test::tracks_msg(1, 5, {test::track_of(9, 1, 2, 0.5, 0)}, 1, 3), &why));
+  EXPECT_NE(why.find("num_chunks"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kMalformed], 1);
+  EXPECT_FALSE(node.on_tracks(test::tracks_msg(1, 5, {test::track_of(7, 1, 2, 0.5, 0)}, 1, 2), &why));
+  EXPECT_NE(why.find("two chunks"), std::string::npos) << why;
+  EXPECT_EQ(node.counters().refused[Refusal::kDuplicateId], 1);
+  EXPECT_EQ(node.counters().tracks_refused, 2);
+  EXPECT_EQ(node.counters().rejected_inputs, 2);
+  EXPECT_EQ(node.track_fusion().robot_tracks(1), 0) << "the publication is not complete";
+  ASSERT_TRUE(node.on_tracks(test::tracks_msg(1, 5, {test::track_of(9, 1, 2, 0.5, 0)}, 1, 2)));
+  EXPECT_EQ(node.track_fusion().robot_tracks(1), 2);
+  EXPECT_EQ(node.counters().tracks, 2);
 }
 
 }  // namespace

@@ -100,7 +100,8 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
         }
         if (node.snapshot_ready())
           for (int c = 0; c < node.num_snapshot_chunks(); ++c) main.on_snapshot(node.snapshot_chunk(c)), ++t.snapshots;
-        if (node.tracks_ready() && main.on_tracks(node.tracks_msg())) ++t.tracks;
+        for (int c = 0; c < node.num_track_chunks(); ++c)
+          if (main.on_tracks(node.track_chunk(c))) ++t.tracks;
         for (const auto& n : main.take_notices(0))
           for (auto& r : robots) r.on_notice(n), ++t.notices;
         const int chunks = main.make_global_map(0);

@@ -241,12 +241,14 @@ TEST(RobotNodeTracks, TracksAreSentWhileThereAreSomeThenOnceEmpty) {
     const std::vector<int> ids = confirmed_ids(pool);
     const bool tracking = !ids.empty();
     if (!tracking && !was_tracking) {
-      EXPECT_FALSE(node.tracks_ready()) << f;
+      EXPECT_EQ(node.num_track_chunks(), 0) << f;
       if (empty > 0) ++quiet_after_empty;
       continue;
     }
-    ASSERT_TRUE(node.tracks_ready()) << f;
-    const track_list_t& t = node.tracks_msg();
+    ASSERT_EQ(node.num_track_chunks(), 1) << f;  // fewer tracks than one chunk holds
+    const track_list_t& t = node.track_chunk(0);
+    EXPECT_EQ(t.chunk, 0);
+    EXPECT_EQ(t.num_chunks, 1);
     EXPECT_EQ(t.robot_id, 2);
     EXPECT_EQ(t.frame, f);
     EXPECT_EQ(t.utime, 5000 + f);
@@ -280,34 +282,48 @@ TEST(RobotNodeTracks, TracksAreSentWhileThereAreSomeThenOnceEmpty) {
   EXPECT_GT(quiet_after_empty, 5);
 }
 
-// More tracks than one datagram holds: the first contract::kMaxTracks go out, the
-// rest are counted, in the message and in the node's counters.
-TEST(RobotNodeTracks, TracksBeyondTheMessagesCapacityAreCounted) {
+// More tracks than one datagram holds (15 movers): every frame's confirmed tracks all
+// go out, in the pool's order, over ceil(n / kMaxTracks) chunks of one publication
+// (each chunk's place, the shared frame, stamp and incarnation); none is omitted.
+TEST(RobotNodeTracks, TracksBeyondOneChunkGoOutInSeveralNoneOmitted) {
   RobotNode node(test::robot_options(Mode::kEla), 2);
   const int n = 2 * (contract::kMaxTracks + 3);
   std::vector<Eigen::Vector2d> lms = test::ring(n, 3.0);
   const std::vector<Eigen::Vector2d> start = lms;
   std::mt19937_64 rng(3);
-  int most = 0;
-  std::int64_t omitted = 0;
+  int most = 0, most_chunks = 0;
   for (int f = 0; f < 60; ++f) {
     // Every other landmark (the rest hold the robot's pose) moves outward at 0.8 m/s from frame 20.
     for (int i = 0; i < n; i += 2)
       lms[static_cast<std::size_t>(i)] = start[static_cast<std::size_t>(i)] * (1.0 + 0.08 / 3.0 * (std::max(f, 20) - 20));
     sensor_frame_t m = to_msg(test::frame_from(f, Pose2{}, Pose2{}, lms, test::all_ids(n), &rng), 2);
     m.utime = 1'700'000'000'000'000 + std::int64_t{100000} * f;
-    ASSERT_EQ(node.on_sensor(m, 0), RobotNode::Verdict::kProcessed) << f;
-    if (!node.tracks_ready()) continue;
-    const track_list_t& t = node.tracks_msg();
-    const int held = static_cast<int>(confirmed_ids(node.robot().tracks()).size());
-    EXPECT_EQ(t.num_tracks, std::min(held, contract::kMaxTracks));
-    EXPECT_EQ(t.num_omitted, held - t.num_tracks);
-    omitted += t.num_omitted;
+    ASSERT_EQ(node.on_sensor(m, 7000 + f), RobotNode::Verdict::kProcessed) << f;
+    const int chunks = node.num_track_chunks();
+    if (chunks == 0) continue;
+    const std::vector<int> want = confirmed_ids(node.robot().tracks());
+    const int held = static_cast<int>(want.size());
+    ASSERT_EQ(chunks, std::max(1, (held + contract::kMaxTracks - 1) / contract::kMaxTracks)) << f;
+    std::vector<int> got;
+    for (int c = 0; c < chunks; ++c) {
+      const track_list_t& t = node.track_chunk(c);
+      EXPECT_EQ(t.chunk, c);
+      EXPECT_EQ(t.num_chunks, chunks);
+      EXPECT_EQ(t.frame, f);
+      EXPECT_EQ(t.utime, 7000 + f);
+      EXPECT_EQ(t.robot_id, 2);
+      EXPECT_EQ(t.incarnation, node.incarnation());
+      EXPECT_EQ(t.num_omitted, 0);
+      EXPECT_EQ(t.num_tracks, c + 1 < chunks ? contract::kMaxTracks : held - c * contract::kMaxTracks) << f;
+      for (int k = 0; k < t.num_tracks; ++k) got.push_back(t.tracks[static_cast<std::size_t>(k)].id);
+    }
+    EXPECT_EQ(got, want) << f;
     most = std::max(most, held);
+    most_chunks = std::max(most_chunks, chunks);
   }
-  ASSERT_GT(most, contract::kMaxTracks) << "the scene must track more movers than fit";
-  EXPECT_GT(omitted, 0);
-  EXPECT_EQ(node.counters().tracks_omitted, omitted);
+  ASSERT_GT(most, contract::kMaxTracks) << "the scene must track more movers than one chunk holds";
+  EXPECT_EQ(most_chunks, 2);
+  EXPECT_EQ(node.counters().tracks_omitted, 0);
 }
 
 TEST_F(RobotNodeInput, NoticesAreValidatedAndAppliedToOthersOnly) {

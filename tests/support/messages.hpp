@@ -71,11 +71,15 @@ inline track_t track_of(int id, double x, double y, double vx, double vy, double
   return t;
 }
 
-/// Robot `robot`'s TRACKS of `frame`.
-inline track_list_t tracks_msg(int robot, int frame, const std::vector<track_t>& tracks) {
+/// Robot `robot`'s TRACKS of `frame`: chunk `chunk` of `num_chunks` (default: the
+/// publication's only chunk).
+inline track_list_t tracks_msg(int robot, int frame, const std::vector<track_t>& tracks, int chunk = 0,
+                               int num_chunks = 1) {
   track_list_t m{};
   m.robot_id = static_cast<std::int16_t>(robot);
   m.frame = frame;
+  m.chunk = static_cast<std::int16_t>(chunk);
+  m.num_chunks = static_cast<std::int16_t>(num_chunks);
   m.num_tracks = static_cast<std::int16_t>(tracks.size());
   m.tracks = tracks;
   return m;

@@ -114,7 +114,9 @@ if live["config"] is None or live["config"]["scenario"]["dynamism_percent"] != 5
 if live["run_info"] is None or live["run_info"]["seed"] != 3 or live["mode"] != "ela":
     fails.append(f"run_info {live['run_info']}, mode {live['mode']}")
 print("live:", live["landmark_error"]["mean_euclidean"], [r["error_mean"] for r in live["robots"]],
-      "latency p50/p99 us:", live["latency_us"]["p50"], live["latency_us"]["p99"])
+      "latency p50/p99 us:", live["latency_us"]["p50"], live["latency_us"]["p99"],
+      "tracks (samples, position RMS m):", *[(live[k]["samples"], round(live[k]["position_rms_m"], 3))
+                                             for k in ("tracks", "global_tracks") if live.get(k)])
 if fails:
     print("\n".join(fails)); sys.exit(1)
 PY
@@ -131,6 +133,38 @@ if [ -x "$PY" ]; then
     grep -q "^$ch  *$n decoded$" "$OUT/decoded.txt" || { echo "python decode: $ch (the log holds $n)"; cat "$OUT/decoded.txt"; exit 1; }
   done
   grep -q "^last GLOBAL_MAP chunk: frame 149" "$OUT/decoded.txt" || { cat "$OUT/decoded.txt"; exit 1; }
+  # The tracks go out whole, in chunks: no TRACKS_<r> or GLOBAL_TRACKS chunk omits
+  # any (a robot's pool and main's fused tracks stay within 6 chunks of 12), and the
+  # chunks of a publication agree on num_chunks.
+  "$PY" - "$OUT/live/run.lcmlog" "$BUILD" "$ROOT" <<'TRACKS' || exit 1
+import collections, re, sys
+sys.path.insert(0, sys.argv[3] + "/tools")
+from elaslam_tool import load_lcm_types
+import lcm
+T = load_lcm_types(sys.argv[2], sys.argv[3] + "/tools/decode_log.py")
+# (channel, frame, utime): one publication (its chunks share utime; main may send a
+# frame's twice, with a timer's repeated map) -> [num_chunks, tracks, omitted]
+pubs = collections.defaultdict(lambda: [None, 0, 0])
+bad = []
+for ev in lcm.EventLog(sys.argv[1], "r"):
+    if ev.channel == "GLOBAL_TRACKS" or re.fullmatch(r"TRACKS_\d+", ev.channel):
+        m = (T.global_tracks_t if ev.channel == "GLOBAL_TRACKS" else T.track_list_t).decode(ev.data)
+        p = pubs[(ev.channel, m.frame, m.utime)]
+        if p[0] not in (None, m.num_chunks):
+            bad.append(f"{ev.channel} frame {m.frame}: num_chunks {m.num_chunks} against {p[0]}")
+        p[0], p[1], p[2] = m.num_chunks, p[1] + m.num_tracks, max(p[2], m.num_omitted)
+fused = [p for (ch, _, _), p in pubs.items() if ch == "GLOBAL_TRACKS"]
+omitted = sum(p[2] for p in pubs.values())
+if omitted or not fused:
+    bad.append(f"{omitted} tracks omitted, {len(fused)} GLOBAL_TRACKS publications")
+beyond = sum(1 for p in fused if p[1] > 12)
+print(f"tracks: {len(fused)} GLOBAL_TRACKS publications, {beyond} with more than 12 fused tracks (at most "
+      f"{max((p[1] for p in fused), default=0)}, in at most {max((p[0] for p in fused), default=0)} chunks; "
+      f"{sum(p[1] for p in fused) / max(1, len(fused)):.1f} on average), {omitted} omitted; robots' TRACKS: at most "
+      f"{max((p[1] for (ch, _, _), p in pubs.items() if ch != 'GLOBAL_TRACKS'), default=0)} tracks")
+if bad:
+    print("\n".join(bad)); sys.exit(1)
+TRACKS
   echo "python decode: ok"
 else
   echo "python decode: skipped (no .venv; tools/setup.sh makes it)"

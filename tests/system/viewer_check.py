@@ -2,8 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """The viewer's /state.json against the log it was shown (system_viewer): the last
 POSE_<r> of each robot, the GLOBAL_MAP assembled from its chunks (each chunk stands
-for its id range), the last TRACKS_<r> of each robot and the last GLOBAL_TRACKS (when
-at most 20 frames old) and the highest frame, all as the viewer must have drawn them.
+for its id range), the chunks of the newest TRACKS_<r> frame of each robot and of the newest
+GLOBAL_TRACKS frame (when at most 20 frames old) and the highest frame, all as the viewer must have drawn them.
 
     viewer_check.py --build-dir DIR LOG STATE_JSON
 Exit 0 when they agree, 1 (saying what differs) when not.
@@ -16,6 +16,17 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "tools"))
 from elaslam_tool import load_lcm_types  # noqa: E402  (finds the generated message types)
 import lcm  # noqa: E402
+
+
+def add_chunk(held, m):
+    """(frame, {landmark ids}, utime) of a tracks publication's chunks so far, with
+    chunk m added: a newer publication (frame, then utime: main may send a frame's
+    GLOBAL_TRACKS twice) starts over, an older one is ignored."""
+    if held is None or (m.frame, m.utime) > (held[0], held[2]):
+        held = (m.frame, set(), m.utime)
+    if (m.frame, m.utime) == (held[0], held[2]):
+        held[1].update(t.id for t in m.tracks)
+    return held
 
 
 def main():
@@ -43,11 +54,12 @@ def main():
             frame = max(frame, m.frame)
         elif re.fullmatch(r"TRACKS_\d+", ev.channel):
             t = T.track_list_t.decode(ev.data)
-            tracks[t.robot_id] = t
+            tracks[t.robot_id] = add_chunk(tracks.get(t.robot_id), t)
             frame = max(frame, t.frame)
         elif ev.channel == "GLOBAL_TRACKS":
-            fused = T.global_tracks_t.decode(ev.data)
-            frame = max(frame, fused.frame)
+            g = T.global_tracks_t.decode(ev.data)
+            fused = add_chunk(fused, g)
+            frame = max(frame, g.frame)
         elif ev.channel == "GROUND_TRUTH":
             frame = max(frame, T.ground_truth_t.decode(ev.data).frame)
     state = json.load(open(state_path))
@@ -72,8 +84,8 @@ def main():
     for i in static_ids & set(drawn):
         if max(abs(drawn[i]["x"] - lms[i].x), abs(drawn[i]["y"] - lms[i].y)) > 1e-9:
             bad.append(f"landmark {i} at ({drawn[i]['x']}, {drawn[i]['y']}) against ({lms[i].x}, {lms[i].y})")
-    def ids(msg):
-        return sorted(t.id for t in msg.tracks) if msg is not None and frame - msg.frame <= 20 else []
+    def ids(held):
+        return sorted(held[1]) if held is not None and frame - held[0] <= 20 else []
     for rid, r in robots.items():
         want = ids(tracks.get(rid))
         if sorted(t["id"] for t in r.get("tracks", [])) != want:

@@ -36,8 +36,8 @@ def messages(T):
         ("STATUS_ROBOT_1", enc(T.node_status_t, node_kind=T.node_status_t.ROBOT, node_id=1)),
         ("TEAM_MAP_2", gmap),
         ("CANDIDATES_1", enc(T.candidate_list_t, robot_id=1, frame=3, num_candidates=1, candidates=[cand])),
-        ("TRACKS_1", enc(T.track_list_t, robot_id=1, frame=3, num_tracks=1, tracks=[track])),
-        ("GLOBAL_TRACKS", enc(T.global_tracks_t, frame=3, num_tracks=1, tracks=[fused])),
+        ("TRACKS_1", enc(T.track_list_t, robot_id=1, frame=3, num_chunks=1, num_tracks=1, tracks=[track])),
+        ("GLOBAL_TRACKS", enc(T.global_tracks_t, frame=3, num_chunks=1, num_tracks=1, tracks=[fused])),
         ("GROUND_TRUTH", enc(T.ground_truth_t, frame=3)),
         ("LMAP_EVENT", enc(T.landmark_event_t, robot_id=1, frame=3)),
         ("LMAP_EVENTS", enc(T.lmap_events_t, robot_id=1, frame=3)),
@@ -97,7 +97,7 @@ def main():
         if got.get(ch) != (1, 0):
             fails.append(f"{ch}: 1 decoded expected, got {got.get(ch)}")
     for brief in ("last POSE_1: frame 3, x 1.250", "run info: source test, scenario made up",
-                  "last GLOBAL_TRACKS: frame 3, 1 fused tracks (0 left out)"):
+                  "last GLOBAL_TRACKS chunk: frame 3, chunk 1 of 1, 1 fused tracks (0 left out)"):
         if brief not in out:
             fails.append(f"'{brief}' not in the output\n{out}")
 

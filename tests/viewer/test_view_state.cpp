@@ -283,18 +283,23 @@ track_t track(int id, double x, double vx, std::int8_t model = track_t::CONSTANT
   return t;
 }
 
-track_list_t tracks(int robot, int frame, std::vector<track_t> ts) {
+track_list_t tracks(int robot, int frame, std::vector<track_t> ts, int chunk = 0, int num_chunks = 1) {
   track_list_t m{};
   m.robot_id = static_cast<std::int16_t>(robot);
   m.frame = frame;
+  m.chunk = static_cast<std::int16_t>(chunk);
+  m.num_chunks = static_cast<std::int16_t>(num_chunks);
   m.num_tracks = static_cast<std::int16_t>(ts.size());
   m.tracks = std::move(ts);
   return m;
 }
 
-global_tracks_t fused(int frame, std::vector<track_t> ts, std::int16_t contributors) {
+global_tracks_t fused(int frame, std::vector<track_t> ts, std::int16_t contributors, int chunk = 0,
+                      int num_chunks = 1) {
   global_tracks_t m{};
   m.frame = frame;
+  m.chunk = static_cast<std::int16_t>(chunk);
+  m.num_chunks = static_cast<std::int16_t>(num_chunks);
   for (const track_t& t : ts) {
     global_track_t g{};
     g.id = t.id, g.x = t.x, g.y = t.y, g.vx = t.vx, g.vy = t.vy, g.likeliest = t.likeliest;
@@ -363,6 +368,54 @@ TEST(ViewState, TracksAndFusedTracksAreKeptCheckedAndAged) {
   j = state(v);
   EXPECT_TRUE(j["robots"][0]["tracks"].empty());
   EXPECT_TRUE(j["global_tracks"].empty());
+}
+
+std::vector<int> ids(const nlohmann::json& list) {
+  std::vector<int> out;
+  for (const auto& t : list) out.push_back(t["id"].get<int>());
+  return out;
+}
+
+// A publication in two chunks: both chunks' tracks are drawn together, a copy of a
+// chunk adds nothing, and the next frame's single chunk replaces them. A chunk at
+// odds with its frame's others (another num_chunks, a landmark an earlier chunk
+// listed, a chunk index out of range) is refused, counted and changes nothing.
+TEST(ViewState, TracksInTwoChunksAreDrawnTogether) {
+  ViewState v;
+  ASSERT_TRUE(v.on_pose(pose(2, 10, 0, 0)));
+  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(4, 1.0, 0.5), track(6, 2.0, 0.0)}, 0, 2)));
+  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(8, 3.0, 0.5)}, 1, 2)));
+  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(8, 3.0, 0.5)}, 1, 2)));  // a copy
+  ASSERT_TRUE(v.on_global_tracks(fused(10, {track(4, 1.1, 0.4)}, 0b10, 0, 2)));
+  ASSERT_TRUE(v.on_global_tracks(fused(10, {track(8, 3.1, 0.4)}, 0b10, 1, 2)));
+  nlohmann::json j = state(v);
+  EXPECT_EQ(ids(j["robots"][0]["tracks"]), (std::vector<int>{4, 6, 8}));
+  EXPECT_EQ(ids(j["global_tracks"]), (std::vector<int>{4, 8}));
+
+  const long long bad = v.bad_messages();
+  ASSERT_TRUE(v.on_tracks(tracks(2, 11, {track(4, 1.2, 0.5)}, 0, 3)));
+  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(5, 1.0, 0.5)}, 1, 2)));  // num_chunks 2 against 3
+  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(4, 1.0, 0.5)}, 1, 3)));  // 4 is in chunk 0
+  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(5, 1.0, 0.5)}, 3, 3)));  // chunk out of range
+  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(5, 1.0, 0.5)}, 0, 7)));  // more chunks than the contract's
+  EXPECT_FALSE(v.on_global_tracks(fused(10, {track(9, 1.0, 0.5)}, 0b10, 0, 1)));  // num_chunks 1 against 2
+  EXPECT_TRUE(v.on_global_tracks(fused(10, {track(9, 1.0, 0.5)}, 0b10, 1, 2)));  // chunk 1 held: ignored
+  EXPECT_EQ(v.bad_messages(), bad + 5);
+  j = state(v);
+  EXPECT_EQ(ids(j["robots"][0]["tracks"]), (std::vector<int>{4}));
+  EXPECT_EQ(j["robots"][0]["tracks"][0]["x"], 1.2);
+  EXPECT_EQ(ids(j["global_tracks"]), (std::vector<int>{4, 8}));
+
+  // Main's second publication of frame 10 (a later utime: a quiet period's repeated
+  // map), in one chunk: it replaces the first, not refused for its num_chunks.
+  global_tracks_t again = fused(10, {track(6, 2.0, 0.0)}, 0b10);
+  again.utime = 5;
+  ASSERT_TRUE(v.on_global_tracks(again));
+  EXPECT_EQ(ids(state(v)["global_tracks"]), (std::vector<int>{6}));
+  EXPECT_EQ(v.bad_messages(), bad + 5);
+
+  ASSERT_TRUE(v.on_tracks(tracks(2, 12, {track(6, 2.5, 0.1)})));
+  EXPECT_EQ(ids(state(v)["robots"][0]["tracks"]), (std::vector<int>{6}));
 }
 
 }  // namespace

@@ -221,6 +221,38 @@ bool ViewState::on_candidates(const candidate_list_t& m) {
   return true;
 }
 
+namespace {
+
+// Where a chunk of a tracks message goes (TRACKS_<r>, GLOBAL_TRACKS): kTake when it
+// starts a newer publication (`chunks` reset: nothing held) or adds a chunk not yet
+// held to the one held; kOld when it is of an older publication or held already.
+// A publication is its frame and utime: main may send a frame's GLOBAL_TRACKS
+// twice (a quiet period's repeated map), the later one newer. Else
+// kNumChunks or kTwice when its num_chunks or a landmark id is at odds with the
+// chunks held, nothing changed. A frame more than 1000 behind is a sender that
+// started over.
+enum class Placed { kTake, kOld, kNumChunks, kTwice };
+template <class Msg, class Chunks, class T>
+Placed place_chunk(const Msg& m, int* frame, Chunks* chunks, const std::vector<T>& held) {
+  if (m.frame < *frame && *frame - m.frame < 1000) return Placed::kOld;
+  if (m.frame == *frame && m.utime < chunks->utime) return Placed::kOld;
+  if (m.frame != *frame || m.utime != chunks->utime) {
+    *frame = m.frame;
+    chunks->utime = m.utime;
+    chunks->num_chunks = m.num_chunks;
+    chunks->received = 0;
+    return Placed::kTake;
+  }
+  if (m.num_chunks != chunks->num_chunks) return Placed::kNumChunks;
+  if ((chunks->received >> m.chunk) & 1u) return Placed::kOld;
+  for (int k = 0; k < m.num_tracks; ++k)
+    for (const T& t : held)
+      if (t.id == m.tracks[static_cast<std::size_t>(k)].id) return Placed::kTwice;
+  return Placed::kTake;
+}
+
+}  // namespace
+
 bool ViewState::on_tracks(const track_list_t& m) {
   ++messages_;
   MessageLimits l;
@@ -228,9 +260,13 @@ bool ViewState::on_tracks(const track_list_t& m) {
   Refusal reason = Refusal::kMalformed;
   if (!check_track_list(m, l, limits_.max_landmark_id, &reason).empty()) return bad("TRACKS invalid");
   Robot& r = robot(m.robot_id);
-  if (m.frame < r.tracks_frame && r.tracks_frame - m.frame < 1000) return true;  // older than what we have
-  r.tracks_frame = m.frame;
-  r.tracks.clear();
+  // The chunks of the robot's newest frame, drawn as they come.
+  const Placed placed = place_chunk(m, &r.tracks_frame, &r.tracks_chunks, r.tracks);
+  if (placed == Placed::kOld) return true;
+  if (placed == Placed::kNumChunks) return bad("TRACKS num_chunks differs from its frame's other chunks");
+  if (placed == Placed::kTwice) return bad("TRACKS landmark id in two chunks");
+  if (r.tracks_chunks.received == 0) r.tracks.clear();
+  r.tracks_chunks.received |= 1u << m.chunk;
   for (int k = 0; k < m.num_tracks; ++k) {
     const track_t& t = m.tracks[static_cast<std::size_t>(k)];
     r.tracks.push_back({t.id, t.x, t.y, t.vx, t.vy, t.cov[0], t.cov[1], t.cov[4],
@@ -247,9 +283,12 @@ bool ViewState::on_global_tracks(const global_tracks_t& m) {
   l.world_bound = limits_.world_bound_m;
   Refusal reason = Refusal::kMalformed;
   if (!check_global_tracks(m, l, limits_.max_landmark_id, &reason).empty()) return bad("GLOBAL_TRACKS invalid");
-  if (m.frame < global_tracks_frame_ && global_tracks_frame_ - m.frame < 1000) return true;  // older than what we have
-  global_tracks_frame_ = m.frame;
-  global_tracks_.clear();
+  const Placed placed = place_chunk(m, &global_tracks_frame_, &global_tracks_chunks_, global_tracks_);
+  if (placed == Placed::kOld) return true;
+  if (placed == Placed::kNumChunks) return bad("GLOBAL_TRACKS num_chunks differs from its frame's other chunks");
+  if (placed == Placed::kTwice) return bad("GLOBAL_TRACKS landmark id in two chunks");
+  if (global_tracks_chunks_.received == 0) global_tracks_.clear();
+  global_tracks_chunks_.received |= 1u << m.chunk;
   for (int k = 0; k < m.num_tracks; ++k) {
     const global_track_t& t = m.tracks[static_cast<std::size_t>(k)];
     global_tracks_.push_back({t.id, t.x, t.y, t.vx, t.vy, t.cov[0], t.cov[1], t.cov[4],

@@ -60,16 +60,23 @@ constexpr int kMaxBatchEvents = (kMaxChunkBytes - kEventBatchHeaderBytes) / kEve
 /// in num_omitted. Each landmark_estimate_t encodes to 52 bytes, so a full list stays
 /// within kMaxChunkBytes, one datagram (test_lcmtypes checks it).
 constexpr int kMaxCandidates = 20;
-/// Tracks per track_list_t (TRACKS_<r>) and per global_tracks_t (GLOBAL_TRACKS): the
-/// rest are counted in num_omitted. The headers encode to 34 and 32 bytes, each
-/// track_t to 95 and each global_track_t to 92 (test_lcmtypes checks them), so 12 is
-/// the most that fit kMaxChunkBytes, one datagram: 34 + 12 * 95 = 1,174 and
-/// 32 + 12 * 92 = 1,136.
-constexpr int kTrackListHeaderBytes = 34, kTrackBytes = 95;
-constexpr int kGlobalTracksHeaderBytes = 32, kGlobalTrackBytes = 92;
+/// Tracks per chunk of track_list_t (TRACKS_<r>) and of global_tracks_t
+/// (GLOBAL_TRACKS). The headers encode to 38 and 36 bytes, each track_t to 95 and
+/// each global_track_t to 92 (test_lcmtypes checks them), so 12 is the most that fit
+/// kMaxChunkBytes, one datagram: 38 + 12 * 95 = 1,178 and 36 + 12 * 92 = 1,140.
+constexpr int kTrackListHeaderBytes = 38, kTrackBytes = 95;
+constexpr int kGlobalTracksHeaderBytes = 36, kGlobalTrackBytes = 92;
 constexpr int kMaxTracks = (kMaxChunkBytes - kTrackListHeaderBytes) / kTrackBytes;
 constexpr int kMaxGlobalTracks = (kMaxChunkBytes - kGlobalTracksHeaderBytes) / kGlobalTrackBytes;
 static_assert(kMaxTracks == 12 && kMaxGlobalTracks == 12, "the .lcm files' comments say 12");
+/// Chunks per publication of TRACKS_<r> and of GLOBAL_TRACKS: enough for a robot's
+/// whole default track pool (kDefaultTrackPool, robot.tracking.max_tracks' default),
+/// 6 chunks of 12 = 72 tracks. A larger pool or more
+/// fused tracks than that are counted in num_omitted; a receiver refuses a chunk
+/// that claims more chunks.
+constexpr int kDefaultTrackPool = 64;
+constexpr int kMaxTrackChunks = (kDefaultTrackPool + kMaxTracks - 1) / kMaxTracks;
+static_assert(kMaxTrackChunks == 6 && kMaxTrackChunks * kMaxGlobalTracks >= kDefaultTrackPool);
 
 static_assert(std::is_same_v<decltype(global_landmark_t::contributors), std::int16_t> && kMaxRobots == 16,
               "one contributor bit per robot id");

@@ -24,11 +24,17 @@ namespace elaslam {
 std::string check_track(const track_t& t, const MessageLimits& l, int max_landmark_id, Refusal* reason);
 std::string check_track(const global_track_t& t, const MessageLimits& l, int max_landmark_id, Refusal* reason);
 
-/// TRACKS_<r>: robot id within the contract, incarnation and frame not negative,
-/// num_tracks in [0, contract::kMaxTracks] and matching the array, num_omitted not
+/// A chunk's place in its publication: num_chunks in [1, contract::kMaxTrackChunks],
+/// chunk in [0, num_chunks). Whether the chunks of one publication agree is the
+/// assembler's (TrackChunks).
+std::string check_chunk(int chunk, int num_chunks);
+
+/// TRACKS_<r>: robot id within the contract, incarnation and frame not negative, the
+/// chunk's place valid (check_chunk), num_tracks in [0, contract::kMaxTracks] and matching the array, num_omitted not
 /// negative, each landmark id listed once, each track valid (check_track).
 std::string check_track_list(const track_list_t& m, const MessageLimits& l, int max_landmark_id, Refusal* reason);
-/// GLOBAL_TRACKS: frame at least -1, incarnation not negative, num_tracks in [0,
+/// GLOBAL_TRACKS: frame at least -1, incarnation not negative, the chunk's place
+/// valid (check_chunk), num_tracks in [0,
 /// contract::kMaxGlobalTracks] and matching the array, num_omitted not negative, ids
 /// ascending and each once, contributors naming robots of l's team only, each track
 /// valid (check_track).

@@ -13,9 +13,10 @@
 // first are "not started"; a frame it processed whose POSE is not in the log is the
 // recorder's loss ("missing from the log"), told apart by POSE.frames_processed.
 //
-// Tracks (docs/tracking.md "On the wire"): each robot's first valid TRACKS_<r> of a
-// frame and main's first valid GLOBAL_TRACKS of a frame are scored against that
-// frame's ground truth (eval/track_score.hpp) into metrics.json `tracks` and
+// Tracks (docs/tracking.md "On the wire"): each robot's TRACKS_<r> of a frame and
+// main's GLOBAL_TRACKS of a frame, every valid chunk of the publication once (a
+// chunk at odds with its publication's others is counted and skipped), are scored
+// against that frame's ground truth (eval/track_score.hpp) into metrics.json `tracks` and
 // `global_tracks` (null when the log has none). GLOBAL_TRACKS of frame k goes out
 // with the GLOBAL_MAP of k and fuses the robots' tracks that reached main by then
 // (mostly those of frame k - 1): it is scored as it would be drawn at frame k.
@@ -73,11 +74,17 @@ struct LogData {
   std::map<int, FrameData> truth;                       // frame -> truth part
   std::map<int, std::vector<std::uint8_t>> truth_present;  // frame -> present[id]: the truth lists landmark id
   // Tracks as TrackScorer's samples (TrackSample::robot: the robot id; 0 for main's
-  // fused tracks): frame -> the first valid TRACKS_<r> of each robot, and the first
-  // valid GLOBAL_TRACKS.
+  // fused tracks): frame -> the valid chunks of each robot's TRACKS_<r>, and of
+  // GLOBAL_TRACKS, each chunk once.
   std::map<int, std::vector<TrackSample>> robot_tracks, global_tracks;
-  std::set<std::pair<int, int>> tracks_taken;  // (frame, robot): a robot's TRACKS of that frame taken
-  long track_messages = 0, global_track_messages = 0;  // valid ones read
+  struct TrackChunks {
+    std::int64_t utime = 0;  // the frame's first publication's (main may send a frame's twice)
+    int num_chunks = 0;  // the publication's, from its first chunk read
+    unsigned taken = 0;  // bit c: chunk c taken
+  };
+  std::map<std::pair<int, int>, TrackChunks> tracks_chunks;  // (frame, robot) -> its TRACKS chunks taken
+  std::map<int, TrackChunks> global_tracks_chunks;           // frame -> its GLOBAL_TRACKS chunks taken
+  long track_messages = 0, global_track_messages = 0;  // valid chunks read
   std::map<int, std::map<int, PoseRecord>> poses;       // frame -> robot -> pose
   std::map<int, std::int64_t> sensor_utime;             // frame -> latest SENSOR utime
   std::map<int, std::vector<int>> observed;             // frame -> observed ids

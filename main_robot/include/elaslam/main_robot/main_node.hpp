@@ -53,11 +53,11 @@ struct MainCounters {
   RefusalCounts refused;                 // every refusal, per reason (rejected_inputs is their sum)
   std::int64_t capacity_faults = 0;      // GLOBAL_MAP publications that could not carry the whole map
   std::int64_t state_damaged = 0;        // a damaged state file was moved aside at start (map_state.hpp)
-  std::int64_t tracks = 0;               // TRACKS_<r> messages taken
-  std::int64_t tracks_refused = 0;       // ... refused (invalid, an older incarnation, a frame too far ahead; in rejected_inputs too)
-  std::int64_t stale_tracks = 0;         // ... ignored: not newer than the robot's last one taken (late, repeated)
-  std::int64_t global_tracks_published = 0;  // GLOBAL_TRACKS messages
-  std::int64_t global_tracks_omitted = 0;    // fused tracks left out of them (more than contract::kMaxGlobalTracks), summed
+  std::int64_t tracks = 0;               // TRACKS_<r> chunks taken
+  std::int64_t tracks_refused = 0;       // ... refused (invalid, an older incarnation, a frame too far ahead, at odds with its publication's other chunks; in rejected_inputs too)
+  std::int64_t stale_tracks = 0;         // ... ignored: of an older publication than the robot's newest, or a chunk taken already (late, repeated)
+  std::int64_t global_tracks_published = 0;  // GLOBAL_TRACKS publications (each one or more chunks)
+  std::int64_t global_tracks_omitted = 0;    // fused tracks left out of them (more than contract::kMaxTrackChunks chunks hold), summed
 };
 
 class MainNode {
@@ -73,19 +73,23 @@ class MainNode {
   /// goes through on_event in order, exactly as if it had come alone (each refusal
   /// counted). False when anything was refused; `why` says the first problem.
   bool on_events(const lmap_events_t& msg, std::string* why = nullptr);
-  /// TRACKS_<r>: robot r's tracks of its moving landmarks. Refused (counted per
-  /// reason, in tracks_refused and rejected_inputs; nothing changes) when invalid
-  /// (check_track_list, a robot outside limits.team), of an incarnation other than
-  /// the one main follows, or more than max_frame_gap frames ahead of the robot's
-  /// newest; ignored (stale_tracks) when not newer than its last one taken. Else its
-  /// tracks replace the robot's previous ones in the fusion (TrackFusion).
+  /// TRACKS_<r>: a chunk of robot r's tracks of its moving landmarks. Refused
+  /// (counted per reason, in tracks_refused and rejected_inputs; nothing changes)
+  /// when invalid (check_track_list, a robot outside limits.team), of an incarnation
+  /// other than the one main follows, more than max_frame_gap frames ahead of the
+  /// robot's newest, or at odds with its publication's other chunks (TrackFusion::
+  /// take); ignored (stale_tracks) when of an older publication or taken already.
+  /// Else taken: once its publication is complete (or superseded) its tracks replace
+  /// the robot's previous ones in the fusion (TrackFusion).
   bool on_tracks(const track_list_t& msg, std::string* why = nullptr);
   /// GLOBAL_TRACKS, stamped like make_global_map: the fused tracks (TrackFusion::fuse
-  /// at that frame), at most contract::kMaxGlobalTracks in ascending id (the rest
-  /// counted in num_omitted and global_tracks_omitted). True when it is to go out:
-  /// while there are fused tracks, and once more when the last has gone.
-  bool make_global_tracks(std::int64_t now_utime, int frame = -1);
-  const global_tracks_t& global_tracks() const { return global_tracks_; }
+  /// at that frame) in ascending id, in chunks of contract::kMaxGlobalTracks, at most
+  /// contract::kMaxTrackChunks (the rest counted in num_omitted and
+  /// global_tracks_omitted). Returns the chunks to go out: while there are fused
+  /// tracks, and once more (one empty chunk) when the last has gone; else 0.
+  int make_global_tracks(std::int64_t now_utime, int frame = -1);
+  int num_global_tracks_chunks() const { return num_global_tracks_chunks_; }
+  const global_tracks_t& global_tracks(int chunk) const { return global_tracks_[static_cast<std::size_t>(chunk)]; }
   const TrackFusion& track_fusion() const { return fusion_; }
   void count_decode_error() { ++counters_.decode_errors; }
   /// The state file was damaged and moved aside at start (map_state.hpp).
@@ -201,7 +205,11 @@ class MainNode {
   FrameCompletion completion_;
   MapPublisher publisher_;
   TrackFusion fusion_;
-  global_tracks_t global_tracks_{};  // reserved for contract::kMaxGlobalTracks at construction
+  // contract::kMaxTrackChunks chunks, each reserved for contract::kMaxGlobalTracks at
+  // construction; the first num_global_tracks_chunks_ are the last publication.
+  std::vector<global_tracks_t> global_tracks_;
+  int num_global_tracks_chunks_ = 0;
+  int global_tracks_published_ = 0;  // fused tracks (sent and omitted) of the last GLOBAL_TRACKS
   int team_map_frame_ = -1;  // frame of the last team maps
   MainCounters counters_;
   std::vector<Notice> pending_;

@@ -75,7 +75,8 @@ class MainPorts {
     last_map_utime_ = shell_.now_utime();
     const int n = node_.make_global_map(last_map_utime_, frame);
     for (int i = 0; i < n; ++i) shell_.publish(map_, node_.map_chunk(i));
-    if (node_.make_global_tracks(last_map_utime_, frame)) shell_.publish(tracks_, node_.global_tracks());
+    const int t = node_.make_global_tracks(last_map_utime_, frame);
+    for (int i = 0; i < t; ++i) shell_.publish(tracks_, node_.global_tracks(i));
     const int k = node_.make_moving_set(last_map_utime_, frame);
     if (node_.moving_set_due(k, last_map_utime_))
       for (int i = 0; i < k; ++i) shell_.publish(moving_, node_.map_chunk(i));

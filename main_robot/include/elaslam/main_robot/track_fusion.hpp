@@ -17,11 +17,13 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "elaslam/common/contract.hpp"
+#include "elaslam/common/limits.hpp"
 #include "elaslam/track_list_t.hpp"
 
 namespace elaslam {
@@ -62,13 +64,28 @@ class TrackFusion {
 
   explicit TrackFusion(int max_age_frames = kDefaultMaxAgeFrames);
 
-  /// Robot r's TRACKS, validated (check_track_list): its tracks from now on, in
-  /// place of those of its previous message.
-  void take(const track_list_t& m);
+  /// What take() did with a chunk.
+  enum class Take {
+    kTaken,    // stored (its publication complete or not yet)
+    kStale,    // of an older publication, or a chunk already taken: ignored
+    kRefused,  // does not agree with its publication's other chunks: nothing changes
+  };
+  /// A chunk of robot r's TRACKS, validated (check_track_list). Robot r's chunks of
+  /// one frame are its publication; once all have come, their tracks replace those
+  /// of its previous publication. A chunk of a newer frame while one is still
+  /// missing takes the incomplete publication as it is (the tracks that came): they
+  /// are newer than the previous publication's, whose movers may have gone since,
+  /// and a lost chunk then costs its own tracks for one frame only. Refused (with
+  /// `problem` and `reason`) when its num_chunks differs from its publication's or
+  /// it lists a landmark an earlier chunk of the publication listed.
+  Take take(const track_list_t& m, std::string* problem = nullptr, Refusal* reason = nullptr);
   /// Robot r's tracks dropped (it restarted: its tracks of before are gone).
   void forget(int robot_id);
-  /// The frame of robot r's newest TRACKS taken, -1: none.
+  /// The frame of robot r's newest TRACKS chunk taken, -1: none.
   int robot_frame(int robot_id) const;
+  /// Tracks of robot r fused from now on: its last complete publication (or the
+  /// incomplete one a newer frame superseded).
+  int robot_tracks(int robot_id) const;
 
   /// Per landmark tracked by any robot whose newest TRACKS is at most max_age_frames
   /// older than `frame`: its tracks fused, in ascending robot id (covariance
@@ -77,14 +94,26 @@ class TrackFusion {
   const std::vector<FusedTrack>& fuse(int frame);
 
  private:
-  struct RobotTracks {
+  // Tracks one publication can carry: contract::kMaxTrackChunks chunks of
+  // contract::kMaxTracks.
+  static constexpr int kCapacity = contract::kMaxTrackChunks * contract::kMaxTracks;
+  // One publication: chunk c's tracks at [c * kMaxTracks, c * kMaxTracks + counts[c]).
+  struct Publication {
     int frame = -1;
-    int count = 0;
-    std::array<TrackEstimate, contract::kMaxTracks> tracks;
+    int num_chunks = 0;
+    unsigned received = 0;  // bit c: chunk c taken
+    std::array<int, contract::kMaxTrackChunks> counts{};
+    std::vector<TrackEstimate> tracks;  // kCapacity, sized at construction
+    bool complete() const { return num_chunks > 0 && received == (1u << num_chunks) - 1; }
+    int count() const;
+  };
+  struct RobotTracks {
+    Publication fused;    // the tracks fuse() uses
+    Publication arriving; // the chunks of a newer frame, until all have come
   };
   int max_age_frames_;
   std::array<RobotTracks, contract::kMaxRobots> robots_;
-  std::vector<std::pair<int, int>> order_;  // (landmark id, robot index * kMaxTracks + slot), sorted
+  std::vector<std::pair<int, int>> order_;  // (landmark id, robot index * kCapacity + slot), sorted
   std::vector<FusedTrack> fused_;
 };
 

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "elaslam/common/contract.hpp"
 #include "elaslam/robot_node/mover_track.hpp"
 
 namespace elaslam {
@@ -19,7 +20,7 @@ namespace elaslam {
 /// robot.tracking (the optional config section).
 struct TrackingOptions {
   bool enabled = true;
-  int max_tracks = 64;        // tracks held at once (the pool's slots)
+  int max_tracks = contract::kDefaultTrackPool;  // tracks held at once (the pool's slots)
   double lost_after_s = 3.0;  // [s] a track unseen this long ends
   /// A candidate with a track returns to the map (RETURN) only once its track finds
   /// it stopped, not as soon as return_frames sightings agree (a slow mover does).

@@ -33,10 +33,11 @@ class RobotMessages {
   /// candidates in the filter (from their first sighting), while there are some and
   /// once more when the last has gone, so that a viewer clears them.
   void fill_candidates(const Robot& robot, int frame, std::int64_t now_utime);
-  /// TRACKS_<r>: the moving landmarks' tracks (Robot::tracks), at most
-  /// contract::kMaxTracks in the order they started (the rest counted in
-  /// num_omitted), every frame while there are some and once more when the last has
-  /// ended, so that readers clear them.
+  /// TRACKS_<r>: the moving landmarks' confirmed tracks (Robot::tracks) in the order
+  /// they started, in chunks of contract::kMaxTracks, at most
+  /// contract::kMaxTrackChunks (the rest counted in num_omitted), every frame while
+  /// there are some and once more (one empty chunk) when the last has ended, so that
+  /// readers clear them.
   void fill_tracks(const Robot& robot, int frame, std::int64_t now_utime);
   /// The map's snapshot, in chunks that each fit one datagram; returns their count.
   int make_snapshot(const Robot& robot, int frame, std::int64_t now_utime);
@@ -58,8 +59,9 @@ class RobotMessages {
   const lmap_snapshot_t& snapshot_chunk(int i) const { return chunks_[static_cast<std::size_t>(i)]; }
   bool candidates_ready() const { return candidates_ready_; }
   const candidate_list_t& candidates() const { return candidates_; }
-  bool tracks_ready() const { return tracks_ready_; }
-  const track_list_t& tracks() const { return tracks_; }
+  /// This frame's TRACKS_<r> chunks: 0 when it sends none.
+  int num_track_chunks() const { return num_track_chunks_; }
+  const track_list_t& track_chunk(int i) const { return track_chunks_[static_cast<std::size_t>(i)]; }
 
   std::int64_t incarnation() const { return incarnation_; }
   void set_incarnation(std::int64_t v) { incarnation_ = v; }
@@ -86,8 +88,11 @@ class RobotMessages {
   int candidates_period_ = 0;
   bool candidates_ready_ = false;
   candidate_list_t candidates_{};  // reserved for contract::kMaxCandidates at construction
-  bool tracks_ready_ = false;
-  track_list_t tracks_{};  // reserved for contract::kMaxTracks at construction
+  // contract::kMaxTrackChunks chunks, each reserved for contract::kMaxTracks at
+  // construction; the first num_track_chunks_ go out this frame.
+  std::vector<track_list_t> track_chunks_;
+  int num_track_chunks_ = 0;
+  int tracks_published_ = 0;  // tracks (sent and omitted) of the last TRACKS_<r>
 };
 
 }  // namespace elaslam

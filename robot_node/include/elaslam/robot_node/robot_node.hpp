@@ -136,11 +136,12 @@ class RobotNode {
   /// candidates_period_frames): the robot's candidates, at most contract::kMaxCandidates.
   bool candidates_ready() const { return messages_.candidates_ready(); }
   const candidate_list_t& candidates_msg() const { return messages_.candidates(); }
-  /// True when this frame also produced a TRACKS_<r> message: the robot's tracks of
-  /// its moving landmarks, at most contract::kMaxTracks (the rest in num_omitted and
-  /// counted in RobotNodeCounters::tracks_omitted).
-  bool tracks_ready() const { return messages_.tracks_ready(); }
-  const track_list_t& tracks_msg() const { return messages_.tracks(); }
+  /// This frame's TRACKS_<r> publication: the robot's tracks of its moving landmarks
+  /// in chunks of contract::kMaxTracks, at most contract::kMaxTrackChunks (the rest
+  /// in num_omitted and counted in RobotNodeCounters::tracks_omitted); 0 chunks when
+  /// this frame sends none.
+  int num_track_chunks() const { return messages_.num_track_chunks(); }
+  const track_list_t& track_chunk(int i) const { return messages_.track_chunk(i); }
 
   /// The incarnation every outgoing message carries (landmark_event_t): the start-up
   /// wall clock [us] of a fresh start, kept from the state file on a resume

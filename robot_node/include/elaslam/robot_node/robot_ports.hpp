@@ -149,7 +149,7 @@ class RobotPorts {
       for (const auto& ev : node_.event_msgs()) shell_.publish(event_, ev);
     if (node_.snapshot_ready()) publish_snapshot();
     if (node_.candidates_ready()) shell_.publish(candidates_, node_.candidates_msg());
-    if (node_.tracks_ready()) shell_.publish(tracks_, node_.tracks_msg());
+    for (int i = 0; i < node_.num_track_chunks(); ++i) shell_.publish(tracks_, node_.track_chunk(i));
     const std::int64_t sent = shell_.now_utime();
     stages_.receive.add(span_us(msg.utime, received));
     stages_.frame.add(now - received);

@@ -65,9 +65,13 @@ class ViewState {
   bool on_candidates(const candidate_list_t& m);
   static constexpr int kCandidateFrames = 20;
   /// A robot's tracks of its moving landmarks (TRACKS_<r>) replace its earlier ones;
-  /// main's fused tracks (GLOBAL_TRACKS) replace the earlier fused ones. Checked as
-  /// main checks them (common/track_checks.hpp); a list older than kCandidateFrames
-  /// frames is not drawn (its sender stopped).
+  /// main's fused tracks (GLOBAL_TRACKS) replace the earlier fused ones. Each comes
+  /// in chunks: the chunks of the newest frame are drawn together, as they come (a
+  /// lost chunk's tracks are missing for that frame only). Checked as main checks
+  /// them (common/track_checks.hpp), and a chunk whose num_chunks or landmark ids
+  /// are at odds with the chunks held of its frame is refused (drops, nothing
+  /// changes); a list older than kCandidateFrames frames is not drawn (its sender
+  /// stopped).
   bool on_tracks(const track_list_t& m);
   bool on_global_tracks(const global_tracks_t& m);
 
@@ -83,6 +87,12 @@ class ViewState {
   long long messages() const { return messages_; }
 
  private:
+  /// The chunks held of one tracks publication.
+  struct TrackChunks {
+    std::int64_t utime = 0;  // the publication's (with its frame)
+    int num_chunks = 0;
+    unsigned received = 0;  // bit c: chunk c
+  };
   /// One track as drawn: where, how fast, its model.
   struct Track {
     int id = -1;
@@ -106,7 +116,8 @@ class ViewState {
     int candidates_frame = -1;
     std::vector<std::array<double, 6>> candidates;  // id, x, y, cxx, cxy, cyy
     int tracks_frame = -1;
-    std::vector<Track> tracks;
+    TrackChunks tracks_chunks;
+    std::vector<Track> tracks;  // the chunks held of frame tracks_frame
   };
   struct Landmark {
     bool known = false;  // a position was ever received
@@ -147,7 +158,8 @@ class ViewState {
   std::deque<Notice> notices_;
   std::int64_t map_version_ = -1;
   int global_tracks_frame_ = -1;
-  std::vector<Track> global_tracks_;
+  TrackChunks global_tracks_chunks_;
+  std::vector<Track> global_tracks_;  // the chunks held of frame global_tracks_frame_
   std::map<std::string, long long> bad_by_reason_;  // the "viewer" object shows it
 };
 
