@@ -10,6 +10,16 @@
 namespace elaslam {
 namespace {
 
+// Every robot message's header: when it was sent, the robot's frame, who sent it
+// and the incarnation it belongs to.
+template <class Message>
+void stamp(Message* m, std::int64_t now_utime, int frame, int robot_id, std::int64_t incarnation) {
+  m->utime = now_utime;
+  m->frame = frame;
+  m->robot_id = static_cast<std::int16_t>(robot_id);
+  m->incarnation = incarnation;
+}
+
 // A snapshot chunk's two kinds of entry (chunks.hpp, prepare_chunks).
 void grow_static(lmap_snapshot_t* m, int n) { contract::set_count(&m->landmarks, &m->num_landmarks, n); }
 void grow_moving(lmap_snapshot_t* m, int n) {
@@ -56,10 +66,7 @@ void RobotMessages::fill_pose(const Robot& robot, const sensor_frame_t& msg, std
                               const FrameSummary& s, std::int64_t processing_us, std::int64_t frames_this_run) {
   const EkfSlam& f = robot.estimate();  // with the team map: the aided filter
   const Pose2 p = f.pose();
-  pose_.utime = now_utime;
-  pose_.frame = msg.frame;
-  pose_.robot_id = static_cast<int16_t>(robot_id_);
-  pose_.incarnation = incarnation_;
+  stamp(&pose_, now_utime, msg.frame, robot_id_, incarnation_);
   pose_.source_utime = msg.utime;
   pose_.x = p.x;
   pose_.y = p.y;
@@ -81,10 +88,7 @@ void RobotMessages::fill_pose(const Robot& robot, const sensor_frame_t& msg, std
 void RobotMessages::fill_events(const Robot& robot, int frame, std::int64_t now_utime) {
   for (const MapEvent& e : robot.events()) {
     landmark_event_t m{};
-    m.utime = now_utime;
-    m.frame = e.frame;
-    m.robot_id = static_cast<int16_t>(robot_id_);
-    m.incarnation = incarnation_;
+    stamp(&m, now_utime, e.frame, robot_id_, incarnation_);
     m.seq = ++seq_;
     m.kind = static_cast<int8_t>(e.kind);
     m.landmark_id = e.landmark_id;
@@ -98,10 +102,7 @@ void RobotMessages::fill_events(const Robot& robot, int frame, std::int64_t now_
   num_batches_ = static_cast<int>((n + k - 1) / k);
   for (std::size_t b = 0; b < static_cast<std::size_t>(num_batches_); ++b) {
     lmap_events_t& m = batches_[b];
-    m.utime = now_utime;
-    m.frame = frame;
-    m.robot_id = static_cast<int16_t>(robot_id_);
-    m.incarnation = incarnation_;
+    stamp(&m, now_utime, frame, robot_id_, incarnation_);
     const std::size_t first = b * k, count = std::min(k, n - first);
     contract::set_count(&m.events, &m.num_events, static_cast<int>(count));
     std::copy_n(events_.begin() + static_cast<std::ptrdiff_t>(first), count, m.events.begin());
@@ -137,10 +138,7 @@ void RobotMessages::fill_candidates(const Robot& robot, int frame, std::int64_t 
     write_cov(l.cov, f.landmark_cov(id));
   }
   if (n + omitted == 0 && candidates_.num_candidates + candidates_.num_omitted == 0) return;
-  candidates_.utime = now_utime;
-  candidates_.frame = frame;
-  candidates_.robot_id = static_cast<std::int16_t>(robot_id_);
-  candidates_.incarnation = incarnation_;
+  stamp(&candidates_, now_utime, frame, robot_id_, incarnation_);
   candidates_.num_candidates = static_cast<std::int16_t>(n);
   candidates_.num_omitted = static_cast<std::int16_t>(omitted);
   candidates_ready_ = true;
@@ -182,10 +180,7 @@ void RobotMessages::fill_tracks(const Robot& robot, int frame, std::int64_t now_
   const auto omitted = static_cast<std::int16_t>(std::min(total - n, static_cast<int>(INT16_MAX)));
   for (int c = 0; c < chunks; ++c) {
     track_list_t& m = track_chunks_[static_cast<std::size_t>(c)];
-    m.utime = now_utime;
-    m.frame = frame;
-    m.robot_id = static_cast<std::int16_t>(robot_id_);
-    m.incarnation = incarnation_;
+    stamp(&m, now_utime, frame, robot_id_, incarnation_);
     m.chunk = static_cast<std::int16_t>(c);
     m.num_chunks = static_cast<std::int16_t>(chunks);
     m.num_omitted = omitted;
@@ -212,10 +207,7 @@ int RobotMessages::make_snapshot(const Robot& robot, int frame, std::int64_t now
   for (int k = 0; k < num_chunks_; ++k) {
     const ChunkSpan& sp = spans_[static_cast<std::size_t>(k)];
     lmap_snapshot_t& c = chunks_[static_cast<std::size_t>(k)];
-    c.utime = now_utime;
-    c.frame = frame;
-    c.robot_id = static_cast<int16_t>(robot_id_);
-    c.incarnation = incarnation_;
+    stamp(&c, now_utime, frame, robot_id_, incarnation_);
     c.seq = seq_;
     c.chunk = static_cast<int16_t>(k);
     c.num_chunks = static_cast<int16_t>(num_chunks_);

@@ -16,17 +16,12 @@
 
 #include "../support/messages.hpp"
 #include "elaslam/main_robot/main_ports.hpp"
+#include "team_options.hpp"
 
 namespace elaslam {
 namespace {
 
-GlobalMapOptions team_of_three() {
-  GlobalMapOptions o;
-  o.max_landmark_id = 32;
-  std::string why;
-  EXPECT_TRUE(parse_team("1,2,3", &o.limits.team_mask, &why)) << why;
-  return o;
-}
+using test::team_of_three;
 
 // Robot `robot`'s POSE of `frame`, announcing its events up to `event_seq` and a
 // snapshot of `snapshot_chunks` chunks.

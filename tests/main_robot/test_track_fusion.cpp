@@ -15,6 +15,7 @@
 #include "elaslam/common/contract.hpp"
 #include "elaslam/main_robot/main_node.hpp"
 #include "elaslam/main_robot/track_fusion.hpp"
+#include "team_options.hpp"
 
 namespace elaslam {
 namespace {
@@ -89,13 +90,7 @@ TEST(TrackFusion, NewestTracksPerRobotWithinTheAgeBound) {
   EXPECT_EQ(fusion.robot_frame(1), -1);
 }
 
-GlobalMapOptions team_of_three() {
-  GlobalMapOptions o;
-  o.max_landmark_id = 32;
-  std::string why;
-  EXPECT_TRUE(parse_team("1,2,3", &o.limits.team_mask, &why)) << why;
-  return o;
-}
+using test::team_of_three;
 
 // GIVEN main holding robot 1's track of landmark 7 and robot 2's of landmark 9
 // WHEN TRACKS messages arrive each spoilt in one way
