@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "../support/messages.hpp"
 #include "elaslam/viewer/view_state.hpp"
 
 namespace elaslam::viewer {
@@ -283,16 +284,7 @@ track_t track(int id, double x, double vx, std::int8_t model = track_t::CONSTANT
   return t;
 }
 
-track_list_t tracks(int robot, int frame, std::vector<track_t> ts, int chunk = 0, int num_chunks = 1) {
-  track_list_t m{};
-  m.robot_id = static_cast<std::int16_t>(robot);
-  m.frame = frame;
-  m.chunk = static_cast<std::int16_t>(chunk);
-  m.num_chunks = static_cast<std::int16_t>(num_chunks);
-  m.num_tracks = static_cast<std::int16_t>(ts.size());
-  m.tracks = std::move(ts);
-  return m;
-}
+using test::tracks_msg;
 
 global_tracks_t fused(int frame, std::vector<track_t> ts, std::int16_t contributors, int chunk = 0,
                       int num_chunks = 1) {
@@ -319,7 +311,7 @@ global_tracks_t fused(int frame, std::vector<track_t> ts, std::int16_t contribut
 TEST(ViewState, TracksAndFusedTracksAreKeptCheckedAndAged) {
   ViewState v;
   ASSERT_TRUE(v.on_pose(pose(2, 10, 0, 0)));
-  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(4, 1.0, 0.5), track(6, 2.0, 0.0, track_t::STATIC)})));
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 10, {track(4, 1.0, 0.5), track(6, 2.0, 0.0, track_t::STATIC)})));
   ASSERT_TRUE(v.on_global_tracks(fused(10, {track(4, 1.1, 0.4)}, 0b11)));
   nlohmann::json j = state(v);
   ASSERT_EQ(j["robots"].size(), 1u);
@@ -337,14 +329,14 @@ TEST(ViewState, TracksAndFusedTracksAreKeptCheckedAndAged) {
 
   // Bad ones: refused, counted, nothing changed.
   const long long bad = v.bad_messages();
-  track_list_t nan_speed = tracks(2, 11, {track(4, 1.0, std::numeric_limits<double>::quiet_NaN())});
+  track_list_t nan_speed = tracks_msg(2, 11, {track(4, 1.0, std::numeric_limits<double>::quiet_NaN())});
   EXPECT_FALSE(v.on_tracks(nan_speed));
-  track_list_t not_psd = tracks(2, 11, {track(4, 1.0, 0.5)});
+  track_list_t not_psd = tracks_msg(2, 11, {track(4, 1.0, 0.5)});
   not_psd.tracks[0].cov[2] = 1.0f;  // xvx far beyond sqrt(var x * var vx) = 0.02
   EXPECT_FALSE(v.on_tracks(not_psd));
-  track_list_t far_id = tracks(2, 11, {track(300, 1.0, 0.5)});  // max_landmark_id 256
+  track_list_t far_id = tracks_msg(2, 11, {track(300, 1.0, 0.5)});  // max_landmark_id 256
   EXPECT_FALSE(v.on_tracks(far_id));
-  track_list_t bad_robot = tracks(17, 11, {track(4, 1.0, 0.5)});
+  track_list_t bad_robot = tracks_msg(17, 11, {track(4, 1.0, 0.5)});
   EXPECT_FALSE(v.on_tracks(bad_robot));
   global_tracks_t bad_sum = fused(11, {track(4, 1.0, 0.5)}, 0b1);
   bad_sum.tracks[0].probabilities[2] = 0.9f;  // sums to 1.2
@@ -358,8 +350,8 @@ TEST(ViewState, TracksAndFusedTracksAreKeptCheckedAndAged) {
   EXPECT_EQ(state(v)["global_tracks"], j["global_tracks"]);
 
   // The newest list replaces the last; an older one is ignored.
-  ASSERT_TRUE(v.on_tracks(tracks(2, 12, {track(6, 2.5, 0.1)})));
-  ASSERT_TRUE(v.on_tracks(tracks(2, 11, {track(9, 0.0, 0.1)})));
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 12, {track(6, 2.5, 0.1)})));
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 11, {track(9, 0.0, 0.1)})));
   j = state(v);
   ASSERT_EQ(j["robots"][0]["tracks"].size(), 1u);
   EXPECT_EQ(j["robots"][0]["tracks"][0]["id"], 6);
@@ -383,9 +375,9 @@ std::vector<int> ids(const nlohmann::json& list) {
 TEST(ViewState, TracksInTwoChunksAreDrawnTogether) {
   ViewState v;
   ASSERT_TRUE(v.on_pose(pose(2, 10, 0, 0)));
-  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(4, 1.0, 0.5), track(6, 2.0, 0.0)}, 0, 2)));
-  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(8, 3.0, 0.5)}, 1, 2)));
-  ASSERT_TRUE(v.on_tracks(tracks(2, 10, {track(8, 3.0, 0.5)}, 1, 2)));  // a copy
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 10, {track(4, 1.0, 0.5), track(6, 2.0, 0.0)}, 0, 2)));
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 10, {track(8, 3.0, 0.5)}, 1, 2)));
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 10, {track(8, 3.0, 0.5)}, 1, 2)));  // a copy
   ASSERT_TRUE(v.on_global_tracks(fused(10, {track(4, 1.1, 0.4)}, 0b10, 0, 2)));
   ASSERT_TRUE(v.on_global_tracks(fused(10, {track(8, 3.1, 0.4)}, 0b10, 1, 2)));
   nlohmann::json j = state(v);
@@ -393,11 +385,11 @@ TEST(ViewState, TracksInTwoChunksAreDrawnTogether) {
   EXPECT_EQ(ids(j["global_tracks"]), (std::vector<int>{4, 8}));
 
   const long long bad = v.bad_messages();
-  ASSERT_TRUE(v.on_tracks(tracks(2, 11, {track(4, 1.2, 0.5)}, 0, 3)));
-  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(5, 1.0, 0.5)}, 1, 2)));  // num_chunks 2 against 3
-  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(4, 1.0, 0.5)}, 1, 3)));  // 4 is in chunk 0
-  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(5, 1.0, 0.5)}, 3, 3)));  // chunk out of range
-  EXPECT_FALSE(v.on_tracks(tracks(2, 11, {track(5, 1.0, 0.5)}, 0, 7)));  // more chunks than the contract's
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 11, {track(4, 1.2, 0.5)}, 0, 3)));
+  EXPECT_FALSE(v.on_tracks(tracks_msg(2, 11, {track(5, 1.0, 0.5)}, 1, 2)));  // num_chunks 2 against 3
+  EXPECT_FALSE(v.on_tracks(tracks_msg(2, 11, {track(4, 1.0, 0.5)}, 1, 3)));  // 4 is in chunk 0
+  EXPECT_FALSE(v.on_tracks(tracks_msg(2, 11, {track(5, 1.0, 0.5)}, 3, 3)));  // chunk out of range
+  EXPECT_FALSE(v.on_tracks(tracks_msg(2, 11, {track(5, 1.0, 0.5)}, 0, 7)));  // more chunks than the contract's
   EXPECT_FALSE(v.on_global_tracks(fused(10, {track(9, 1.0, 0.5)}, 0b10, 0, 1)));  // num_chunks 1 against 2
   EXPECT_TRUE(v.on_global_tracks(fused(10, {track(9, 1.0, 0.5)}, 0b10, 1, 2)));  // chunk 1 held: ignored
   EXPECT_EQ(v.bad_messages(), bad + 5);
@@ -414,7 +406,7 @@ TEST(ViewState, TracksInTwoChunksAreDrawnTogether) {
   EXPECT_EQ(ids(state(v)["global_tracks"]), (std::vector<int>{6}));
   EXPECT_EQ(v.bad_messages(), bad + 5);
 
-  ASSERT_TRUE(v.on_tracks(tracks(2, 12, {track(6, 2.5, 0.1)})));
+  ASSERT_TRUE(v.on_tracks(tracks_msg(2, 12, {track(6, 2.5, 0.1)})));
   EXPECT_EQ(ids(state(v)["robots"][0]["tracks"]), (std::vector<int>{6}));
 }
 

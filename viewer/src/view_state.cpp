@@ -223,32 +223,40 @@ bool ViewState::on_candidates(const candidate_list_t& m) {
 
 namespace {
 
-// Where a chunk of a tracks message goes (TRACKS_<r>, GLOBAL_TRACKS): kTake when it
-// starts a newer publication (`chunks` reset: nothing held) or adds a chunk not yet
-// held to the one held; kOld when it is of an older publication or held already.
-// A publication is its frame and utime: main may send a frame's GLOBAL_TRACKS
-// twice (a quiet period's repeated map), the later one newer. Else
-// kNumChunks or kTwice when its num_chunks or a landmark id is at odds with the
-// chunks held, nothing changed. A frame more than 1000 behind is a sender that
-// started over.
-enum class Placed { kTake, kOld, kNumChunks, kTwice };
+// Takes a chunk of a tracks message (TRACKS_<r>, GLOBAL_TRACKS) into `held`, the
+// tracks of the publication drawn: a chunk of a newer publication starts it over
+// (`held` cleared), a chunk not yet held is added. A publication is its frame and
+// utime: main may send a frame's GLOBAL_TRACKS twice (a quiet period's repeated
+// map), the later one newer. A chunk of an older publication, or held already, is
+// ignored (*taken false). Returns the reason a chunk is refused, nothing changed:
+// its num_chunks or one of its landmark ids at odds with the chunks held; else
+// nullptr. A frame more than 1000 behind is a sender that started over.
+struct ChunkRefusals {
+  const char* num_chunks;  // num_chunks differs from the publication's
+  const char* twice;       // a landmark listed in another chunk
+};
 template <class Msg, class Chunks, class T>
-Placed place_chunk(const Msg& m, int* frame, Chunks* chunks, const std::vector<T>& held) {
-  if (m.frame < *frame && *frame - m.frame < 1000) return Placed::kOld;
-  if (m.frame == *frame && m.utime < chunks->utime) return Placed::kOld;
+const char* place_chunk(const Msg& m, const ChunkRefusals& why, int* frame, Chunks* chunks, std::vector<T>* held,
+                        bool* taken) {
+  *taken = false;
+  if (m.frame < *frame && *frame - m.frame < 1000) return nullptr;
+  if (m.frame == *frame && m.utime < chunks->utime) return nullptr;
   if (m.frame != *frame || m.utime != chunks->utime) {
     *frame = m.frame;
     chunks->utime = m.utime;
     chunks->num_chunks = m.num_chunks;
     chunks->received = 0;
-    return Placed::kTake;
+    held->clear();
+  } else {
+    if (m.num_chunks != chunks->num_chunks) return why.num_chunks;
+    if ((chunks->received >> m.chunk) & 1u) return nullptr;
+    for (int k = 0; k < m.num_tracks; ++k)
+      for (const T& t : *held)
+        if (t.id == m.tracks[static_cast<std::size_t>(k)].id) return why.twice;
   }
-  if (m.num_chunks != chunks->num_chunks) return Placed::kNumChunks;
-  if ((chunks->received >> m.chunk) & 1u) return Placed::kOld;
-  for (int k = 0; k < m.num_tracks; ++k)
-    for (const T& t : held)
-      if (t.id == m.tracks[static_cast<std::size_t>(k)].id) return Placed::kTwice;
-  return Placed::kTake;
+  chunks->received |= 1u << m.chunk;
+  *taken = true;
+  return nullptr;
 }
 
 }  // namespace
@@ -261,12 +269,11 @@ bool ViewState::on_tracks(const track_list_t& m) {
   if (!check_track_list(m, l, limits_.max_landmark_id, &reason).empty()) return bad("TRACKS invalid");
   Robot& r = robot(m.robot_id);
   // The chunks of the robot's newest frame, drawn as they come.
-  const Placed placed = place_chunk(m, &r.tracks_frame, &r.tracks_chunks, r.tracks);
-  if (placed == Placed::kOld) return true;
-  if (placed == Placed::kNumChunks) return bad("TRACKS num_chunks differs from its frame's other chunks");
-  if (placed == Placed::kTwice) return bad("TRACKS landmark id in two chunks");
-  if (r.tracks_chunks.received == 0) r.tracks.clear();
-  r.tracks_chunks.received |= 1u << m.chunk;
+  static constexpr ChunkRefusals kWhy{"TRACKS num_chunks differs from its frame's other chunks",
+                                     "TRACKS landmark id in two chunks"};
+  bool taken = false;
+  if (const char* why = place_chunk(m, kWhy, &r.tracks_frame, &r.tracks_chunks, &r.tracks, &taken)) return bad(why);
+  if (!taken) return true;
   for (int k = 0; k < m.num_tracks; ++k) {
     const track_t& t = m.tracks[static_cast<std::size_t>(k)];
     r.tracks.push_back({t.id, t.x, t.y, t.vx, t.vy, t.cov[0], t.cov[1], t.cov[4],
@@ -283,12 +290,12 @@ bool ViewState::on_global_tracks(const global_tracks_t& m) {
   l.world_bound = limits_.world_bound_m;
   Refusal reason = Refusal::kMalformed;
   if (!check_global_tracks(m, l, limits_.max_landmark_id, &reason).empty()) return bad("GLOBAL_TRACKS invalid");
-  const Placed placed = place_chunk(m, &global_tracks_frame_, &global_tracks_chunks_, global_tracks_);
-  if (placed == Placed::kOld) return true;
-  if (placed == Placed::kNumChunks) return bad("GLOBAL_TRACKS num_chunks differs from its frame's other chunks");
-  if (placed == Placed::kTwice) return bad("GLOBAL_TRACKS landmark id in two chunks");
-  if (global_tracks_chunks_.received == 0) global_tracks_.clear();
-  global_tracks_chunks_.received |= 1u << m.chunk;
+  static constexpr ChunkRefusals kWhy{"GLOBAL_TRACKS num_chunks differs from its frame's other chunks",
+                                     "GLOBAL_TRACKS landmark id in two chunks"};
+  bool taken = false;
+  if (const char* why = place_chunk(m, kWhy, &global_tracks_frame_, &global_tracks_chunks_, &global_tracks_, &taken))
+    return bad(why);
+  if (!taken) return true;
   for (int k = 0; k < m.num_tracks; ++k) {
     const global_track_t& t = m.tracks[static_cast<std::size_t>(k)];
     global_tracks_.push_back({t.id, t.x, t.y, t.vx, t.vy, t.cov[0], t.cov[1], t.cov[4],
