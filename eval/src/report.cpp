@@ -115,6 +115,8 @@ nlohmann::json metrics_json(const RunInfo& info, const RunResult& r) {
       r["filter_full"] = rm.filter_full;
       r["evictions"] = rm.evictions;
       r["restored"] = rm.restored;
+      r["mover_corrections"] = rm.mover_corrections;
+      r["movers_followed"] = rm.movers_followed;
       r["final_landmarks"] = rm.final_landmarks;
       r["team_lost"] = rm.team_lost;
       r["relocalised"] = rm.relocalised;

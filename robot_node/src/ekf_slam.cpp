@@ -469,6 +469,23 @@ UpdateReport EkfSlam::update_position(int id, const Eigen::Vector2d& z, const Ei
   return report;
 }
 
+EkfStatus EkfSlam::move_landmark(int id, const Eigen::Vector2d& delta, const Eigen::Matrix2d& Q) {
+  const double scale = Q.cwiseAbs().maxCoeff();
+  const bool q_ok = Q.allFinite() && std::fabs(Q(0, 1) - Q(1, 0)) <= 1e-9 * scale && Q(0, 0) >= 0.0 &&
+                    Q(1, 1) >= 0.0 && Q.determinant() >= -1e-12 * scale * scale;
+  if (!valid_id(id) || !delta.allFinite() || !q_ok) return EkfStatus::kBadInput;
+  const int slot = slot_of(id);
+  if (slot < 0) return EkfStatus::kUnknownLandmark;
+  settle();
+  const Index off = Layout::landmark_offset(slot);
+  x_.segment<kL>(off) += delta;
+  P_(off, off) += Q(0, 0);
+  P_(off + 1, off) += 0.5 * (Q(1, 0) + Q(0, 1));
+  P_(off + 1, off + 1) += Q(1, 1);
+  upper_stale_ = true;
+  return EkfStatus::kOk;
+}
+
 // The landmark's two columns of P into lm_cols_: above the landmark block they are
 // read along its rows (lower storage), from the block down along the columns.
 void EkfSlam::load_landmark_columns(Index off) const {

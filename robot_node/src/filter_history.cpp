@@ -57,6 +57,11 @@ FilterHistory::Op FilterHistory::held_position(int frame, int id, const Eigen::V
 }
 FilterHistory::Op FilterHistory::add(int frame, int id, const RangeBearing& z) { return sighting(Kind::kAdd, frame, id, z); }
 FilterHistory::Op FilterHistory::remove(int frame, int id) { return op_of(Kind::kRemove, frame, id); }
+FilterHistory::Op FilterHistory::move(int frame, int id, const Eigen::Vector2d& delta, const Eigen::Matrix2d& Q) {
+  Op op = update_position(frame, id, delta, Q);
+  op.kind = Kind::kMove;
+  return op;
+}
 
 void FilterHistory::record(const Op& op) {
   if (!enabled()) return;
@@ -112,6 +117,7 @@ const char* FilterHistory::to_string(Kind k) {
     case Kind::kAdd: return "add";
     case Kind::kRemove: return "remove";
     case Kind::kHeldPosition: return "held_position";
+    case Kind::kMove: return "move";
   }
   return "?";
 }
@@ -141,6 +147,7 @@ bool FilterHistory::apply(const Op& op, EkfSlam* f) {
     case Kind::kAdd: return f->add_landmark(op.id, op.z) == EkfStatus::kOk;
     case Kind::kRemove: return f->remove_landmark(op.id) == EkfStatus::kOk;
     case Kind::kHeldPosition: return true;  // nothing until the candidate is confirmed (upgrade)
+    case Kind::kMove: return f->move_landmark(op.id, op.p, op.R) == EkfStatus::kOk;
   }
   return false;
 }

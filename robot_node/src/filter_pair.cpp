@@ -37,6 +37,16 @@ UpdateReport FilterPair::update(int frame, int id, const RangeBearing& z, bool g
   return r;
 }
 
+EkfStatus FilterPair::move_landmark(int frame, int id, const Eigen::Vector2d& delta, const Eigen::Matrix2d& Q,
+                                     int* faults) {
+  const EkfStatus st = own_.move_landmark(id, delta, Q);
+  if (st != EkfStatus::kOk) return st;
+  const FilterHistory::Op op = FilterHistory::move(frame, id, delta, Q);
+  own_history_.record(op);
+  to_aided(op, faults);
+  return st;
+}
+
 void FilterPair::update_landmark_only(int frame, int id, const RangeBearing& z, int* faults) {
   const FilterHistory::Op op = FilterHistory::update_landmark_only(frame, id, z);
   if (!own_history_.apply_and_record(op, &own_)) ++*faults;

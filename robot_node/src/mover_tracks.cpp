@@ -58,6 +58,11 @@ bool MoverTracks::see(int id, const TrackSighting& s, double t) {
   return true;
 }
 
+void MoverTracks::predict(int id, double t) {
+  const int slot = slot_of(id);
+  if (slot >= 0) pool_[static_cast<std::size_t>(slot)].predict(t);
+}
+
 void MoverTracks::release(int id) {
   const int slot = slot_of(id);
   pool_[static_cast<std::size_t>(slot)].stop();

@@ -3,6 +3,7 @@
 
 #include "elaslam/common/stats.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include <algorithm>
@@ -61,6 +62,7 @@ Robot::Robot(const RobotOptions& options, int robot_id)
   pairs_.reserve(static_cast<std::size_t>(options.ekf.capacity));
   events_.reserve(event_capacity(options));
   track_ops_.reserve(2 * static_cast<std::size_t>(options.max_observations));
+  followed_frame_.assign(static_cast<std::size_t>(std::max(options.ekf.max_landmark_id, 0)), -1);
 }
 
 void Robot::reset() {
@@ -74,6 +76,7 @@ void Robot::reset() {
   trouble_frame_ = -1;
   tracks_.clear();
   track_ops_.clear();
+  std::fill(followed_frame_.begin(), followed_frame_.end(), -1);
   clock_s_ = 0.0;
 }
 
@@ -88,6 +91,7 @@ FrameSummary Robot::process(const FrameInput& in) {
   predict(in, &s);
   clock_s_ += dt;
   last_frame_ = in.frame;
+  follow_movers(&s);
   for (int k = 0; k < in.num_obs; ++k) lmap_.seen(in.obs[static_cast<std::size_t>(k)].landmark_id, in.frame);
 
   if (options_.mode == Mode::kEkf || options_.mode == Mode::kGated) {
@@ -295,10 +299,19 @@ void Robot::handle_candidates(const FrameInput& in, FrameSummary* s) {
     record_sighting(id, o.z);
     if (e.status == LandmarkStatus::kCandidate && filters_.own().has_landmark(id)) {
       if (gate_.judge_candidate(id, filters_.own().check(id, o.z), &lmap_)) {
-        const bool moving_track = options_.tracking.return_when_stopped && tracks_.has(id) &&
+        const bool followed = followed_frame_[static_cast<std::size_t>(id)] == in.frame;
+        const bool moving_track = (options_.tracking.return_when_stopped || followed) && tracks_.has(id) &&
                                   !tracks_.track(id).stopped();
         if (lmap_.candidate_consistent(id) && !moving_track) {
           confirm(id, o.z, s);
+        } else if (followed) {
+          // A followed mover: its sighting corrects the pose as a static landmark's
+          // would, through the state its track moves (follow_movers).
+          if (filters_.update(last_frame_, id, o.z, false, &s->filter_faults).status == EkfStatus::kOk) {
+            ++s->mover_corrections;
+          } else {
+            ++s->filter_faults;
+          }
         } else if (options_.candidate_updates) {
           filters_.update_landmark_only(last_frame_, id, o.z, &s->filter_faults);
         }
@@ -406,6 +419,40 @@ void Robot::mark_moving(int id, const RangeBearing* seen, FrameSummary* s) {
   }
   emit_at(EventKind::kMoving, id, last, last_cov);
   ++s->num_moving;
+}
+
+// tracking.correct_pose: a candidate in the filter whose track is validated and
+// likeliest static or bounded is followed. Its state in the filter moves as its
+// track predicts over the frame's interval: the track's mean displacement, and
+// the growth of its position covariance as the landmark's own process noise. The
+// state keeps its cross-covariances with the pose and the map, so its sightings
+// correct the pose with the uncertainty the motion adds (handle_candidates), and
+// the robot never trusts a mover more than its track's model says it may.
+void Robot::follow_movers(FrameSummary* s) {
+  if (!options_.tracking.correct_pose || !tracks_.enabled()) return;
+  for (const int id : tracks_.ids()) {
+    const LMapEntry& e = lmap_[id];
+    if (e.status != LandmarkStatus::kCandidate || !filters_.own().has_landmark(id)) continue;
+    const MoverTrack& t = tracks_.track(id);
+    if (!t.validated() || t.likeliest() == MotionModel::kConstantVelocity) continue;
+    const Eigen::Vector2d before = t.mean().head<2>();
+    const Eigen::Matrix2d before_cov = t.covariance().topLeftCorner<2, 2>();
+    tracks_.predict(id, clock_s_);
+    const Eigen::Vector2d delta = t.mean().head<2>() - before;
+    Eigen::Matrix2d Q = t.covariance().topLeftCorner<2, 2>() - before_cov;
+    Q = 0.5 * (Q + Q.transpose()).eval();
+    // Mixing can narrow a model's spread: the process noise is the growth's
+    // positive part.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(Q);
+    Q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+    Q = 0.5 * (Q + Q.transpose()).eval();
+    if (filters_.move_landmark(last_frame_, id, delta, Q, &s->filter_faults) != EkfStatus::kOk) {
+      ++s->filter_faults;
+      continue;
+    }
+    followed_frame_[static_cast<std::size_t>(id)] = last_frame_;
+    ++s->movers_followed;
+  }
 }
 
 void Robot::queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const Eigen::Vector2d& anchor,

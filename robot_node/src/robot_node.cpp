@@ -94,6 +94,8 @@ void RobotNode::run_frame(const sensor_frame_t& msg, std::int64_t now_utime) {
   if (s.filter_full > 0) note_filter_full(s.filter_full);
   counters_.evictions += s.evicted;
   counters_.restored += s.restored;
+  counters_.mover_corrections += s.mover_corrections;
+  counters_.movers_followed += s.movers_followed;
   counters_.own_drifted_frames += s.drifted;
   if (s.inconsistent) note_inconsistent(s.recovered);
   messages_.fill_events(robot_, msg.frame, now_utime);

@@ -132,6 +132,7 @@ void parse_tracking(config::Reader& t, TrackingOptions* o) {
   t.read_optional("max_tracks", &o->max_tracks, 0, 4096);
   t.read_optional("lost_after_s", &o->lost_after_s, 1e-3, 3600.0);
   t.read_optional("return_when_stopped", &o->return_when_stopped);
+  t.read_optional("correct_pose", &o->correct_pose);
   MoverTrackOptions& k = o->track;
   t.read_optional("model_sojourn_s", &k.model_sojourn_s, 1e-3, 3600.0);
   t.read_optional("static_walk_m_per_sqrt_s", &k.static_walk_m_per_sqrt_s, 1e-9, 10.0);

@@ -268,6 +268,7 @@ json RobotStateAccess::save_history(const FilterHistory& h) {
       case FilterHistory::Kind::kAdd: j.push_back(json::array({op.z.range, op.z.bearing})); break;
       case FilterHistory::Kind::kPosition:
       case FilterHistory::Kind::kHeldPosition:
+      case FilterHistory::Kind::kMove:
         j.push_back(to_json(op.p));
         j.push_back(to_json(op.R));
         break;
@@ -593,14 +594,16 @@ FilterHistory::Op RobotStateAccess::parse_op(const json& entry, const std::strin
   bool known = false;
   for (const auto kd : {FilterHistory::Kind::kPredict, FilterHistory::Kind::kUpdate, FilterHistory::Kind::kLandmarkOnly,
                         FilterHistory::Kind::kPosition, FilterHistory::Kind::kAdd, FilterHistory::Kind::kRemove,
-                        FilterHistory::Kind::kHeldPosition})
+                        FilterHistory::Kind::kHeldPosition, FilterHistory::Kind::kMove})
     if (kind.is_string() && kind.get<std::string>() == FilterHistory::to_string(kd)) op.kind = kd, known = true;
   if (!known) fail(w + "[0] (kind)", kind.dump() + " is not an operation");
   op.frame = static_cast<int>(whole(j[1], w + "[1] (frame)", first_frame, r.last_frame_));
   const bool predict = op.kind == FilterHistory::Kind::kPredict;
   op.id = static_cast<int>(whole(j[2], w + "[2] (id)", predict ? -1 : 0, predict ? -1 : max_id));
   const std::size_t values = predict                                       ? 3
-                             : op.kind == FilterHistory::Kind::kPosition || op.kind == FilterHistory::Kind::kHeldPosition ? 2
+                             : op.kind == FilterHistory::Kind::kPosition || op.kind == FilterHistory::Kind::kHeldPosition ||
+                                       op.kind == FilterHistory::Kind::kMove
+                                   ? 2
                              : op.kind == FilterHistory::Kind::kRemove   ? 0
                                                                          : 1;
   if (j.size() != 3 + values) fail(w, "has " + std::to_string(j.size()) + " entries, a " + FilterHistory::to_string(op.kind) + " has " + std::to_string(3 + values));
@@ -633,6 +636,16 @@ FilterHistory::Op RobotStateAccess::parse_op(const json& entry, const std::strin
         op.R(e / 2, e % 2) = real(R[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
       if (!(op.R(0, 0) > 0.0) || !(op.R.determinant() > 0.0) || std::fabs(op.R(0, 1) - op.R(1, 0)) > 1e-9 * op.R.trace())
         fail(w + "[4] (R)", "not symmetric positive definite");
+      break;
+    }
+    case FilterHistory::Kind::kMove: {
+      op.p = vec2(j[3], w + "[3] (displacement)", bound);
+      const json& Q = array(j[4], w + "[4] (Q)", 4, 4);
+      for (int e = 0; e < 4; ++e)
+        op.R(e / 2, e % 2) = real(Q[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
+      if (!(op.R(0, 0) >= 0.0) || !(op.R(1, 1) >= 0.0) || op.R.determinant() < -1e-12 * op.R.trace() * op.R.trace() ||
+          std::fabs(op.R(0, 1) - op.R(1, 0)) > 1e-9 * op.R.trace())
+        fail(w + "[4] (Q)", "not symmetric positive semi-definite");
       break;
     }
     case FilterHistory::Kind::kRemove: break;

@@ -340,6 +340,8 @@ RunResult InProcessTeam::finish() {
       rm.filter_full = node.counters().filter_full;
       rm.evictions = node.counters().evictions;
       rm.restored = node.counters().restored;
+      rm.mover_corrections = node.counters().mover_corrections;
+      rm.movers_followed = node.counters().movers_followed;
       rm.final_landmarks = node.robot().filter().num_landmarks();
       rm.team_lost = node.robot().team_counters().lost;
       rm.relocalised = node.robot().team_counters().relocalised;

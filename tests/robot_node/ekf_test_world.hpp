@@ -104,6 +104,11 @@ class DenseEkf {
     H.middleCols<2>(off).setIdentity();
     correct(H, z - X_.segment<2>(off), H * P_ * H.transpose() + R, R);
   }
+  void move_landmark(int id, const Vec2& delta, const Eigen::Matrix2d& Q) {
+    const Eigen::Index off = offset(id);
+    X_.segment<2>(off) += delta;
+    P_.block<2, 2>(off, off) += Q;
+  }
   void add(int id, const RangeBearing& y) {
     dense_augment(y, W_, &X_, &P_);
     ids_.push_back(id);

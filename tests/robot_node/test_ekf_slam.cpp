@@ -342,6 +342,43 @@ TEST(EkfSlam, PositionUpdateRefusesUnknownAndBadInput) {
   EXPECT_NEAR(ekf.check_position(3, z, R).d2, d2, 1e-9 * d2);
 }
 
+// move_landmark (a followed mover's own prediction): the landmark's mean moves by
+// delta and its block gains Q; nothing else changes, its cross-covariances
+// included. Against the dense reference with the same step applied by hand.
+TEST(EkfSlam, MoveLandmarkShiftsOneLandmarkAndWidensItsBlockAlone) {
+  const int checked = after_random_operations(0x30F3, [](RandomWorld& w, EkfSlam& ekf, DenseEkf& ref, int k) {
+    const int id = ekf.id_at(w.pick(ekf.num_landmarks()));
+    Eigen::Matrix2d Q;
+    Q << 4e-4, 1e-4, 1e-4, 2e-4;
+    const Vec2 delta(0.03, -0.01);
+    const Eigen::MatrixXd P_before = ekf.covariance();
+    const Eigen::VectorXd x_before = ekf.mean();
+    ASSERT_EQ(ekf.move_landmark(id, delta, Q), EkfStatus::kOk);
+    const int off = StateLayout::landmark_offset(ekf.slot_of(id));
+    Eigen::VectorXd x = x_before;
+    x.segment<2>(off) += delta;
+    Eigen::MatrixXd P = P_before;
+    P.block<2, 2>(off, off) += Q;
+    EXPECT_LT((ekf.mean() - x).cwiseAbs().maxCoeff(), 1e-15) << "operation " << k;
+    EXPECT_LT((ekf.covariance() - P).cwiseAbs().maxCoeff(), 1e-15) << "operation " << k;
+    ref.move_landmark(id, delta, Q);
+    ASSERT_LT(max_difference(ekf, ref), 1e-9) << "operation " << k;
+  });
+  EXPECT_GE(checked, 200);
+  EkfSlam ekf = filter_with_landmark_3();
+  const Eigen::VectorXd x = ekf.mean();
+  const Eigen::MatrixXd P = ekf.covariance();
+  const Eigen::Matrix2d Q = 1e-4 * Eigen::Matrix2d::Identity();
+  EXPECT_EQ(ekf.move_landmark(4, Vec2(0.1, 0.0), Q), EkfStatus::kUnknownLandmark);
+  EXPECT_EQ(ekf.move_landmark(3, Vec2(std::nan(""), 0.0), Q), EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.move_landmark(3, Vec2(0.1, 0.0), -Q), EkfStatus::kBadInput);
+  Eigen::Matrix2d indefinite;
+  indefinite << 1e-4, 2e-4, 2e-4, 1e-4;
+  EXPECT_EQ(ekf.move_landmark(3, Vec2(0.1, 0.0), indefinite), EkfStatus::kBadInput);
+  EXPECT_EQ(ekf.mean(), x);
+  EXPECT_EQ(ekf.covariance(), P);
+}
+
 TEST(EkfSlam, LandmarkOnlyUpdateRefusesUnknownAndBadInput) {
   EkfSlam ekf = filter_with_landmark_3();
   ASSERT_TRUE(ekf.has_landmark(3));

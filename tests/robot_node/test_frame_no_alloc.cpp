@@ -50,6 +50,9 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       k.turn_bias_sigma = 0.01;
       k.turn_scale_walk = k.speed_scale_walk = 1e-3;
       k.turn_bias_walk = 1e-4;
+      // Movers followed in the filter (robot.tracking.correct_pose): moved, corrected.
+      c.robot.tracking.correct_pose = true;
+      c.robot.tracking.return_when_stopped = true;
     }
     c.scenario.dynamism_percent = 50.0;
     c.scenario.landmark_speed_mps = 0.5;
@@ -163,6 +166,17 @@ TEST(FrameNoAlloc, RobotNodesAndMainRobotAllocateNothingPerFrame) {
       EXPECT_GT(started, 10);
       EXPECT_GT(updates, 50);
       EXPECT_GT(ended, 0);
+      std::int64_t followed = 0, corrections = 0;
+      for (const auto& r : robots) {
+        followed += r.counters().movers_followed;
+        corrections += r.counters().mover_corrections;
+      }
+      if (calibrated) {
+        EXPECT_GT(followed, 10);
+        EXPECT_GT(corrections, 10);
+      } else {
+        EXPECT_EQ(followed, 0);
+      }
       // ... sent (TRACKS_<r>), checked and fused by main (GLOBAL_TRACKS).
       EXPECT_GT(t.tracks, 10);
       EXPECT_GT(t.global_tracks, 10);

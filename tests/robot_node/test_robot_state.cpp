@@ -465,11 +465,20 @@ TEST(RobotState, RefusalsPerReasonAreKeptWithTheirTotal) {
 // Prints the largest file and what saving it (text + atomic write) costs.
 TEST(RobotState, EveryStateOfARunLoadsBack) {
   using Clock = std::chrono::steady_clock;
-  for (Mode mode : {Mode::kEkf, Mode::kGated, Mode::kEla, Mode::kConsensus}) {
-    SCOPED_TRACE(to_string(mode));
-    const TeamConfig c = paper(mode, 3);
+  // The last run follows movers in the filter (robot.tracking.correct_pose): its
+  // histories hold their moves.
+  struct Run {
+    Mode mode;
+    bool follow;
+  };
+  for (const auto& [mode, follow] : {Run{Mode::kEkf, false}, Run{Mode::kGated, false}, Run{Mode::kEla, false},
+                                      Run{Mode::kConsensus, false}, Run{Mode::kEla, true}}) {
+    SCOPED_TRACE(std::string(to_string(mode)) + (follow ? ", movers followed" : ""));
+    TeamConfig c = paper(mode, 3);
+    c.robot.tracking.correct_pose = c.robot.tracking.return_when_stopped = follow;
     const auto frames = sensor_frames(c);
     RobotNode node(c.robot, kRobot);
+    int with_moves = 0;
     std::size_t largest = 0;
     double save_ms = 0.0, load_ms = 0.0;
     for (std::size_t f = kRobot - 1; f < frames.size(); f += c.scenario.robots.size()) {
@@ -483,11 +492,17 @@ TEST(RobotState, EveryStateOfARunLoadsBack) {
       ASSERT_TRUE(load_robot_state(text, &copy, &why)) << "frame " << frames[f].frame << ": " << why;
       const auto t2 = Clock::now();
       EXPECT_EQ(save_robot_state(copy), text);
+      if (text.find("[\"move\",") != std::string::npos) ++with_moves;
       if (text.size() > largest) {
         largest = text.size();
         save_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
         load_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
       }
+    }
+    if (follow) {
+      EXPECT_GT(with_moves, 0);
+    } else {
+      EXPECT_EQ(with_moves, 0);
     }
     std::printf("%s: largest state %zu bytes (%d landmarks in the filter at the end): text %.2f ms, load %.2f ms\n",
                 to_string(mode), largest, node.robot().filter().num_landmarks(), save_ms, load_ms);

@@ -67,6 +67,8 @@ struct RobotMetrics {
   std::int64_t filter_full = 0;   // landmarks not added: every slot held something in range
   std::int64_t evictions = 0;     // landmarks that left the full filter to make room
   std::int64_t restored = 0;      // evicted landmarks seen again and back in the filter
+  std::int64_t movers_followed = 0;    // candidate-frames followed as their tracks predict (tracking.correct_pose)
+  std::int64_t mover_corrections = 0;  // ... sightings of them that corrected the filter
   int final_landmarks = 0;        // landmarks in the filter at the end (candidates included)
   // The team map's verdicts on the robot (Robot::apply_team_map), from its counters.
   std::int64_t team_lost = 0;     // team maps fused untested: the robot was lost and saw it itself

@@ -155,6 +155,13 @@ class EkfSlam {
   /// The same measurement's innovation and d2 without changing the filter.
   UpdateReport check_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) const;
 
+  /// Prediction of landmark `id` alone, for a mover the filter follows
+  /// (docs/tracking.md "Movers that correct the pose"): l <- l + delta, P_ll <- P_ll
+  /// + Q, its cross-covariances unchanged (the motion is independent of the rest
+  /// of the state). Q symmetric positive semi-definite; kBadInput otherwise, filter
+  /// unchanged. O(1) after the pending steps.
+  EkfStatus move_landmark(int id, const Eigen::Vector2d& delta, const Eigen::Matrix2d& Q);
+
   /// Add landmark `id` by inverse observation (eq 15) with Jacobian augmentation.
   EkfStatus add_landmark(int id, const RangeBearing& z);
 

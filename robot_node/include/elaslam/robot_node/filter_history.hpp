@@ -37,7 +37,9 @@ class FilterHistory {
 
   /// kHeldPosition: a team increment for a candidate (Robot::hold_team_estimate),
   /// applied as nothing until the candidate is confirmed; then it is a kPosition.
-  enum class Kind : std::uint8_t { kPredict, kUpdate, kLandmarkOnly, kPosition, kAdd, kRemove, kHeldPosition };
+  /// kMove: a followed mover's own prediction (EkfSlam::move_landmark; p the
+  /// displacement, R its noise).
+  enum class Kind : std::uint8_t { kPredict, kUpdate, kLandmarkOnly, kPosition, kAdd, kRemove, kHeldPosition, kMove };
   static const char* to_string(Kind k);
   /// One operation on a filter: the fields its kind uses.
   struct Op {
@@ -48,8 +50,8 @@ class FilterHistory {
     Pose2 increment;                                  // predict: the odometer's reported increment
     Eigen::Matrix3d U = Eigen::Matrix3d::Zero();      // predict
     double dt = 0.0;                                  // predict: the time it spans [s]
-    Eigen::Vector2d p = Eigen::Vector2d::Zero();      // position
-    Eigen::Matrix2d R = Eigen::Matrix2d::Zero();      // position
+    Eigen::Vector2d p = Eigen::Vector2d::Zero();      // position; move: the displacement
+    Eigen::Matrix2d R = Eigen::Matrix2d::Zero();      // position; move: the displacement's noise
   };
   static Op predict(int frame, const Pose2& increment, const Eigen::Matrix3d& U, double dt = 0.0);
   static Op update(int frame, int id, const RangeBearing& z);
@@ -57,6 +59,7 @@ class FilterHistory {
   static Op update_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
   static Op held_position(int frame, int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R);
   static Op add(int frame, int id, const RangeBearing& z);
+  static Op move(int frame, int id, const Eigen::Vector2d& delta, const Eigen::Matrix2d& Q);
   static Op remove(int frame, int id);
 
   /// Apply one operation to a filter; false when the filter refuses it.

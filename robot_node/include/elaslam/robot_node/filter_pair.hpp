@@ -41,6 +41,8 @@ class FilterPair {
   /// (the aided one never gates again: the decision was taken). Nothing happens to
   /// the aided filter when the own one refuses or gates it.
   UpdateReport update(int frame, int id, const RangeBearing& z, bool gate, int* faults);
+  /// A followed mover's own prediction in both filters (EkfSlam::move_landmark).
+  EkfStatus move_landmark(int frame, int id, const Eigen::Vector2d& delta, const Eigen::Matrix2d& Q, int* faults);
   /// A sighting that refines the landmark alone (a candidate's: Schmidt update).
   void update_landmark_only(int frame, int id, const RangeBearing& z, int* faults);
   /// A landmark into both filters at its sighting; nothing to the aided filter when

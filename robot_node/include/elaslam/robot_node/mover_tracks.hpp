@@ -25,6 +25,12 @@ struct TrackingOptions {
   /// A candidate with a track returns to the map (RETURN) only once its track finds
   /// it stopped, not as soon as return_frames sightings agree (a slow mover does).
   bool return_when_stopped = false;
+  /// A candidate whose track is validated and likeliest static or bounded is
+  /// followed: its state in the filter moves as the track predicts, and its
+  /// sightings correct the robot (Robot::follow_movers); other movers stay
+  /// consider states. A followed mover returns to the map only once its track
+  /// finds it stopped.
+  bool correct_pose = false;
   MoverTrackOptions track;
 };
 
@@ -64,6 +70,9 @@ class MoverTracks {
   /// Predicts id's track to t and corrects it with the sighting; false when id has
   /// no track.
   bool see(int id, const TrackSighting& s, double t);
+  /// Predicts id's track to t [s] (nothing when id has no track, or t is not
+  /// later than its time): its estimate before a sighting at t.
+  void predict(int id, double t);
   /// Ends id's track (`returned`: the landmark is STATIC again).
   void end(int id, bool returned);
   /// Ends every track unseen since before t - lost_after_s.

@@ -80,6 +80,8 @@ struct FrameSummary {
   int nis_dof = 0;            // ... and its degrees of freedom (2 per correction)
   bool inconsistent = false;  // the consistency monitor's verdict after this frame
   bool recovered = false;     // ... and the pose covariance was widened (consistency_recover)
+  int movers_followed = 0;    // candidates followed this frame (tracking.correct_pose: validated, static or bounded)
+  int mover_corrections = 0;  // ... whose sightings corrected the filter
   int drifted = 0;            // 1: the own filter had drifted from the aided one: no MOVING finding (own_filter_drifted)
 };
 
@@ -231,6 +233,9 @@ class Robot {
   /// and change its rounding, and tracks must change nothing the robot estimates.
   void queue_track(TrackOp::Kind kind, int id, const RangeBearing& z, const Eigen::Vector2d& anchor, bool may_begin);
   void apply_track_ops();
+  /// tracking.correct_pose: candidates whose tracks are validated and likeliest
+  /// static or bounded move in the filter as their tracks predict (followed).
+  void follow_movers(FrameSummary* s);
   /// A free slot in the filter: true when there is one or one was made by evicting
   /// the held landmark farthest from the robot beyond sensor_range that was not
   /// seen this frame (a STATIC one is archived, a candidate dropped); false when
@@ -280,6 +285,7 @@ class Robot {
   LMap lmap_;     // sole owner of the per-landmark state and its lifecycle
   MoverTracks tracks_;  // the moving landmarks' tracks (not in the state file: a restart starts none)
   std::vector<TrackOp> track_ops_;  // the last frame's (reserved: two per observation)
+  std::vector<int> followed_frame_;  // per landmark id: the last frame follow_movers moved it in (-1: never)
   double clock_s_ = 0.0;  // [s] clock_s()
   ElaGate gate_;  // this frame's verdicts and gate records
   ConsistencyMonitor monitor_;  // NIS of the corrections over a window of frames

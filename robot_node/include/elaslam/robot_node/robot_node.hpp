@@ -53,6 +53,8 @@ struct RobotNodeCounters {
   std::int64_t filter_full = 0;       // landmarks not added because every filter slot was taken
   std::int64_t evictions = 0;         // landmarks that left the full filter to make room (Robot::make_room)
   std::int64_t restored = 0;          // evicted landmarks seen again and back in the filter
+  std::int64_t movers_followed = 0;   // candidate-frames followed as their tracks predict (tracking.correct_pose)
+  std::int64_t mover_corrections = 0; // ... sightings of them that corrected the filter
   std::int64_t inconsistent_frames = 0;  // frames the consistency monitor found the filter inconsistent
   std::int64_t recoveries = 0;           // of those, pose covariance widened (consistency_recover)
   std::int64_t own_drifted_frames = 0;   // frames whose own filter had drifted from the aided one: no MOVING finding
