@@ -184,16 +184,30 @@ void MoverTrack::predict_model(int j, double dt) {
     for (int m = 0; m < kMotionModels; ++m) transition(static_cast<MotionModel>(m), dt, &F_step_[m], &c, &Q_step_[m]);
     step_cached_ = dt;
   }
+  // Every model moves each axis alike: F = [[a I, b I], [c I, d I]] on (p, v), so
+  // F x and F P F' take 2 x 2 blocks (a third of the general 4 x 4 products).
   const TrackMatrix& F = F_step_[j];
+  const double a = F(0, 0), b = F(0, 2), c = F(2, 0), d = F(2, 2);
+  TrackVector& x = x_[j];
+  const Vec2 p = x.head<2>(), v = x.tail<2>();
+  x.head<2>() = a * p + b * v;
+  x.tail<2>() = c * p + d * v;
+  // The spring pulls towards (anchor, 0): x' = F x + (I - F) (anchor, 0).
   if (static_cast<MotionModel>(j) == MotionModel::kBounded) {
-    TrackVector eq = TrackVector::Zero();
-    eq.head<2>() = anchor_;
-    x_[j] = F * x_[j] + (TrackMatrix::Identity() - F) * eq;
-  } else {
-    x_[j] = F * x_[j];
+    x.head<2>() += (1.0 - a) * anchor_;
+    x.tail<2>() -= c * anchor_;
   }
-  P_[j] = F * P_[j] * F.transpose() + Q_step_[j];
-  P_[j] = 0.5 * (P_[j] + P_[j].transpose()).eval();
+  TrackMatrix& P = P_[j];
+  const Mat2 A = P.topLeftCorner<2, 2>(), B = P.topRightCorner<2, 2>(), C = P.bottomRightCorner<2, 2>();
+  const Mat2 Bs = B + B.transpose();
+  const Mat2 App = a * a * A + a * b * Bs + b * b * C;
+  const Mat2 Bpv = a * c * A + a * d * B + b * c * B.transpose() + b * d * C;
+  const Mat2 Cvv = c * c * A + c * d * Bs + d * d * C;
+  P.topLeftCorner<2, 2>() = 0.5 * (App + App.transpose());
+  P.topRightCorner<2, 2>() = Bpv;
+  P.bottomLeftCorner<2, 2>() = Bpv.transpose();
+  P.bottomRightCorner<2, 2>() = 0.5 * (Cvv + Cvv.transpose());
+  P += Q_step_[j];
 }
 
 void MoverTrack::predict(double t) {
@@ -201,7 +215,13 @@ void MoverTrack::predict(double t) {
   const double dt = t - t_;
   // Mixing (IMM step 1): c_j = sum_i pi_ij mu_i; each model starts from the
   // moment-matched mixture of all models, weighted by mu_{i|j} = pi_ij mu_i / c_j.
-  const Eigen::Matrix3d pi = switching(dt);
+  // The switching matrix depends on the interval alone (frames come at a steady
+  // rate): computed once per interval length.
+  if (dt != switching_cached_) {
+    switching_step_ = switching(dt);
+    switching_cached_ = dt;
+  }
+  const Eigen::Matrix3d& pi = switching_step_;
   std::array<double, kMotionModels> c{};
   for (int j = 0; j < kMotionModels; ++j) {
     for (int i = 0; i < kMotionModels; ++i) c[j] += pi(i, j) * mu_[i];

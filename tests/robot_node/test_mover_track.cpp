@@ -152,6 +152,32 @@ TEST(MoverTrack, MixingMomentMatchesTheModelsBeforePrediction) {
   EXPECT_NEAR(mixed.probabilities()[2], c2, 1e-12);
 }
 
+// Each model's prediction (done on 2 x 2 blocks, every model moving both axes
+// alike) is its transition's F x + c and F P F' + Q, on models that hold different
+// velocities and a position away from the bounded model's anchor. The switching
+// matrix is the identity here (an endless sojourn), so mixing changes nothing.
+TEST(MoverTrack, EachModelsPredictionIsItsTransition) {
+  MoverTrackOptions o;
+  o.model_sojourn_s = 1e300;
+  MoverTrack track(o);
+  Observer obs(11);
+  const auto path = [](double t) { return constant_velocity(t, Vec2(3.0, 1.0), Vec2(0.4, -0.3)); };
+  run_track(&track, &obs, path, 30, [](int, const MoverTrack&, const Truth&) {});
+  ASSERT_GT((track.model_mean(MotionModel::kBounded).head<2>() - track.anchor()).norm(), 0.3);
+  MoverTrack next = track;
+  next.predict(track.time() + kDt);
+  for (int j = 0; j < kMotionModels; ++j) {
+    const auto m = static_cast<MotionModel>(j);
+    TrackMatrix F, Q;
+    TrackVector c;
+    track.transition(m, kDt, &F, &c, &Q);
+    const TrackVector x = F * track.model_mean(m) + c;
+    const TrackMatrix P = F * track.model_covariance(m) * F.transpose() + Q;
+    EXPECT_LT((next.model_mean(m) - x).norm(), 1e-12) << "model " << j;
+    EXPECT_LT((next.model_covariance(m) - P).norm(), 1e-12 * P.norm()) << "model " << j;
+  }
+}
+
 TEST(MoverTrack, BoundedModelIsTheDampedSpringItDiscretises) {
   MoverTrackOptions o;
   o.bounded_omega_rad_s = 1.0;

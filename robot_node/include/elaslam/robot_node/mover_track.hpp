@@ -178,6 +178,9 @@ class MoverTrack {
   // Each model's F and Q for the last step length predicted (predict_model).
   double step_cached_ = -1.0;
   std::array<TrackMatrix, kMotionModels> F_step_{}, Q_step_{};
+  // The switching matrix for the last interval predicted over (predict).
+  double switching_cached_ = -1.0;
+  Eigen::Matrix3d switching_step_ = Eigen::Matrix3d::Identity();
   double mean_nis_ = 2.0;     // running mean of the unscaled combined innovations' d2
   double noise_scale_ = 1.0;  // lambda
   bool pending_ = false;
