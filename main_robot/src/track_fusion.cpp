@@ -76,6 +76,24 @@ double covariance_intersection(const TrackEstimate& a, const TrackEstimate& b, T
   return w;
 }
 
+TrackEstimate predict_track(const TrackEstimate& e, double dt) {
+  TrackEstimate out = e;
+  if (!(dt > 0.0)) return out;
+  Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
+  F(0, 2) = F(1, 3) = dt;
+  const double q = kTrackPredictionAccelSigma * kTrackPredictionAccelSigma;
+  Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
+  for (int k = 0; k < 2; ++k) {
+    Q(k, k) = q * dt * dt * dt / 3.0;
+    Q(k, k + 2) = Q(k + 2, k) = q * dt * dt / 2.0;
+    Q(k + 2, k + 2) = q * dt;
+  }
+  out.x = F * e.x;
+  out.P = F * e.P * F.transpose() + Q;
+  out.P = 0.5 * (out.P + out.P.transpose()).eval();
+  return out;
+}
+
 TrackFusion::TrackFusion(int max_age_frames) : max_age_frames_(max_age_frames) {
   const std::size_t most = static_cast<std::size_t>(contract::kMaxRobots) * kCapacity;
   order_.reserve(most);
@@ -110,8 +128,12 @@ TrackFusion::Take TrackFusion::take(const track_list_t& m, std::string* problem,
     if ((a.received >> m.chunk) & 1u) return Take::kStale;
   } else {
     // A newer frame: the publication still arriving (if any) is taken as it came.
-    if (a.frame >= 0) std::swap(r.fused, a);
+    if (a.frame >= 0) {
+      std::swap(r.fused, a);
+      measure_period(&r, a);
+    }
     a.frame = m.frame;
+    a.utime = m.utime;
     a.num_chunks = m.num_chunks;
     a.received = 0;
   }
@@ -137,6 +159,7 @@ TrackFusion::Take TrackFusion::take(const track_list_t& m, std::string* problem,
   a.received |= 1u << m.chunk;
   if (a.complete()) {
     std::swap(r.fused, a);
+    measure_period(&r, a);
     a.frame = -1;
     a.num_chunks = 0;
     a.received = 0;
@@ -144,8 +167,24 @@ TrackFusion::Take TrackFusion::take(const track_list_t& m, std::string* problem,
   return Take::kTaken;
 }
 
+// The stamps are the robot's frames' (checked finite integers): a period outside
+// (0, 10] s is not a frame rate (a replay restarted, a clock stepped) and is not
+// taken.
+void TrackFusion::measure_period(RobotTracks* r, const Publication& older) {
+  const Publication& newer = r->fused;
+  if (older.frame < 0 || newer.frame <= older.frame) return;
+  const double period = (static_cast<double>(newer.utime) - static_cast<double>(older.utime)) * 1e-6 /
+                        (newer.frame - older.frame);
+  if (period > 0.0 && period <= 10.0) r->period_s = period;
+}
+
+double TrackFusion::robot_period_s(int robot_id) const {
+  return robots_[static_cast<std::size_t>(robot_id - 1)].period_s;
+}
+
 void TrackFusion::forget(int robot_id) {
   RobotTracks& r = robots_[static_cast<std::size_t>(robot_id - 1)];
+  r.period_s = 0.0;
   for (Publication* p : {&r.fused, &r.arriving}) {
     p->frame = -1;
     p->num_chunks = 0;
@@ -183,7 +222,10 @@ const std::vector<FusedTrack>& TrackFusion::fuse(int frame) {
     bool first = true;
     for (; i < order_.size() && order_[i].first == id; ++i) {
       const int r = order_[i].second / kCapacity, k = order_[i].second % kCapacity;
-      const TrackEstimate& e = robots_[static_cast<std::size_t>(r)].fused.tracks[static_cast<std::size_t>(k)];
+      const RobotTracks& rt = robots_[static_cast<std::size_t>(r)];
+      // Predicted to the frame fused, by the frames between at the robot's period.
+      const TrackEstimate e =
+          predict_track(rt.fused.tracks[static_cast<std::size_t>(k)], (frame - rt.fused.frame) * rt.period_s);
       if (first) {
         f.estimate = e;
         first = false;

@@ -90,6 +90,49 @@ TEST(TrackFusion, NewestTracksPerRobotWithinTheAgeBound) {
   EXPECT_EQ(fusion.robot_frame(1), -1);
 }
 
+// Each robot's tracks are predicted to the frame fused at the robot's own frame
+// period, measured from its publications' stamps: robot 1's track of a mover at
+// 1 m/s sent at frame 9 and robot 2's at frame 10, both at 10 Hz, are fused as two
+// estimates of frame 10. Until a robot's period is known its tracks go as sent.
+TEST(TrackFusion, TracksArePredictedToTheFrameFusedAtEachRobotsPeriod) {
+  TrackFusion fusion(10);
+  const auto stamped = [](int robot, int frame, double x) {
+    track_list_t m = test::tracks_msg(robot, frame, {test::track_of(3, x, 0, 1, 0)});
+    m.utime = 1'000'000 + std::int64_t{100'000} * frame;
+    return m;
+  };
+  fusion.take(stamped(1, 9, 0.9));
+  EXPECT_EQ(fusion.robot_period_s(1), 0.0);
+  const std::vector<FusedTrack>& alone = fusion.fuse(10);  // period unknown: as sent
+  ASSERT_EQ(alone.size(), 1u);
+  EXPECT_EQ(alone[0].estimate.x(0), 0.9);
+  fusion.take(stamped(1, 8, 0.8));  // older: stale, nothing learnt
+  fusion.take(stamped(2, 9, 0.9));
+  fusion.take(stamped(2, 10, 1.0));
+  EXPECT_NEAR(fusion.robot_period_s(2), 0.1, 1e-12);
+  fusion.take(stamped(1, 10, 1.0));
+  fusion.take(stamped(1, 11, 1.1));
+  EXPECT_NEAR(fusion.robot_period_s(1), 0.1, 1e-12);
+  const std::vector<FusedTrack>& f = fusion.fuse(12);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_EQ(f[0].contributors, 0b11);
+  // Robot 1's of frame 11 predicted 0.1 s, robot 2's of frame 10 0.2 s: both at 1.2 m.
+  EXPECT_NEAR(f[0].estimate.x(0), 1.2, 1e-9);
+  // The prediction widens the covariance by the constant-velocity model's Q.
+  const TrackEstimate one = predict_track(TrackEstimate{3, Eigen::Vector4d(0, 0, 1, 0),
+                                                        Eigen::Vector4d(0.01, 0.01, 0.04, 0.04).asDiagonal(), {}},
+                                          0.2);
+  const double q = kTrackPredictionAccelSigma * kTrackPredictionAccelSigma;
+  EXPECT_NEAR(one.x(0), 0.2, 1e-15);
+  EXPECT_NEAR(one.P(0, 0), 0.01 + 0.04 * 0.04 + q * 0.008 / 3.0, 1e-15);
+  EXPECT_NEAR(one.P(0, 2), 0.04 * 0.2 + q * 0.04 / 2.0, 1e-15);
+  EXPECT_NEAR(one.P(2, 2), 0.04 + q * 0.2, 1e-15);
+  EXPECT_EQ(predict_track(one, 0.0).x, one.x);
+  EXPECT_EQ(predict_track(one, -0.1).P, one.P);
+  fusion.forget(2);
+  EXPECT_EQ(fusion.robot_period_s(2), 0.0);
+}
+
 using test::team_of_three;
 
 // GIVEN main holding robot 1's track of landmark 7 and robot 2's of landmark 9

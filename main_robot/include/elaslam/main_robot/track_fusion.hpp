@@ -8,8 +8,9 @@
 // robot's pose error, so their errors are correlated by an unknown amount, and
 // covariance intersection is consistent whatever that correlation is (Julier and
 // Uhlmann 1997); a Kalman fusion that assumed them independent would be
-// overconfident. The tracks are fused as sent, each at its robot's frame: none is
-// predicted to a common time.
+// overconfident. Before fusion each track is predicted to the time of the frame
+// fused (predict_track): a robot's tracks of frame k - 1 and another's of frame k
+// are then estimates of one moment.
 //
 // Fixed memory: every buffer is sized at construction; take() and fuse() allocate
 // nothing.
@@ -56,6 +57,16 @@ struct FusedTrack {
 /// too. The model probabilities are averaged with the same weights. Returns w.
 double covariance_intersection(const TrackEstimate& a, const TrackEstimate& b, TrackEstimate* fused);
 
+/// The white acceleration [m / s^1.5] of predict_track's constant-velocity model:
+/// the robots' tracks' own default (robot.tracking.cv_accel_sigma).
+constexpr double kTrackPredictionAccelSigma = 0.2;
+
+/// A track predicted dt [s] ahead by constant velocity: p += v dt, P <- F P F' + Q,
+/// Q the white acceleration's (kTrackPredictionAccelSigma). The model
+/// probabilities are kept: over the fraction of a second between two robots'
+/// frames a mover keeps its motion (the tracks' model_sojourn_s is seconds).
+TrackEstimate predict_track(const TrackEstimate& e, double dt);
+
 class TrackFusion {
  public:
   /// Tracks of a TRACKS message this many frames older than the frame fused are
@@ -88,10 +99,14 @@ class TrackFusion {
   int robot_tracks(int robot_id) const;
 
   /// Per landmark tracked by any robot whose newest TRACKS is at most max_age_frames
-  /// older than `frame`: its tracks fused, in ascending robot id (covariance
-  /// intersection pairwise: the running fusion with the next robot's track). In
-  /// ascending landmark id; valid until the next call.
+  /// older than `frame`: its tracks, each predicted to `frame`'s time, fused in
+  /// ascending robot id (covariance intersection pairwise: the running fusion with
+  /// the next robot's track). A robot's frame period is measured from its own
+  /// publications' stamps (two with different frames); until then its tracks are
+  /// fused as sent. In ascending landmark id; valid until the next call.
   const std::vector<FusedTrack>& fuse(int frame);
+  /// Robot r's frame period measured from its publications [s], 0: not yet.
+  double robot_period_s(int robot_id) const;
 
  private:
   // Tracks one publication can carry: contract::kMaxTrackChunks chunks of
@@ -100,6 +115,7 @@ class TrackFusion {
   // One publication: chunk c's tracks at [c * kMaxTracks, c * kMaxTracks + counts[c]).
   struct Publication {
     int frame = -1;
+    std::int64_t utime = 0;  // its stamp (the robot's frame's)
     int num_chunks = 0;
     unsigned received = 0;  // bit c: chunk c taken
     std::array<int, contract::kMaxTrackChunks> counts{};
@@ -110,7 +126,10 @@ class TrackFusion {
   struct RobotTracks {
     Publication fused;    // the tracks fuse() uses
     Publication arriving; // the chunks of a newer frame, until all have come
+    double period_s = 0.0;  // frame period from two publications' stamps, 0: not yet
   };
+  /// r.fused has just replaced `older`: the period between their stamps.
+  static void measure_period(RobotTracks* r, const Publication& older);
   int max_age_frames_;
   std::array<RobotTracks, contract::kMaxRobots> robots_;
   std::vector<std::pair<int, int>> order_;  // (landmark id, robot index * kCapacity + slot), sorted
