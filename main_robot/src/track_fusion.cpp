@@ -79,15 +79,8 @@ double covariance_intersection(const TrackEstimate& a, const TrackEstimate& b, T
 TrackEstimate predict_track(const TrackEstimate& e, double dt) {
   TrackEstimate out = e;
   if (!(dt > 0.0)) return out;
-  Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
-  F(0, 2) = F(1, 3) = dt;
-  const double q = kTrackPredictionAccelSigma * kTrackPredictionAccelSigma;
-  Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
-  for (int k = 0; k < 2; ++k) {
-    Q(k, k) = q * dt * dt * dt / 3.0;
-    Q(k, k + 2) = Q(k + 2, k) = q * dt * dt / 2.0;
-    Q(k + 2, k + 2) = q * dt;
-  }
+  Eigen::Matrix4d F, Q;
+  constant_velocity_step(dt, kDefaultCvAccelSigma, &F, &Q);
   out.x = F * e.x;
   out.P = F * e.P * F.transpose() + Q;
   out.P = 0.5 * (out.P + out.P.transpose()).eval();

@@ -10,6 +10,7 @@
 #include <Eigen/LU>
 
 #include "elaslam/common/stats.hpp"
+#include "elaslam/common/track_motion.hpp"
 
 namespace elaslam {
 namespace {
@@ -120,7 +121,7 @@ void MoverTrack::start(const TrackSighting& s, const Vec2& anchor, double t) {
 }
 
 void MoverTrack::transition(MotionModel m, double dt, TrackMatrix* F, TrackVector* c, TrackMatrix* Q) const {
-  const double dt2 = dt * dt, dt3 = dt2 * dt;
+  const double dt2 = dt * dt;
   c->setZero();
   switch (m) {
     case MotionModel::kStatic: {
@@ -160,9 +161,7 @@ void MoverTrack::transition(MotionModel m, double dt, TrackMatrix* F, TrackVecto
       return;
     }
     case MotionModel::kConstantVelocity: {
-      const double q = options_.cv_accel_sigma * options_.cv_accel_sigma;
-      *F = per_axis(1.0, dt, 0.0, 1.0);
-      *Q = per_axis(q * dt3 / 3, q * dt2 / 2, q * dt2 / 2, q * dt);
+      constant_velocity_step(dt, options_.cv_accel_sigma, F, Q);
       return;
     }
   }

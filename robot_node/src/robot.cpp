@@ -445,7 +445,6 @@ void Robot::follow_movers(FrameSummary* s) {
     // positive part.
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(Q);
     Q = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
-    Q = 0.5 * (Q + Q.transpose()).eval();
     if (filters_.move_landmark(last_frame_, id, delta, Q, &s->filter_faults) != EkfStatus::kOk) {
       ++s->filter_faults;
       continue;

@@ -91,9 +91,9 @@ Eigen::Vector2d vec2(const json& v, const std::string& where, double bound) {
   return {real(a[0], where + "[0]", -bound, bound), real(a[1], where + "[1]", -bound, bound)};
 }
 
-// A 2x2 covariance, row-major: finite, variances in [0, kMaxVariance], symmetric and
-// PSD within rounding; unless all zero (never set), within limits.cov_* like a message's.
-Eigen::Matrix2d cov2(const json& v, const std::string& where, const MessageLimits& lim) {
+// A 2x2 symmetric positive semi-definite matrix, row-major: finite, variances in
+// [0, kMaxVariance], symmetric and PSD within rounding.
+Eigen::Matrix2d psd2(const json& v, const std::string& where) {
   const json& a = array(v, where, 4, 4);
   Eigen::Matrix2d C;
   for (int k = 0; k < 4; ++k) C(k / 2, k % 2) = real(a[static_cast<std::size_t>(k)], where + "[" + std::to_string(k) + "]", -kMaxVariance, kMaxVariance);
@@ -101,6 +101,13 @@ Eigen::Matrix2d cov2(const json& v, const std::string& where, const MessageLimit
   const double scale = std::max(C(0, 0) + C(1, 1), 1e-300);
   if (std::fabs(C(0, 1) - C(1, 0)) > 1e-6 * scale) fail(where, "not symmetric");
   if (C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0) < -1e-9 * scale * scale) fail(where, "not positive semi-definite");
+  return C;
+}
+
+// A 2x2 covariance: psd2, and unless all zero (never set), within limits.cov_* like
+// a message's.
+Eigen::Matrix2d cov2(const json& v, const std::string& where, const MessageLimits& lim) {
+  const Eigen::Matrix2d C = psd2(v, where);
   if (!C.isZero(0.0))
     if (const std::string bad = check_cov2(C, lim, "covariance"); !bad.empty()) fail(where, bad);
   return C;
@@ -638,16 +645,10 @@ FilterHistory::Op RobotStateAccess::parse_op(const json& entry, const std::strin
         fail(w + "[4] (R)", "not symmetric positive definite");
       break;
     }
-    case FilterHistory::Kind::kMove: {
+    case FilterHistory::Kind::kMove:
       op.p = vec2(j[3], w + "[3] (displacement)", bound);
-      const json& Q = array(j[4], w + "[4] (Q)", 4, 4);
-      for (int e = 0; e < 4; ++e)
-        op.R(e / 2, e % 2) = real(Q[static_cast<std::size_t>(e)], w + "[4][" + std::to_string(e) + "]", -kMaxVariance, kMaxVariance);
-      if (!(op.R(0, 0) >= 0.0) || !(op.R(1, 1) >= 0.0) || op.R.determinant() < -1e-12 * op.R.trace() * op.R.trace() ||
-          std::fabs(op.R(0, 1) - op.R(1, 0)) > 1e-9 * op.R.trace())
-        fail(w + "[4] (Q)", "not symmetric positive semi-definite");
+      op.R = psd2(j[4], w + "[4] (Q)");  // a process noise: no floor, unlike a covariance
       break;
-    }
     case FilterHistory::Kind::kRemove: break;
   }
   return op;

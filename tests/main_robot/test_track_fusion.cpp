@@ -92,8 +92,8 @@ TEST(TrackFusion, NewestTracksPerRobotWithinTheAgeBound) {
 
 // Each robot's tracks are predicted to the frame fused at the robot's own frame
 // period, measured from its publications' stamps: robot 1's track of a mover at
-// 1 m/s sent at frame 9 and robot 2's at frame 10, both at 10 Hz, are fused as two
-// estimates of frame 10. Until a robot's period is known its tracks go as sent.
+// 1 m/s sent at frame 11 and robot 2's at frame 10, both at 10 Hz, are fused as two
+// estimates of frame 12. Until a robot's period is known its tracks go as sent.
 TEST(TrackFusion, TracksArePredictedToTheFrameFusedAtEachRobotsPeriod) {
   TrackFusion fusion(10);
   const auto stamped = [](int robot, int frame, double x) {
@@ -122,7 +122,7 @@ TEST(TrackFusion, TracksArePredictedToTheFrameFusedAtEachRobotsPeriod) {
   const TrackEstimate one = predict_track(TrackEstimate{3, Eigen::Vector4d(0, 0, 1, 0),
                                                         Eigen::Vector4d(0.01, 0.01, 0.04, 0.04).asDiagonal(), {}},
                                           0.2);
-  const double q = kTrackPredictionAccelSigma * kTrackPredictionAccelSigma;
+  const double q = kDefaultCvAccelSigma * kDefaultCvAccelSigma;
   EXPECT_NEAR(one.x(0), 0.2, 1e-15);
   EXPECT_NEAR(one.P(0, 0), 0.01 + 0.04 * 0.04 + q * 0.008 / 3.0, 1e-15);
   EXPECT_NEAR(one.P(0, 2), 0.04 * 0.2 + q * 0.04 / 2.0, 1e-15);

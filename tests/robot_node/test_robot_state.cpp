@@ -644,6 +644,16 @@ TEST_F(RobotStateCorrupt, ABadHistoryIsRefused) {
   expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update][2] = 100000; }), at + "[2] (id)");
   expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update][3][0] = -1.0; }), at + "[3][0] (range)");
   expect_refused(edited([&](json& s) { s["robot"]["history"]["ops"][update].push_back(1.0); }), at);
+  // A followed mover's move (robot.tracking.correct_pose) whose noise is not a
+  // covariance: a negative variance, an indefinite matrix.
+  const auto move_with = [&](const std::vector<double>& Q) {
+    return edited([&](json& s) {
+      json& op = s["robot"]["history"]["ops"][update];
+      op = json::array({"move", op[1], op[2], json::array({0.0, 0.0}), Q});
+    });
+  };
+  expect_refused(move_with({-1e-4, 0.0, 0.0, 1e-4}), at + "[4] (Q)");
+  expect_refused(move_with({1e-4, 2e-4, 2e-4, 1e-4}), at + "[4] (Q)");
   // Well-formed, but not what happened: the replay misses the saved filter.
   expect_refused(edited([&](json& s) {
     s["robot"]["history"]["ops"][update][3][0] = s["robot"]["history"]["ops"][update][3][0].get<double>() + 0.5;

@@ -25,6 +25,7 @@
 
 #include "elaslam/common/contract.hpp"
 #include "elaslam/common/limits.hpp"
+#include "elaslam/common/track_motion.hpp"
 #include "elaslam/track_list_t.hpp"
 
 namespace elaslam {
@@ -57,12 +58,9 @@ struct FusedTrack {
 /// too. The model probabilities are averaged with the same weights. Returns w.
 double covariance_intersection(const TrackEstimate& a, const TrackEstimate& b, TrackEstimate* fused);
 
-/// The white acceleration [m / s^1.5] of predict_track's constant-velocity model:
-/// the robots' tracks' own default (robot.tracking.cv_accel_sigma).
-constexpr double kTrackPredictionAccelSigma = 0.2;
-
-/// A track predicted dt [s] ahead by constant velocity: p += v dt, P <- F P F' + Q,
-/// Q the white acceleration's (kTrackPredictionAccelSigma). The model
+/// A track predicted dt [s] ahead by constant velocity (constant_velocity_step with
+/// the robots' tracks' default white acceleration, kDefaultCvAccelSigma): p += v
+/// dt, P <- F P F' + Q. The model
 /// probabilities are kept: over the fraction of a second between two robots'
 /// frames a mover keeps its motion (the tracks' model_sojourn_s is seconds).
 TrackEstimate predict_track(const TrackEstimate& e, double dt);

@@ -156,7 +156,7 @@ class EkfSlam {
   UpdateReport check_position(int id, const Eigen::Vector2d& z, const Eigen::Matrix2d& R) const;
 
   /// Prediction of landmark `id` alone, for a mover the filter follows
-  /// (docs/tracking.md "Movers that correct the pose"): l <- l + delta, P_ll <- P_ll
+  /// (docs/tracking.md "Followed movers"): l <- l + delta, P_ll <- P_ll
   /// + Q, its cross-covariances unchanged (the motion is independent of the rest
   /// of the state). Q symmetric positive semi-definite; kBadInput otherwise, filter
   /// unchanged. O(1) after the pending steps.

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include "elaslam/common/geometry.hpp"
+#include "elaslam/common/track_motion.hpp"
 #include "elaslam/robot_node/models.hpp"
 
 namespace elaslam {
@@ -56,7 +57,7 @@ struct MoverTrackOptions {
   double bounded_damping = 0.7;
   /// Constant velocity: standard deviation of the white acceleration's spectral
   /// density [m / s^1.5]: the velocity's random walk per sqrt(s).
-  double cv_accel_sigma = 0.2;
+  double cv_accel_sigma = kDefaultCvAccelSigma;
   /// A new track's velocity: zero with this standard deviation per axis [m/s].
   double initial_speed_sigma_mps = 0.5;
   /// A new track's model probabilities (static, bounded, constant velocity): it
