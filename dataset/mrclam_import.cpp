@@ -86,7 +86,7 @@ int import_main(int argc, char** argv) {
     std::cout << "mrclam_import: " << a.config_path << ": valid\n";
     return 0;
   }
-  try {
+  return mrclam::run_step("mrclam_import", [&] {
     const mrclam::Dataset d = mrclam::Dataset::load(a.dataset_dir, o.robots);
     const mrclam::FrameSource src(d, o);
     // Its directory is made when missing (runs/ on a fresh clone), as run_dataset does.
@@ -102,14 +102,8 @@ int import_main(int argc, char** argv) {
     if (!write_log(src, mrclam::import_run_info(src, o, a.dataset_dir, effective_yaml), o.rate_hz, &log, a.out_path)) return cli::kExitFailure;
     std::cout << "mrclam_import: " << a.dataset_dir << " -> " << a.out_path << "\n";
     mrclam::print_import_stats(std::cout, src.stats(), o.rate_hz);
-  } catch (const mrclam::DatasetError& e) {
-    std::fprintf(stderr, "mrclam_import: %s\n", e.what());
-    return cli::kExitFailure;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "mrclam_import: %s\n", e.what());
-    return cli::kExitBadInput;
-  }
-  return 0;
+    return cli::kExitOk;
+  });
 }
 
 }  // namespace

@@ -77,16 +77,13 @@ int stats_main(int argc, char** argv) {
     return 0;
   }
   nlohmann::json out;
-  try {
-    const mrclam::Dataset d = mrclam::Dataset::load(a.stats.dataset_dir, a.stats.ids);
-    out = mrclam::noise_report(d, a.stats, stdout);
-  } catch (const mrclam::DatasetError& e) {
-    std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
-    return cli::kExitFailure;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "mrclam_stats: %s\n", e.what());
-    return cli::kExitBadInput;
-  }
+  if (const int rc = mrclam::run_step("mrclam_stats", [&] {
+        const mrclam::Dataset d = mrclam::Dataset::load(a.stats.dataset_dir, a.stats.ids);
+        out = mrclam::noise_report(d, a.stats, stdout);
+        return cli::kExitOk;
+      });
+      rc != cli::kExitOk)
+    return rc;
   if (!a.json_path.empty()) {
     std::ofstream f(a.json_path);
     f << out.dump(2) << "\n";

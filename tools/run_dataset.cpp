@@ -103,15 +103,12 @@ int run_dataset_main(int argc, char** argv) {
     return 0;
   }
   DatasetSources src;
-  try {
-    src = load_sources(a.dataset_dir, cfg.dataset, a.report || !a.barcodes, a.report || a.barcodes);
-  } catch (const mrclam::DatasetError& e) {
-    std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return cli::kExitFailure;
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "run_dataset: %s\n", e.what());
-    return cli::kExitBadInput;
-  }
+  if (const int rc = mrclam::run_step("run_dataset", [&] {
+        src = load_sources(a.dataset_dir, cfg.dataset, a.report || !a.barcodes, a.report || a.barcodes);
+        return cli::kExitOk;
+      });
+      rc != cli::kExitOk)
+    return rc;
   const std::vector<DeadReckoning> dr = dead_reckoning(src.any());
   std::vector<DatasetRun> runs = dataset_runs(modes, a.report, a.barcodes);
   run_dataset_runs(cfg, src, a.jobs, &runs);

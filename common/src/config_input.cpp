@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "config_input.hpp"
 
+#include "file_open.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -16,14 +18,6 @@ namespace elaslam::config::input {
 namespace {
 
 const std::string kLimit = "the limit of " + std::to_string(kMaxFileBytes) + " bytes (1 MiB) for a configuration file";
-
-/// Closes a descriptor on every way out.
-struct Fd {
-  int fd;
-  ~Fd() {
-    if (fd >= 0) ::close(fd);
-  }
-};
 
 std::string kind_of(const struct stat& st) {
   if (S_ISDIR(st.st_mode)) return "a directory";
@@ -151,21 +145,18 @@ class Walk {
 }  // namespace
 
 bool read_file(const std::string& path, std::string* text, std::string* why) {
-  // O_NONBLOCK: opening a FIFO must not wait for a writer (it is refused below).
-  Fd f{::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK)};
-  if (f.fd < 0) {
-    const int e = errno;
-    *why = std::string("cannot open the file: ") + (e == ENOENT ? "no such file" : std::strerror(e));
-    return false;
-  }
+  files::Fd f;
   struct stat st {};
-  if (::fstat(f.fd, &st) != 0) {
-    *why = std::string("cannot read the file: ") + std::strerror(errno);
-    return false;
-  }
-  if (!S_ISREG(st.st_mode)) {
-    *why = "not a regular file (" + kind_of(st) + "): a configuration is a YAML file";
-    return false;
+  int e = 0;
+  switch (files::open_regular(path, 0, &f, &st, &e)) {
+    case files::OpenStep::kDone: break;
+    case files::OpenStep::kOpen:
+      *why = std::string("cannot open the file: ") + (e == ENOENT ? "no such file" : std::strerror(e));
+      return false;
+    case files::OpenStep::kStat: *why = std::string("cannot read the file: ") + std::strerror(e); return false;
+    case files::OpenStep::kNotRegular:
+      *why = "not a regular file (" + kind_of(st) + "): a configuration is a YAML file";
+      return false;
   }
   if (static_cast<std::size_t>(st.st_size) > kMaxFileBytes) {
     *why = "the file has " + std::to_string(st.st_size) + " bytes, larger than " + kLimit;

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "elaslam/common/secret_file.hpp"
 
+#include "file_open.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -19,15 +21,25 @@ std::string mode_text(mode_t m) {
   return buf;
 }
 
-/// Closes a descriptor on every way out.
-struct Fd {
-  int fd = -1;
-  ~Fd() {
-    if (fd >= 0) ::close(fd);
-  }
-};
-
 }  // namespace
+
+Fd::~Fd() {
+  if (fd >= 0) ::close(fd);
+}
+
+OpenStep open_regular(const std::string& path, int extra_flags, Fd* f, struct stat* st, int* error) {
+  *error = 0;
+  f->fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK | extra_flags);
+  if (f->fd < 0) {
+    *error = errno;
+    return OpenStep::kOpen;
+  }
+  if (::fstat(f->fd, st) != 0) {
+    *error = errno;
+    return OpenStep::kStat;
+  }
+  return S_ISREG(st->st_mode) ? OpenStep::kDone : OpenStep::kNotRegular;
+}
 
 bool in_credentials_directory(const std::string& path) {
   const char* dir = std::getenv("CREDENTIALS_DIRECTORY");
@@ -53,18 +65,10 @@ bool read_secret_file(const std::string& path, const std::string& what, std::uin
     return false;
   }
   Fd f;
-  f.fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-  if (f.fd < 0) {
-    *why = where + std::strerror(errno);
-    return false;
-  }
   struct stat st {};
-  if (::fstat(f.fd, &st) != 0) {
-    *why = where + std::strerror(errno);
-    return false;
-  }
-  if (!S_ISREG(st.st_mode)) {
-    *why = where + "is not a regular file";
+  int error = 0;
+  if (const OpenStep step = open_regular(path, O_NOFOLLOW, &f, &st, &error); step != OpenStep::kDone) {
+    *why = where + (step == OpenStep::kNotRegular ? "is not a regular file" : std::strerror(error));
     return false;
   }
   if (in_credentials_directory(path)) {

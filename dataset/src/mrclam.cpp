@@ -8,6 +8,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "elaslam/common/cli.hpp"
 #include "elaslam/common/contract.hpp"
 
 namespace elaslam::mrclam {
@@ -131,6 +132,18 @@ RobotSeries load_robot(const std::string& dir, int id) {
 
 
 }  // namespace
+
+int run_step(const char* program, const std::function<int()>& step) {
+  try {
+    return step();
+  } catch (const DatasetError& e) {
+    std::fprintf(stderr, "%s: %s\n", program, e.what());
+    return cli::kExitFailure;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s: %s\n", program, e.what());
+    return cli::kExitBadInput;
+  }
+}
 
 // ---- options -------------------------------------------------------------------------
 

@@ -49,6 +49,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -65,6 +66,12 @@ namespace elaslam::mrclam {
 struct DatasetError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+
+/// Runs `step` of a dataset program and returns its exit code; when it throws, "program:
+/// message" on stderr and the code the error earns: cli::kExitFailure for a
+/// DatasetError (the data), cli::kExitBadInput for std::invalid_argument (a value the
+/// user gave). Anything else propagates (to cli::guarded_main).
+int run_step(const char* program, const std::function<int()>& step);
 
 constexpr int kMaxRobotSubject = 5;    // subjects 1..5 are the robots
 constexpr int kFirstLandmarkSubject = 6;  // subjects 6..20 the static landmarks
