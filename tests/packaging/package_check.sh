@@ -69,7 +69,7 @@ expected_files() {
       done
       return 0 ;;
     elaslam-spy)
-      echo "$p/bin/elaslam-spy"; echo "$p/bin/elaslam-logplayer-gui"
+      echo "$p/bin/elaslam-spy"; echo "$p/bin/elaslam-logplayer-gui"; echo "$p/share/elaslam/tools/lcm_java_lib.sh"
       [ -f "$BUILD/elaslam_types.jar" ] && echo "$p/share/elaslam/java/elaslam_types.jar"
       return 0 ;;
     elaslam-dev)  # packaging/dev.cmake; tests/packaging/embed_check.sh builds against it
