@@ -21,7 +21,6 @@ set -euo pipefail
 
 SELF="$(readlink -f "${BASH_SOURCE[0]}")"
 HERE="$(dirname "$SELF")"
-PROG="$(basename "${BASH_SOURCE[0]}")"
 
 usage() {
   cat <<EOF
@@ -39,15 +38,11 @@ Start LCM's log player (a GUI) with the elaslam message types, on Java 17.
 Needs a display (DISPLAY): a desktop, ssh -X, or xvfb-run $PROG.
 EOF
 }
-die() { echo "$PROG: $*" >&2; exit 1; }
-
-version() {
-  local f
-  for f in "$HERE/../share/elaslam/VERSION" "${BUILD_DIR:-${ELASLAM_BUILD_DIR:-$HERE/../build}}/share/elaslam/VERSION"; do
-    [ -f "$f" ] && { echo "${PROG%.sh} ($(cat "$f"))"; return; }
-  done
-  echo "${PROG%.sh} (elaslam, version unknown: no build's share/elaslam/VERSION)"
-}
+# PROG, die, version, find_lcm_jar: beside this script, or installed in ../share/elaslam/tools.
+LIB="$HERE/lcm_java_lib.sh"
+[ -f "$LIB" ] || LIB="$HERE/../share/elaslam/tools/lcm_java_lib.sh"
+# shellcheck source=tools/lcm_java_lib.sh
+. "$LIB"
 
 BUILD_DIR=""
 ARGS=()
@@ -78,9 +73,7 @@ fi
 
 JAVA="$(command -v java || true)"
 [ -n "$JAVA" ] || die "no Java runtime (java) found: apt-get install default-jre"
-LCM_JAR=""
-command -v pkg-config >/dev/null 2>&1 && LCM_JAR="$(pkg-config --variable=classpath lcm-java 2>/dev/null || true)"
-[ -n "$LCM_JAR" ] && [ -f "$LCM_JAR" ] || LCM_JAR=/usr/share/java/lcm.jar
+find_lcm_jar
 [ -f "$LCM_JAR" ] || die "lcm.jar (LCM's Java library with the log player) not found: apt-get install liblcm-java"
 
 # --lcm-url from $LCM_DEFAULT_URL unless given (the player reads only its option).

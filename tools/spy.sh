@@ -25,7 +25,6 @@ set -euo pipefail
 
 SELF="$(readlink -f "${BASH_SOURCE[0]}")"
 HERE="$(dirname "$SELF")"
-PROG="$(basename "${BASH_SOURCE[0]}")"
 
 usage() {
   cat <<EOF
@@ -44,18 +43,12 @@ Needs a display (DISPLAY): run it on a desktop, over ssh -X, or headless with
 xvfb-run $PROG.
 EOF
 }
-die() { echo "$PROG: $*" >&2; exit 1; }
 bad_arg() { echo "$PROG: $*" >&2; echo "see $PROG --help" >&2; exit 2; }
-
-# "<prog> (elaslam <version>, git <commit>)" from the build's share/elaslam/VERSION
-# (installed: beside bin/; source tree: the build directory's).
-version() {
-  local f
-  for f in "$HERE/../share/elaslam/VERSION" "${BUILD_DIR:-${ELASLAM_BUILD_DIR:-$HERE/../build}}/share/elaslam/VERSION"; do
-    [ -f "$f" ] && { echo "${PROG%.sh} ($(cat "$f"))"; return; }
-  done
-  echo "${PROG%.sh} (elaslam, version unknown: no build's share/elaslam/VERSION)"
-}
+# PROG, die, version, find_lcm_jar: beside this script, or installed in ../share/elaslam/tools.
+LIB="$HERE/lcm_java_lib.sh"
+[ -f "$LIB" ] || LIB="$HERE/../share/elaslam/tools/lcm_java_lib.sh"
+# shellcheck source=tools/lcm_java_lib.sh
+. "$LIB"
 
 URL=""
 URL_SET=0
@@ -147,11 +140,7 @@ if [ -d "$JAVA_HOME_DIR/lib" ] && ! [ -e "$JAVA_HOME_DIR/lib/libawt_xawt.so" ]; 
   die "the Java runtime in $JAVA_HOME_DIR is headless (no AWT/X11), lcm-spy cannot open a window: $HOW_TO_INSTALL openjdk-17-jre"
 fi
 
-LCM_JAR=""
-if command -v pkg-config >/dev/null 2>&1; then
-  LCM_JAR="$(pkg-config --variable=classpath lcm-java 2>/dev/null || true)"
-fi
-[ -n "$LCM_JAR" ] && [ -f "$LCM_JAR" ] || LCM_JAR=/usr/share/java/lcm.jar
+find_lcm_jar
 [ -f "$LCM_JAR" ] || die "lcm.jar (LCM's Java library, with lcm-spy) not found: $HOW_TO_INSTALL liblcm-java"
 
 JCHART_JAR=/usr/share/java/jchart2d.jar

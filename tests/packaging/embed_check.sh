@@ -23,7 +23,6 @@ BUILD="$(cd "${2:?BUILD_DIR}" && pwd)"
 INTREE="${3:?INTREE_PROGRAM}"
 # shellcheck source=tests/packaging/lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
-CMAKE="${CMAKE_COMMAND:-cmake}"
 EXAMPLE="$SRC/examples/embed_robot"
 scratch embed
 GENERATOR=()
@@ -67,17 +66,8 @@ mode_embed() {
   "$CMAKE" --install "$BUILD" --prefix "$P" --component dev > "$TMP/install.log" 2>&1 \
     || { cat "$TMP/install.log"; fail "cmake --install --component dev"; }
   # ---- exactly what a consumer needs ----------------------------------------------
-  local build_type; build_type="$(cache CMAKE_BUILD_TYPE | tr '[:upper:]' '[:lower:]')"
   {
-    for l in common transport robot main; do echo "$P/$libdir/libelaslam_$l.a"; done
-    for d in common transport robot_node main_robot; do
-      (cd "$SRC/$d/include" && find . -name '*.hpp' | sed "s#^\./#$P/$incdir/#")
-    done
-    for f in "$SRC"/lcmtypes/elaslam_*.lcm; do f="$(basename "$f" .lcm)"; echo "$P/$incdir/elaslam/${f#elaslam_}.hpp"; done
-    for f in elaslamConfig elaslamConfigVersion elaslamTargets "elaslamTargets-${build_type:-noconfig}" lcm_library; do
-      echo "$P/$libdir/cmake/elaslam/$f.cmake"
-    done
-    echo "$P/$libdir/pkgconfig/elaslam.pc"
+    dev_files "$P"
     # Every package's licence and changelog (packaging/debian/copyright).
     echo "$P/share/doc/elaslam-dev/copyright"; echo "$P/share/doc/elaslam-dev/changelog.Debian.gz"
   } | sort > "$TMP/expected"

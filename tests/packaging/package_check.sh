@@ -21,7 +21,6 @@ BUILD="$(cd "${2:?BUILD_DIR}" && pwd)"
 VERSION="${3:?VERSION}"
 # shellcheck source=tests/packaging/lib.sh
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
-CMAKE="${CMAKE_COMMAND:-cmake}"
 CPACK="${CPACK_COMMAND:-cpack}"
 scratch pkg
 
@@ -70,22 +69,11 @@ expected_files() {
       done
       return 0 ;;
     elaslam-spy)
-      echo "$p/bin/elaslam-spy"; echo "$p/bin/elaslam-logplayer-gui"
+      echo "$p/bin/elaslam-spy"; echo "$p/bin/elaslam-logplayer-gui"; echo "$p/share/elaslam/tools/lcm_java_lib.sh"
       [ -f "$BUILD/elaslam_types.jar" ] && echo "$p/share/elaslam/java/elaslam_types.jar"
       return 0 ;;
     elaslam-dev)  # packaging/dev.cmake; tests/packaging/embed_check.sh builds against it
-      local libdir incdir build_type d
-      libdir="$(cache CMAKE_INSTALL_LIBDIR)"; incdir="$(cache CMAKE_INSTALL_INCLUDEDIR)"
-      build_type="$(cache CMAKE_BUILD_TYPE | tr '[:upper:]' '[:lower:]')"
-      for t in common transport robot main; do echo "$p/$libdir/libelaslam_$t.a"; done
-      for d in common transport robot_node main_robot; do
-        (cd "$SRC/$d/include" && find . -name '*.hpp' | sed "s#^\./#$p/$incdir/#")
-      done
-      for f in "$SRC"/lcmtypes/elaslam_*.lcm; do f="$(basename "$f" .lcm)"; echo "$p/$incdir/elaslam/${f#elaslam_}.hpp"; done
-      for f in elaslamConfig elaslamConfigVersion elaslamTargets "elaslamTargets-${build_type:-noconfig}" lcm_library; do
-        echo "$p/$libdir/cmake/elaslam/$f.cmake"
-      done
-      echo "$p/$libdir/pkgconfig/elaslam.pc" ;;
+      dev_files "$p" ;;
   esac
 }
 PACKAGES=(elaslam-common elaslam-robot elaslam-main-robot elaslam-simulator elaslam-tools elaslam-dev elaslam-spy)

@@ -18,11 +18,7 @@ FRAMES=60
 . "$ROOT/tests/system/lib.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
-  BUILD="$2" OUT="$3" KEYS="$4"
-  B="$BUILD/bin"
-  kill_pids_at_exit
-  K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
-  "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
+  keyed_inner "$2" "$3" "$4"
   "$B/main_robot" "${K[@]}" --key-file "$KEYS/main.key" > "$OUT/main_robot.log" 2>&1 & PIDS+=($!)
   "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_1.key" --robot 1 > "$OUT/robot_1.log" 2>&1 & PIDS+=($!)
   "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_2.key" --robot 2 > "$OUT/robot_2a.log" 2>&1 & PIDS+=($!)

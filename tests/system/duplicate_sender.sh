@@ -27,12 +27,8 @@ PY="$ROOT/.venv/bin/python"
 . "$ROOT/tests/system/lib.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
-  BUILD="$2" OUT="$3"
-  mkdir -p "$OUT/logs"
-  kill_pids_at_exit
+  unkeyed_inner "$2" "$3"
   robot() { "$BUILD/bin/robot_node" --config "$CONFIG" --robot "$1" > "$OUT/logs/$2.log" 2>&1 & PIDS+=($!); }
-  lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
-  "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
   robot 1 robot_node_1; robot 2 robot_node_2; robot 3 robot_node_3
   "$PY" "$ROOT/tests/system/lcm_check.py" --build-dir "$BUILD" wait-frame POSE_2 "$DUP_FRAME" --timeout 60 \
     > "$OUT/logs/watch.log" 2>&1 &

@@ -26,11 +26,7 @@ said_silent() { grep -q "FAULT: robot 1 has not heard main_robot" "$1/robot_1.lo
                 grep -q "FAULT: robot 2 has not heard main_robot" "$1/robot_2.log"; }
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT KEYS
-  BUILD="$2" OUT="$3" KEYS="$4"
-  B="$BUILD/bin"
-  kill_pids_at_exit
-  K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
-  "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
+  keyed_inner "$2" "$3" "$4"
   "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_1.key" --robot 1 --state "$OUT/no/such/dir/robot1.json" \
     > "$OUT/robot_1.log" 2>&1 & PIDS+=($!)
   "$B/robot_node" "${K[@]}" --key-file "$KEYS/robot_2.key" --robot 2 > "$OUT/robot_2.log" 2>&1 & PIDS+=($!)

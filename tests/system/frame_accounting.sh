@@ -18,12 +18,8 @@ CHECK="$ROOT/tests/system/lcm_check.py"
 . "$ROOT/tests/system/lib.sh"
 
 if [ "${1:-}" = "--inner" ]; then  # inside the namespace: --inner BUILD OUT
-  BUILD="$2" OUT="$3"
-  mkdir -p "$OUT/logs"
-  kill_pids_at_exit
+  unkeyed_inner "$2" "$3"
   robot() { "$BUILD/bin/robot_node" --config "$CONFIG" --robot "$1" >> "$OUT/logs/robot_node_$1.log" 2>&1 & }
-  lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
-  "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
   robot 1; PIDS+=($!)
   robot 2; R2=$!
   "$BUILD/bin/simulator" --config "$CONFIG" --frames 80 --rate 20 --wait-for-nodes 3 > "$OUT/logs/simulator.log" 2>&1 &

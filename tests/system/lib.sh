@@ -10,6 +10,15 @@
 #   kill_pids_at_exit          PIDS=(), and every process put in PIDS is killed at exit
 #   stop_pids                  SIGINT to every process in PIDS, then wait for each;
 #                              returns 1 when one exited with an error; PIDS=()
+#   keyed_inner BUILD OUT KEYS inside the namespace of a team with keys (keys team
+#                              KEYS): sets BUILD, OUT, KEYS, B (BUILD/bin) and K (the
+#                              options --config CONFIG --roster KEYS/team.yaml), PIDS as
+#                              kill_pids_at_exit, and starts the recorder (record:
+#                              OUT/run.lcmlog, its output in OUT/logger.log) into PIDS
+#   unkeyed_inner BUILD OUT    inside the namespace of a team without keys: sets BUILD
+#                              and OUT, makes OUT/logs, PIDS as kill_pids_at_exit, and
+#                              starts lcm-logger (OUT/run.lcmlog) and main_robot
+#                              (--config CONFIG) into PIDS, their output in OUT/logs/
 #   run_team_attacked LOG CMD... -- TEAM_ARGS...
 #                              inside a namespace: the attacking process CMD in the
 #                              background (its output in LOG) while tools/run_team.sh
@@ -47,6 +56,22 @@ make_out() {
 kill_pids_at_exit() {
   PIDS=()
   trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null || true; done' EXIT
+}
+
+keyed_inner() {
+  BUILD="$1" OUT="$2" KEYS="$3"
+  B="$BUILD/bin"
+  kill_pids_at_exit
+  K=(--config "$CONFIG" --roster "$KEYS/team.yaml")
+  "$B/record" -f -q "$OUT/run.lcmlog" > "$OUT/logger.log" 2>&1 & PIDS+=($!)
+}
+
+unkeyed_inner() {
+  BUILD="$1" OUT="$2"
+  mkdir -p "$OUT/logs"
+  kill_pids_at_exit
+  lcm-logger -f -q "$OUT/run.lcmlog" > "$OUT/logs/logger.log" 2>&1 & PIDS+=($!)
+  "$BUILD/bin/main_robot" --config "$CONFIG" > "$OUT/logs/main_robot.log" 2>&1 & PIDS+=($!)
 }
 
 run_team_attacked() {
