@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 #include "elaslam/common/config.hpp"
@@ -30,10 +31,13 @@ const char* to_string(Refusal r) {
   return "?";
 }
 
-std::int64_t RefusalCounts::total() const {
-  std::int64_t t = 0;
-  for (std::int64_t v : n) t += v;
-  return t;
+std::int64_t RefusalCounts::total() const { return std::accumulate(n.begin(), n.end(), std::int64_t{0}); }
+
+bool RefusalCounts::count(Refusal r, const std::string& problem, std::int64_t* rejected, std::string* why) {
+  add(r);
+  ++*rejected;
+  if (why) *why = problem;
+  return false;
 }
 
 bool parse_team(const std::string& text, int* mask, std::string* why) {

@@ -280,10 +280,7 @@ const std::vector<dynamic_notice_t>& MainNode::take_notices(std::int64_t now_uti
 }
 
 bool MainNode::refused(Refusal reason, const std::string& problem, std::string* why) {
-  ++counters_.rejected_inputs;
-  counters_.refused.add(reason);
-  if (why) *why = problem;
-  return false;
+  return counters_.refused.count(reason, problem, &counters_.rejected_inputs, why);
 }
 
 int MainNode::on_pose(const pose_estimate_t& m, std::string* why) {

@@ -253,10 +253,7 @@ void RobotNode::apply_moving(const MovingReport& m) {
 }
 
 bool RobotNode::refused(Refusal reason, const std::string& problem, std::string* why) {
-  ++counters_.rejected_inputs;
-  counters_.refused.add(reason);
-  if (why) *why = problem;
-  return false;
+  return counters_.refused.count(reason, problem, &counters_.rejected_inputs, why);
 }
 
 bool RobotNode::on_global_map(const global_map_t& msg, std::string* why) {

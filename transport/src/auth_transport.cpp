@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cstring>
+#include <numeric>
 #include <stdexcept>
 #include <string_view>
 
@@ -73,9 +74,7 @@ const char* key_of(Verdict v) {
 }
 
 std::int64_t AuthCounters::refused() const {
-  std::int64_t n = 0;
-  for (std::int64_t c : refused_by) n += c;
-  return n;
+  return std::accumulate(refused_by.begin(), refused_by.end(), std::int64_t{0});
 }
 
 bool sender_may_publish(std::int16_t id, const std::string& channel, const std::string& suffix,

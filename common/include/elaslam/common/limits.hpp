@@ -43,6 +43,9 @@ struct RefusalCounts {
   void add(Refusal r) { ++n[static_cast<std::size_t>(r)]; }
   std::int64_t operator[](Refusal r) const { return n[static_cast<std::size_t>(r)]; }
   std::int64_t total() const;
+  /// A refused input: counted here and in *rejected (a node's count of every input it
+  /// refused), *why (when given) set to `problem`. False: what a handler returns for it.
+  bool count(Refusal r, const std::string& problem, std::int64_t* rejected, std::string* why);
 };
 
 struct MessageLimits {
