@@ -38,27 +38,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   expect_config_error_only("robot", [&] {
     config::Document doc = config::Document::from_string(text, "<fuzz>");
-    RobotOptions o;
-    doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
-    doc.allow_sections();
-    doc.finish();
+    (void)config::read_component<RobotOptions>(doc, "robot");
   });
   expect_config_error_only("main", [&] {
     config::Document doc = config::Document::from_string(text, "<fuzz>");
-    GlobalMapOptions o;
-    doc.section("main", [&](config::Reader& r) { parse(r, &o); });
-    doc.allow_sections();
-    doc.finish();
+    (void)config::read_component<GlobalMapOptions>(doc, "main");
   });
   expect_config_error_only("scenario", [&] {
     (void)sim::load_scenario_text(text, "<fuzz>");  // parse + check_scenario, as the simulator
   });
   expect_config_error_only("dataset", [&] {
     config::Document doc = config::Document::from_string(text, "<fuzz>");
-    mrclam::Options o;
-    doc.section("dataset", [&](config::Reader& r) { parse(r, &o); });
-    doc.allow_sections();
-    doc.finish();
+    (void)config::read_component<mrclam::Options>(doc, "dataset");
   });
   return 0;
 }

@@ -20,11 +20,7 @@ inline const std::string& paper_yaml() {
 inline const GlobalMapOptions& main_options() {
   static const GlobalMapOptions o = [] {
     config::Document doc = config::Document::from_file(paper_yaml());
-    GlobalMapOptions g;
-    doc.section("main", [&](config::Reader& r) { parse(r, &g); });
-    doc.allow_sections();
-    doc.finish();
-    return g;
+    return config::read_component<GlobalMapOptions>(doc, "main");
   }();
   return o;
 }

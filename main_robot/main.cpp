@@ -37,10 +37,7 @@ struct Args {
 
 GlobalMapOptions load_options(const std::string& path) {
   config::Document doc = config::Document::from_file(path);
-  GlobalMapOptions o;
-  doc.section("main", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow_sections();
-  doc.finish();
+  GlobalMapOptions o = config::read_component<GlobalMapOptions>(doc, "main");
   if (auto problems = check_shared_config(path); !problems.empty()) throw config::ConfigError(path, std::move(problems));
   return o;
 }

@@ -199,10 +199,7 @@ void parse(config::Reader& r, Options* o) {
 
 Options load_options(const std::string& yaml_path, std::string* effective_yaml) {
   config::Document doc = config::Document::from_file(yaml_path);
-  Options o;
-  doc.section("dataset", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow_sections();
-  doc.finish();
+  Options o = config::read_component<Options>(doc, "dataset");
   if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;
 }

@@ -18,14 +18,33 @@ std::string robot(int robot_id, const MessageLimits& l, Refusal* reason) {
   return "";
 }
 
-std::string event(const landmark_event_t& m, const MessageLimits& lim, int max_landmark_id, Refusal* reason) {
-  Refusal dummy = Refusal::kMalformed;
-  Refusal& r = reason ? *reason : dummy;
-  if (std::string p = robot(m.robot_id, lim, &r); !p.empty()) return p;
-  r = Refusal::kMalformed;
-  if (m.seq < 1 || m.seq > kMaxSeq) return contract::got("seq not in [1, 2^62]", m.seq);
+namespace {
+
+/// robot(), then *r kMalformed for the checks that follow it.
+std::string sender(int robot_id, const MessageLimits& lim, Refusal* r) {
+  if (std::string p = robot(robot_id, lim, r); !p.empty()) return p;
+  *r = Refusal::kMalformed;
+  return "";
+}
+
+/// What a robot's event or snapshot starts with: its robot in the team (the refusal's
+/// reason that check's), then, malformed otherwise, seq in [min_seq, kMaxSeq] and
+/// incarnation and frame not negative.
+template <typename Message>
+std::string sender_run_frame(const Message& m, std::int64_t min_seq, const MessageLimits& lim, Refusal* r) {
+  if (std::string p = sender(m.robot_id, lim, r); !p.empty()) return p;
+  if (m.seq < min_seq || m.seq > kMaxSeq)
+    return contract::got("seq not in [" + std::to_string(min_seq) + ", 2^62]", m.seq);
   if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  return "";
+}
+
+}  // namespace
+
+std::string event(const landmark_event_t& m, const MessageLimits& lim, int max_landmark_id, Refusal* reason) {
+  Refusal& r = *reason;
+  if (std::string p = sender_run_frame(m, 1, lim, &r); !p.empty()) return p;
   if (m.kind < landmark_event_t::ADD || m.kind > landmark_event_t::RETURN) return contract::got("unknown kind", int(m.kind));
   if (m.landmark_id < 0 || m.landmark_id >= max_landmark_id)
     return contract::got("landmark_id outside [0, max_landmark_id)", m.landmark_id);
@@ -38,10 +57,8 @@ std::string event(const landmark_event_t& m, const MessageLimits& lim, int max_l
 }
 
 std::string events(const lmap_events_t& m, const MessageLimits& lim, Refusal* reason) {
-  Refusal dummy = Refusal::kMalformed;
-  Refusal& r = reason ? *reason : dummy;
-  if (std::string p = robot(m.robot_id, lim, &r); !p.empty()) return p;
-  r = Refusal::kMalformed;
+  Refusal& r = *reason;
+  if (std::string p = sender(m.robot_id, lim, &r); !p.empty()) return p;
   if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
   if (m.frame < 0) return contract::got("frame is negative", m.frame);
   if (m.num_events < 1 || m.num_events > contract::kMaxBatchEvents)
@@ -61,13 +78,8 @@ std::string events(const lmap_events_t& m, const MessageLimits& lim, Refusal* re
 }
 
 std::string snapshot(const lmap_snapshot_t& m, const MessageLimits& lim, int max_landmark_id, Refusal* reason) {
-  Refusal dummy = Refusal::kMalformed;
-  Refusal& r = reason ? *reason : dummy;
-  if (std::string p = robot(m.robot_id, lim, &r); !p.empty()) return p;
-  r = Refusal::kMalformed;
-  if (m.seq < 0 || m.seq > kMaxSeq) return contract::got("seq not in [0, 2^62]", m.seq);
-  if (m.incarnation < 0) return contract::got("incarnation is negative", m.incarnation);
-  if (m.frame < 0) return contract::got("frame is negative", m.frame);
+  Refusal& r = *reason;
+  if (std::string p = sender_run_frame(m, 0, lim, &r); !p.empty()) return p;
   if (m.num_chunks < 1 || m.chunk < 0 || m.chunk >= m.num_chunks) return contract::got("chunk outside [0, num_chunks)", m.chunk);
   if (m.id_begin < 0 || m.id_end <= m.id_begin || m.id_end > max_landmark_id)
     return contract::got("id range not within [0, max_landmark_id), id_begin", m.id_begin);
@@ -108,18 +120,15 @@ std::string snapshot(const lmap_snapshot_t& m, const MessageLimits& lim, int max
 }
 
 std::string pose(const pose_estimate_t& m, const MessageLimits& lim, Refusal* reason) {
-  Refusal dummy = Refusal::kMalformed;
-  Refusal& r = reason ? *reason : dummy;
-  if (std::string p = robot(m.robot_id, lim, &r); !p.empty()) return p;
-  r = Refusal::kMalformed;
+  Refusal& r = *reason;
+  if (std::string p = sender(m.robot_id, lim, &r); !p.empty()) return p;
   if (m.event_seq < 0 || m.event_seq > kMaxSeq) return contract::got("event_seq not in [0, 2^62]", m.event_seq);
   if (m.snapshot_chunks < 0) return contract::got("snapshot_chunks is negative", m.snapshot_chunks);
   return check_pose(m, lim, &r);
 }
 
 std::string tracks(const track_list_t& m, const MessageLimits& lim, int max_landmark_id, Refusal* reason) {
-  Refusal dummy = Refusal::kMalformed;
-  Refusal& r = reason ? *reason : dummy;
+  Refusal& r = *reason;
   if (std::string p = robot(m.robot_id, lim, &r); !p.empty()) return p;
   return check_track_list(m, lim, max_landmark_id, &r);
 }

@@ -29,24 +29,35 @@ MainNode::MainNode(const GlobalMapOptions& options) : map_(options), publisher_(
   for (auto& c : global_tracks_) c.tracks.resize(contract::kMaxGlobalTracks);
 }
 
+namespace {
+
+/// A check that says why into *reason when the caller asks, else into a local.
+template <typename Check>
+std::string checked(Refusal* reason, Check check) {
+  Refusal ignored = Refusal::kMalformed;
+  return check(reason ? reason : &ignored);
+}
+
+}  // namespace
+
 std::string MainNode::validate(const landmark_event_t& m, Refusal* reason) const {
-  return main_checks::event(m, map_.options().limits, map_.max_landmark_id(), reason);
+  return checked(reason, [&](Refusal* r) { return main_checks::event(m, map_.options().limits, map_.max_landmark_id(), r); });
 }
 
 std::string MainNode::validate(const lmap_snapshot_t& m, Refusal* reason) const {
-  return main_checks::snapshot(m, map_.options().limits, map_.max_landmark_id(), reason);
+  return checked(reason, [&](Refusal* r) { return main_checks::snapshot(m, map_.options().limits, map_.max_landmark_id(), r); });
 }
 
 std::string MainNode::validate(const lmap_events_t& m, Refusal* reason) const {
-  return main_checks::events(m, map_.options().limits, reason);
+  return checked(reason, [&](Refusal* r) { return main_checks::events(m, map_.options().limits, r); });
 }
 
 std::string MainNode::validate(const pose_estimate_t& m, Refusal* reason) const {
-  return main_checks::pose(m, map_.options().limits, reason);
+  return checked(reason, [&](Refusal* r) { return main_checks::pose(m, map_.options().limits, r); });
 }
 
 std::string MainNode::validate(const track_list_t& m, Refusal* reason) const {
-  return main_checks::tracks(m, map_.options().limits, map_.max_landmark_id(), reason);
+  return checked(reason, [&](Refusal* r) { return main_checks::tracks(m, map_.options().limits, map_.max_landmark_id(), r); });
 }
 
 // The newest frame known of the robot (else of the team, when the robot is new): a

@@ -177,10 +177,7 @@ std::string config_advice(const RobotOptions& o) {
 
 RobotOptions load_robot_options(const std::string& path, std::string* effective_yaml) {
   config::Document doc = config::Document::from_file(path);
-  RobotOptions o;
-  doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
-  doc.allow_sections();
-  doc.finish();
+  RobotOptions o = config::read_component<RobotOptions>(doc, "robot");
   if (auto problems = check_shared_config(path); !problems.empty()) throw config::ConfigError(path, std::move(problems));
   if (effective_yaml) *effective_yaml = doc.effective_yaml();
   return o;

@@ -10,11 +10,8 @@
 namespace elaslam::viewer {
 
 ViewLimits load_view_limits(const std::string& config_path) {
-  GlobalMapOptions mo;
   config::Document doc = config::Document::from_file(config_path);
-  doc.section("main", [&](config::Reader& r) { parse(r, &mo); });
-  doc.allow_sections();
-  doc.finish();
+  const GlobalMapOptions mo = config::read_component<GlobalMapOptions>(doc, "main");
   ViewLimits limits;
   limits.max_landmark_id = mo.max_landmark_id;
   limits.world_bound_m = mo.limits.world_bound;

@@ -14,9 +14,9 @@
 //   }
 // and at the top:
 //   config::Document doc = config::Document::from_file(path);   // throws ConfigError
-//   RobotOptions o; doc.section("robot", [&](config::Reader& r) { parse(r, &o); });
-//   doc.allow_sections();                                       // the other components' sections
-//   doc.finish();                                               // throws ConfigError
+//   RobotOptions o = config::read_component<RobotOptions>(doc, "robot");  // throws ConfigError
+// which reads the section with that parse(), allows the other components' sections
+// and finishes the document (Document::section, allow_sections, finish).
 #pragma once
 
 #include <cstddef>
@@ -158,6 +158,19 @@ class Document {
   void know(const std::string& key);  // a section name accepted at the top level (once)
   std::vector<std::string> known_;
 };
+
+/// One component's options from `doc`: section `key` read into a fresh Options by the
+/// component's parse(Reader&, Options*) (found by argument-dependent lookup), every
+/// other section of the file allowed, the document finished. Throws ConfigError with
+/// every problem found.
+template <typename Options>
+Options read_component(Document& doc, const std::string& key) {
+  Options o;
+  doc.section(key, [&](Reader& r) { parse(r, &o); });
+  doc.allow_sections();
+  doc.finish();
+  return o;
+}
 
 /// An effective configuration (YAML text) with overrides written into it, so that
 /// what a run records is what ran: `edit` gets the parsed root map. Text that is not

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The checks of a robot's message to main_robot on its own: the contract, the limits
 // and the team (limits.hpp). Each returns "" when the message is valid, else the
-// problem, with `reason` its kind. What depends on the robot's stream (its
+// problem, with *reason (never null) its kind. What depends on the robot's stream (its
 // incarnation, frame and seq windows) is MainNode's. The robot's checks of main's
 // messages are in common/limits.hpp (check_global_map) and robot_node.
 #pragma once
