@@ -2,9 +2,11 @@
 // The MRCLAM importer: a hand-written tiny dataset (tests/dataset/data/tiny, every
 // expected value computed by hand in the comments), malformed files, and the real
 // dataset6 when it is present.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <string>
 
 #include <unistd.h>
@@ -46,6 +48,25 @@ std::vector<int> ids(const sensor_frame_t& m) {
   std::vector<int> v;
   for (int i = 0; i < m.num_obs; ++i) v.push_back(m.obs[i].landmark_id);
   return v;
+}
+
+// A robot's measurement lines by what became of them, and its odometry gaps.
+struct Counts {
+  long measurements, used, misreads, robot_barcodes, duplicates, odometry_gaps;
+  bool operator==(const Counts& o) const {
+    return measurements == o.measurements && used == o.used && misreads == o.misreads &&
+           robot_barcodes == o.robot_barcodes && duplicates == o.duplicates && odometry_gaps == o.odometry_gaps;
+  }
+};
+
+std::ostream& operator<<(std::ostream& out, const Counts& c) {
+  return out << "measurements " << c.measurements << ", used " << c.used << ", misreads " << c.misreads
+             << ", robot_barcodes " << c.robot_barcodes << ", duplicates " << c.duplicates << ", odometry_gaps "
+             << c.odometry_gaps;
+}
+
+Counts counts(const RobotStats& r) {
+  return {r.measurements, r.used, r.misreads, r.robot_barcodes, r.duplicates, r.odometry_gaps};
 }
 
 // ---- frame times -----------------------------------------------------------------
@@ -258,19 +279,9 @@ TEST(Mrclam, ObservationsBinnedFilteredAndDeduplicated) {
   ASSERT_EQ(st.robots.size(), 2u);
   const RobotStats& r1 = st.robots[0];
   EXPECT_EQ(r1.id, 1);
-  EXPECT_EQ(r1.measurements, 10);
-  EXPECT_EQ(r1.used, 5);
-  EXPECT_EQ(r1.misreads, 3);
-  EXPECT_EQ(r1.robot_barcodes, 1);
-  EXPECT_EQ(r1.duplicates, 1);
-  EXPECT_EQ(r1.odometry_gaps, 1);  // 1000.3 -> 1001.0
+  EXPECT_EQ(counts(r1), (Counts{10, 5, 3, 1, 1, 1}));  // the odometry gap: 1000.3 -> 1001.0
   EXPECT_NEAR(r1.max_odometry_gap_s, 0.7, 1e-9);
-  const RobotStats& r2 = st.robots[1];
-  EXPECT_EQ(r2.measurements, 3);
-  EXPECT_EQ(r2.used, 2);
-  EXPECT_EQ(r2.robot_barcodes, 1);
-  EXPECT_EQ(r2.misreads, 0);
-  EXPECT_EQ(r2.odometry_gaps, 0);
+  EXPECT_EQ(counts(st.robots[1]), (Counts{3, 2, 0, 1, 0, 0}));
 }
 
 TEST(Mrclam, RobotBarcodesKeptWhenAsked) {
@@ -346,9 +357,10 @@ TEST(Mrclam, RobotList) {
 class MrclamMalformed : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("test_mrclam_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // One directory per test; a parameterised test's name has a '/'.
+    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    dir_ = fs::temp_directory_path() / ("test_mrclam_" + std::to_string(::getpid()) + "_" + name);
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     for (const auto& e : fs::directory_iterator(kTiny)) fs::copy_file(e.path(), dir_ / e.path().filename());
@@ -381,33 +393,37 @@ class MrclamMalformed : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(MrclamMalformed, WrongColumnCount) {
-  const std::string m = error_at("Robot2_Odometry.dat", "1002.000 0.2 0.5 7");
-  EXPECT_HAS(m, "column count");
+// A row appended to a file of the tiny dataset, and what the load's error then says
+// besides the file and the line (nothing more when `says` is empty).
+struct BadRow {
+  const char* name;
+  const char* file;
+  const char* row;
+  const char* says;
+};
+
+void PrintTo(const BadRow& b, std::ostream* out) { *out << b.file << ": " << b.row; }
+
+class MrclamBadRow : public MrclamMalformed, public ::testing::WithParamInterface<BadRow> {};
+
+TEST_P(MrclamBadRow, ErrorNamesTheFileAndTheLine) {
+  const BadRow& b = GetParam();
+  const std::string m = error_at(b.file, b.row);
+  if (*b.says != '\0') {
+    EXPECT_HAS(m, b.says);
+  }
 }
 
-TEST_F(MrclamMalformed, TextInANumber) {
-  const std::string m = error_at("Robot1_Measurement.dat", "1003.000 63 abc 0.1");
-  EXPECT_HAS(m, "column 3 ('abc') is not a number");
-}
-
-TEST_F(MrclamMalformed, NotFinite) {
-  const std::string m = error_at("Robot1_Groundtruth.dat", "1003.000 nan 0.0 0.0");
-  EXPECT_HAS(m, "not finite");
-}
-
-TEST_F(MrclamMalformed, TimeGoingBackwards) {
-  const std::string m = error_at("Robot1_Groundtruth.dat", "1001.500 0.0 0.0 0.0");
-  EXPECT_HAS(m, "backwards");
-}
-
-TEST_F(MrclamMalformed, MeasurementTimeGoingBackwards) {
-  error_at("Robot2_Measurement.dat", "1000.000 63 1.0 0.0");
-}
-
-TEST_F(MrclamMalformed, NonIntegerBarcode) {
-  error_at("Barcodes.dat", "9 3.5");
-}
+INSTANTIATE_TEST_SUITE_P(
+    Mrclam, MrclamBadRow,
+    ::testing::Values(BadRow{"WrongColumnCount", "Robot2_Odometry.dat", "1002.000 0.2 0.5 7", "column count"},
+                      BadRow{"TextInANumber", "Robot1_Measurement.dat", "1003.000 63 abc 0.1",
+                             "column 3 ('abc') is not a number"},
+                      BadRow{"NotFinite", "Robot1_Groundtruth.dat", "1003.000 nan 0.0 0.0", "not finite"},
+                      BadRow{"TimeGoingBackwards", "Robot1_Groundtruth.dat", "1001.500 0.0 0.0 0.0", "backwards"},
+                      BadRow{"MeasurementTimeGoingBackwards", "Robot2_Measurement.dat", "1000.000 63 1.0 0.0", ""},
+                      BadRow{"NonIntegerBarcode", "Barcodes.dat", "9 3.5", ""}),
+    [](const ::testing::TestParamInfo<BadRow>& info) { return std::string(info.param.name); });
 
 TEST_F(MrclamMalformed, MissingFile) {
   fs::remove(dir_ / "Robot2_Groundtruth.dat");

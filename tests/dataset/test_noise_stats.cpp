@@ -5,14 +5,13 @@
 // dataset against its reference text (tests/dataset/data/tiny_stats.txt).
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "elaslam/dataset/noise_stats.hpp"
 #include "elaslam/dataset/stats_report.hpp"
+#include "../support/read_file.hpp"
 
 namespace elaslam::mrclam {
 namespace {
@@ -144,13 +143,6 @@ TEST(NoiseStats, TinySensorResiduals) {
   EXPECT_NEAR(r.bearing[5], wrap_angle(3.5 - std::atan2(2.0, -0.25)), 1e-12);
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 TEST(NoiseStats, TinyReportAgainstItsReference) {
   const Dataset d = Dataset::load(kTiny, {1, 2});
   StatsOptions o;
@@ -163,7 +155,7 @@ TEST(NoiseStats, TinyReportAgainstItsReference) {
   std::string text;
   for (int c; (c = std::fgetc(f)) != EOF;) text += static_cast<char>(c);
   std::fclose(f);
-  EXPECT_EQ(text, slurp(kTiny + "_stats.txt"));
+  EXPECT_EQ(text, test::read_file(kTiny + "_stats.txt"));
   EXPECT_EQ(j["dataset"], "tiny");
   EXPECT_EQ(j["robots"]["1"]["range_m"]["count"], 7);
   EXPECT_EQ(j["overall"]["range_m"]["count"], j["robots"]["1"]["range_m"]["count"].get<long>() +

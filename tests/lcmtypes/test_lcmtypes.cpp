@@ -146,6 +146,30 @@ TYPED_TEST(LcmTypeTest, CorruptedFingerprintFailsCleanly) {
   }
 }
 
+// m encoded into *buf and decoded into *d, both succeeding.
+template <typename T>
+void round_trip(const T& m, T* d, std::vector<uint8_t>* buf) {
+  buf->resize(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_GT(m.encode(buf->data(), 0, static_cast<int>(buf->size())), 0);
+  ASSERT_GT(d->decode(buf->data(), 0, static_cast<int>(buf->size())), 0);
+}
+
+// A Msg whose list (`list`, counted by `count`) is `header` bytes empty and `entry`
+// bytes more per entry; `most` entries fit one snapshot-sized datagram and one more
+// would not (`why` says so when it would).
+template <typename Msg, typename Entry, typename Count>
+void expect_chunk_fits(std::vector<Entry> Msg::*list, Count Msg::*count, int header, int entry, int most,
+                       const char* why) {
+  Msg m{};
+  EXPECT_EQ(m.getEncodedSize(), header);
+  contract::set_count(&(m.*list), &(m.*count), 1);
+  EXPECT_EQ(m.getEncodedSize(), header + entry);
+  contract::set_count(&(m.*list), &(m.*count), most);
+  EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
+  contract::set_count(&(m.*list), &(m.*count), most + 1);
+  EXPECT_GT(m.getEncodedSize(), contract::kMaxChunkBytes) << why;
+}
+
 TEST(LcmTypes, SensorFrameFieldsSurvive) {
   sensor_frame_t m{};
   m.utime = 1700000000123456;
@@ -160,10 +184,9 @@ TEST(LcmTypes, SensorFrameFieldsSurvive) {
   m.obs[0].range = 3.5;
   m.obs[0].bearing = -0.5;
   m.obs[1].landmark_id = 71;
-  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  ASSERT_GT(m.encode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  std::vector<uint8_t> buf;
   sensor_frame_t d{};
-  ASSERT_GT(d.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  ASSERT_NO_FATAL_FAILURE(round_trip(m, &d, &buf));
   EXPECT_EQ(d.utime, m.utime);
   EXPECT_EQ(d.frame, 17);
   EXPECT_EQ(d.robot_id, 2);
@@ -205,28 +228,17 @@ TEST(LcmTypes, CandidateListsFitOneDatagram) {
 // chunk round-trips with its place and a track (the covariance's upper triangle in
 // floats).
 TEST(LcmTypes, TrackListsFitOneDatagram) {
-  track_list_t m{};
-  EXPECT_EQ(m.getEncodedSize(), contract::kTrackListHeaderBytes);
-  contract::set_count(&m.tracks, &m.num_tracks, 1);
-  EXPECT_EQ(m.getEncodedSize(), contract::kTrackListHeaderBytes + contract::kTrackBytes);
-  contract::set_count(&m.tracks, &m.num_tracks, contract::kMaxTracks);
-  EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
-  contract::set_count(&m.tracks, &m.num_tracks, contract::kMaxTracks + 1);
-  EXPECT_GT(m.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxTracks is the most that fits";
-  global_tracks_t g{};
-  EXPECT_EQ(g.getEncodedSize(), contract::kGlobalTracksHeaderBytes);
-  contract::set_count(&g.tracks, &g.num_tracks, 1);
-  EXPECT_EQ(g.getEncodedSize(), contract::kGlobalTracksHeaderBytes + contract::kGlobalTrackBytes);
-  contract::set_count(&g.tracks, &g.num_tracks, contract::kMaxGlobalTracks);
-  EXPECT_LE(g.getEncodedSize(), contract::kMaxChunkBytes);
-  contract::set_count(&g.tracks, &g.num_tracks, contract::kMaxGlobalTracks + 1);
-  EXPECT_GT(g.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxGlobalTracks is the most that fit";
+  expect_chunk_fits(&track_list_t::tracks, &track_list_t::num_tracks, contract::kTrackListHeaderBytes,
+                    contract::kTrackBytes, contract::kMaxTracks, "kMaxTracks is the most that fits");
+  expect_chunk_fits(&global_tracks_t::tracks, &global_tracks_t::num_tracks, contract::kGlobalTracksHeaderBytes,
+                    contract::kGlobalTrackBytes, contract::kMaxGlobalTracks, "kMaxGlobalTracks is the most that fit");
   EXPECT_EQ(contract::kTrackListHeaderBytes, 38);
   EXPECT_EQ(contract::kGlobalTracksHeaderBytes, 36);
   EXPECT_EQ(contract::kMaxTrackChunks, 6);
   EXPECT_GE(contract::kMaxTrackChunks * contract::kMaxTracks, contract::kDefaultTrackPool);
   EXPECT_LT((contract::kMaxTrackChunks - 1) * contract::kMaxTracks, contract::kDefaultTrackPool) << "no chunk more than needed";
 
+  track_list_t m{};
   contract::set_count(&m.tracks, &m.num_tracks, 2);
   m.robot_id = 3;
   m.chunk = 4;
@@ -236,10 +248,9 @@ TEST(LcmTypes, TrackListsFitOneDatagram) {
   m.tracks[1].cov[4] = 0.5f;  // yy
   m.tracks[1].probabilities[2] = 0.75f;
   m.tracks[1].likeliest = track_t::CONSTANT_VELOCITY;
-  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  ASSERT_GT(m.encode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  std::vector<uint8_t> buf;
   track_list_t d{};
-  ASSERT_GT(d.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  ASSERT_NO_FATAL_FAILURE(round_trip(m, &d, &buf));
   ASSERT_EQ(d.num_tracks, 2);
   EXPECT_EQ(d.robot_id, 3);
   EXPECT_EQ(d.chunk, 4);
@@ -256,25 +267,19 @@ TEST(LcmTypes, TrackListsFitOneDatagram) {
 // snapshot-sized datagram and round-trips with its events' fields, and the sender
 // binding's robot_id sits at bytes 20..21 as in landmark_event_t (auth_transport.cpp).
 TEST(LcmTypes, EventBatchesFitOneDatagram) {
+  expect_chunk_fits(&lmap_events_t::events, &lmap_events_t::num_events, contract::kEventBatchHeaderBytes,
+                    contract::kEventBytes, contract::kMaxBatchEvents, "kMaxBatchEvents is the most that fits");
   lmap_events_t m{};
-  EXPECT_EQ(m.getEncodedSize(), contract::kEventBatchHeaderBytes);
-  contract::set_count(&m.events, &m.num_events, 1);
-  EXPECT_EQ(m.getEncodedSize(), contract::kEventBatchHeaderBytes + contract::kEventBytes);
-  contract::set_count(&m.events, &m.num_events, contract::kMaxBatchEvents);
-  EXPECT_LE(m.getEncodedSize(), contract::kMaxChunkBytes);
-  contract::set_count(&m.events, &m.num_events, contract::kMaxBatchEvents + 1);
-  EXPECT_GT(m.getEncodedSize(), contract::kMaxChunkBytes) << "kMaxBatchEvents is the most that fits";
   contract::set_count(&m.events, &m.num_events, 2);
   m.robot_id = 0x0203;
   m.frame = 9;
   m.events[1].seq = 12;
   m.events[1].cov[1][0] = 0.25;
-  std::vector<uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  ASSERT_GT(m.encode(buf.data(), 0, static_cast<int>(buf.size())), 0);
+  std::vector<uint8_t> buf;
+  lmap_events_t d{};
+  ASSERT_NO_FATAL_FAILURE(round_trip(m, &d, &buf));
   EXPECT_EQ(buf[20], 0x02);
   EXPECT_EQ(buf[21], 0x03);
-  lmap_events_t d{};
-  ASSERT_GT(d.decode(buf.data(), 0, static_cast<int>(buf.size())), 0);
   ASSERT_EQ(d.num_events, 2);
   EXPECT_EQ(d.frame, 9);
   EXPECT_EQ(d.events[1].seq, 12);

@@ -29,6 +29,7 @@
 #include "elaslam/pose_estimate_t.hpp"
 #include "elaslam/run_info_t.hpp"
 #include "elaslam/sensor_frame_t.hpp"
+#include "../support/expect_has.hpp"
 
 namespace elaslam {
 namespace {
@@ -58,6 +59,26 @@ void expect_invariant(const RobotFrameAccount& a) {
   EXPECT_EQ(a.poses_logged + a.not_started + a.dropped + a.missing_from_log, a.frames_in_run);
 }
 
+// The four counts every frame of the run falls in exactly one of.
+struct Counts {
+  int poses_logged, not_started, dropped, missing_from_log;
+  bool operator==(const Counts& o) const {
+    return poses_logged == o.poses_logged && not_started == o.not_started && dropped == o.dropped &&
+           missing_from_log == o.missing_from_log;
+  }
+};
+
+std::ostream& operator<<(std::ostream& out, const Counts& c) {
+  return out << "poses_logged " << c.poses_logged << ", not_started " << c.not_started << ", dropped " << c.dropped
+             << ", missing_from_log " << c.missing_from_log;
+}
+
+// a's four counts are `want`, and they add up to the run.
+void expect_counts(const RobotFrameAccount& a, const Counts& want) {
+  EXPECT_EQ((Counts{a.poses_logged, a.not_started, a.dropped, a.missing_from_log}), want);
+  expect_invariant(a);
+}
+
 // ---------------------------------------------------------------------------------
 // account_frames
 // ---------------------------------------------------------------------------------
@@ -66,17 +87,13 @@ TEST(AccountFrames, CleanRunHasEveryPose) {
   const auto a = account_frames(1, 0, 99, poses(0, 99), {{99, 100, 0}}, frames(0, 99));
   EXPECT_EQ(a.robot_id, 1);
   EXPECT_EQ(a.frames_in_run, 100);
-  EXPECT_EQ(a.poses_logged, 100);
-  EXPECT_EQ(a.not_started, 0);
-  EXPECT_EQ(a.dropped, 0);
-  EXPECT_EQ(a.missing_from_log, 0);
+  expect_counts(a, {100, 0, 0, 0});
   EXPECT_EQ(a.restarts, 0);
   EXPECT_TRUE(a.missing_pose_ranges.empty());
   EXPECT_TRUE(a.sensor_recorded);
   EXPECT_EQ(a.sensors_logged, 100);
   EXPECT_TRUE(a.missing_sensor_ranges.empty());
   EXPECT_EQ(a.node_reported_dropped, 0);
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, PoseLostByTheRecorderIsMissingFromLogNotDropped) {
@@ -85,44 +102,30 @@ TEST(AccountFrames, PoseLostByTheRecorderIsMissingFromLogNotDropped) {
   p.erase(p.begin() + 40);
   // WHEN accounted THEN frames_processed jumping by 2 across the gap says "processed"
   const auto a = account_frames(1, 0, 99, p, {}, frames(0, 99));
-  EXPECT_EQ(a.poses_logged, 99);
-  EXPECT_EQ(a.missing_from_log, 1);
-  EXPECT_EQ(a.dropped, 0);
+  expect_counts(a, {99, 0, 0, 1});
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{40, 40}}));
   EXPECT_EQ(a.node_reported_dropped, -1);
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, FramesTheRobotDidNotProcessAreDropped) {
   // frames_processed grows by 1 from frame 39 to frame 42: 40 and 41 were never processed
   const auto a = account_frames(2, 0, 99, poses(0, 39) + poses(42, 99, 41), {{99, 98, 2}}, frames(0, 99));
-  EXPECT_EQ(a.poses_logged, 98);
-  EXPECT_EQ(a.dropped, 2);
-  EXPECT_EQ(a.missing_from_log, 0);
+  expect_counts(a, {98, 0, 2, 0});
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{40, 41}}));
   EXPECT_EQ(a.node_reported_dropped, 2);
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, RobotThatJoinedLateHasNotStartedFramesNotDrops) {
   const auto a = account_frames(3, 0, 99, poses(15, 99), {}, frames(0, 99));
-  EXPECT_EQ(a.poses_logged, 85);
-  EXPECT_EQ(a.not_started, 15);
-  EXPECT_EQ(a.dropped, 0);
-  EXPECT_EQ(a.missing_from_log, 0);
+  expect_counts(a, {85, 15, 0, 0});
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{0, 14}}));
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, FirstTwoPosesLostByTheRecorder) {
   // The first POSE logged (frame 2) says it is the robot's third frame.
   const auto a = account_frames(1, 0, 99, poses(2, 99, 3), {}, frames(0, 99));
-  EXPECT_EQ(a.poses_logged, 98);
-  EXPECT_EQ(a.not_started, 0);
-  EXPECT_EQ(a.missing_from_log, 2);
-  EXPECT_EQ(a.dropped, 0);
+  expect_counts(a, {98, 0, 0, 2});
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{0, 1}}));
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, RobotKilledAndRestartedCountsOneRestart) {
@@ -130,11 +133,8 @@ TEST(AccountFrames, RobotKilledAndRestartedCountsOneRestart) {
   const auto a = account_frames(1, 0, 99, poses(0, 60) + poses(70, 99, 1), {{99, 30, 0}}, frames(0, 99));
   // THEN 61..69 are dropped and one restart is seen
   EXPECT_EQ(a.restarts, 1);
-  EXPECT_EQ(a.poses_logged, 91);
-  EXPECT_EQ(a.dropped, 9);
-  EXPECT_EQ(a.missing_from_log, 0);
+  expect_counts(a, {91, 0, 9, 0});
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{61, 69}}));
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, RestartedRobotWhoseFirstPoseAfterTheRestartWasLost) {
@@ -152,13 +152,10 @@ TEST(AccountFrames, RobotThatDiedAtFrame100WithALaterStatus) {
   // lost POSEs 96..100; its last STATUS (frame 100, 101 frames) came after POSE 95.
   const std::vector<StatusCheckpoint> st = {{50, 51, 0}, {100, 101, 0}};
   const auto a = account_frames(1, 0, 149, poses(0, 95), st, frames(0, 149));
-  EXPECT_EQ(a.poses_logged, 96);
-  EXPECT_EQ(a.missing_from_log, 5);  // 96..100: processed, says the STATUS
-  EXPECT_EQ(a.dropped, 49);          // 101..149: the robot was gone
-  EXPECT_EQ(a.not_started, 0);
+  // 96..100 missing from the log: processed, says the STATUS; 101..149 dropped: the robot was gone
+  expect_counts(a, {96, 0, 49, 5});
   EXPECT_EQ(a.restarts, 0);
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{96, 149}}));
-  expect_invariant(a);
 
   // Without a STATUS after the last POSE, the tail is dropped (nothing proves otherwise).
   const auto b = account_frames(1, 0, 149, poses(0, 95), {{50, 51, 0}}, frames(0, 149));
@@ -184,27 +181,19 @@ TEST(AccountFrames, DuplicatesKeepTheFirstAndOutOfRangePosesAreIgnored) {
   q.push_back({15, 1});
   q.push_back({5, 100});
   const auto a = account_frames(1, 10, 19, q, {}, {10, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 30});
-  EXPECT_EQ(a.poses_logged, 10);
+  expect_counts(a, {10, 0, 0, 0});
   EXPECT_EQ(a.restarts, 0);
-  EXPECT_EQ(a.dropped, 0);
-  EXPECT_EQ(a.missing_from_log, 0);
-  EXPECT_EQ(a.not_started, 0);
   EXPECT_EQ(a.sensors_logged, 10);
   EXPECT_TRUE(a.missing_sensor_ranges.empty());
-  expect_invariant(a);
 }
 
 TEST(AccountFrames, NoPoseAtAll) {
   // A STATUS proves 30 frames were processed: their POSEs were lost; the rest not started.
   const auto a = account_frames(4, 0, 99, {}, {{29, 30, 0}}, {});
-  EXPECT_EQ(a.poses_logged, 0);
-  EXPECT_EQ(a.missing_from_log, 30);
-  EXPECT_EQ(a.not_started, 70);
-  EXPECT_EQ(a.dropped, 0);
+  expect_counts(a, {0, 70, 0, 30});
   EXPECT_FALSE(a.sensor_recorded);
   EXPECT_TRUE(a.missing_sensor_ranges.empty());
   EXPECT_EQ(a.missing_pose_ranges, (Ranges{{0, 99}}));
-  expect_invariant(a);
 
   const auto b = account_frames(4, 0, 99, {}, {}, {});
   EXPECT_EQ(b.not_started, 100);
@@ -304,6 +293,13 @@ class SyntheticLog : public ::testing::Test {
     write_log();
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  // What print_log_summary prints of `s`.
+  static std::string printed(const LogSummary& s) {
+    std::ostringstream out;
+    print_log_summary(out, s);
+    return out.str();
+  }
 
   // Out of line: inlined with a known message, g++ 12 sees LCM's encoder of an empty
   // variable-length array (ground_truth_t) write past the buffer (it does not).
@@ -507,10 +503,7 @@ TEST_F(SyntheticLog, EveryNumberOfTheSummary) {
   EXPECT_EQ(r1.pose_undecodable, 1);
   EXPECT_TRUE(r1.outputs_recorded());
   EXPECT_EQ(r1.account.frames_in_run, 10);
-  EXPECT_EQ(r1.account.poses_logged, 9);
-  EXPECT_EQ(r1.account.missing_from_log, 1);
-  EXPECT_EQ(r1.account.dropped, 0);
-  EXPECT_EQ(r1.account.not_started, 0);
+  expect_counts(r1.account, {9, 0, 0, 1});
   EXPECT_EQ(r1.account.missing_pose_ranges, (Ranges{{2, 2}}));
   EXPECT_EQ(r1.account.sensors_logged, 10);
   EXPECT_TRUE(r1.account.missing_sensor_ranges.empty());
@@ -521,10 +514,7 @@ TEST_F(SyntheticLog, EveryNumberOfTheSummary) {
   EXPECT_TRUE(r2.modes.empty());
   EXPECT_EQ(r2.status_events, 0);
   EXPECT_EQ(r2.pose_events, 7);
-  EXPECT_EQ(r2.account.poses_logged, 7);
-  EXPECT_EQ(r2.account.not_started, 2);
-  EXPECT_EQ(r2.account.dropped, 1);
-  EXPECT_EQ(r2.account.missing_from_log, 0);
+  expect_counts(r2.account, {7, 2, 1, 0});
   EXPECT_EQ(r2.account.missing_pose_ranges, (Ranges{{0, 1}, {6, 6}}));
   EXPECT_EQ(r2.account.sensors_logged, 9);
   EXPECT_EQ(r2.account.missing_sensor_ranges, (Ranges{{6, 6}}));
@@ -552,9 +542,7 @@ TEST_F(SyntheticLog, JsonCarriesTheSameNumbersWithUnitsInTheKeys) {
 }
 
 TEST_F(SyntheticLog, PrintedSummaryNamesTheLossesCompactly) {
-  std::ostringstream out;
-  print_log_summary(out, summarize_log(path_));
-  const std::string text = out.str();
+  const std::string text = printed(summarize_log(path_));
   EXPECT_NE(text.find("events:    51, read to the end"), std::string::npos) << text;
   EXPECT_NE(text.find("duration:  1.408 s"), std::string::npos) << text;
   EXPECT_NE(text.find("seed 7, dynamism 20 %, speed 0.5 m/s, rate 10 Hz, 10 frames, robots 1 2"), std::string::npos)
@@ -576,9 +564,7 @@ TEST_F(SyntheticLog, TruncatedCopyIsReadUpToTheCut) {
       EXPECT_FALSE(s.complete);
       EXPECT_EQ(s.bytes_read, ends_[k - 1]);
       EXPECT_EQ(s.size_bytes, cut);
-      std::ostringstream out;
-      print_log_summary(out, s);
-      EXPECT_NE(out.str().find("truncated or corrupt"), std::string::npos);
+      EXPECT_HAS(printed(s), "truncated or corrupt");
     }
   }
   // A cut between events is a complete (shorter) log.
@@ -602,9 +588,7 @@ TEST_F(SyntheticLog, StrayBytesAndABrokenEventAreSkippedAndCounted) {
   EXPECT_EQ(s.events, 50);
   EXPECT_TRUE(s.complete);
   EXPECT_EQ(s.bytes_skipped, 23 + (ends_[30] - ends_[29]));
-  std::ostringstream out;
-  print_log_summary(out, s);
-  EXPECT_NE(out.str().find("bytes between events skipped"), std::string::npos) << out.str();
+  EXPECT_HAS(printed(s), "bytes between events skipped");
 }
 
 TEST_F(SyntheticLog, RandomDamageNeverBreaksTheSummary) {
@@ -628,8 +612,7 @@ TEST_F(SyntheticLog, RandomDamageNeverBreaksTheSummary) {
     for (const auto& c : s.channels) counted += c.count;
     EXPECT_EQ(counted, s.events);
     for (const auto& r : s.robots) expect_invariant(r.account);
-    std::ostringstream out;
-    print_log_summary(out, s);
+    printed(s);
     EXPECT_FALSE(to_json(s).dump().empty());
   }
 }
@@ -654,30 +637,30 @@ TEST_F(SyntheticLog, ExtremeFramesAndTimestampsDoNotOverflow) {
   EXPECT_GT(s.duration_s(), 1e12);
   ASSERT_EQ(s.robots.size(), 1u);
   expect_invariant(s.robots[0].account);
-  std::ostringstream out;
-  print_log_summary(out, s);
-  EXPECT_NE(out.str().find("2 of 4294967296 logged"), std::string::npos) << out.str();
+  EXPECT_HAS(printed(s), "2 of 4294967296 logged");
   EXPECT_FALSE(to_json(s).dump().empty());
 }
 
 TEST_F(SyntheticLog, NotAnLcmLogAndMissingFileAreClearErrors) {
+  // summarize_log's error for `path` (a failure when it has none).
+  auto error_of = [](const std::string& path) -> std::string {
+    try {
+      summarize_log(path);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    ADD_FAILURE() << "no error for " << path;
+    return "";
+  };
   const std::string text = (dir_ / "notes.txt").string();
   std::ofstream(text) << "hello, this is not a log\n";
-  try {
-    summarize_log(text);
-    FAIL() << "no error for a text file";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("is not an LCM log"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
+  const std::string not_a_log = error_of(text);
+  EXPECT_HAS(not_a_log, "is not an LCM log");
+  EXPECT_HAS(not_a_log, text);
   const std::string missing = (dir_ / "nothing.lcmlog").string();
-  try {
-    summarize_log(missing);
-    FAIL() << "no error for a missing file";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
-  }
+  const std::string no_file = error_of(missing);
+  EXPECT_HAS(no_file, "no such file");
+  EXPECT_HAS(no_file, missing);
   EXPECT_THROW(summarize_log(dir_.string()), std::runtime_error);  // a directory
   // An empty file is a log of no events (a recorder that heard nothing).
   const std::string empty = (dir_ / "empty.lcmlog").string();
@@ -697,9 +680,7 @@ TEST_F(SyntheticLog, LogWithoutRunInfoTakesRobotsFromChannelNames) {
   ASSERT_EQ(s.robots.size(), 2u);
   EXPECT_EQ(s.robots[0].robot_id, 1);
   EXPECT_EQ(s.robots[1].account.not_started, 2);
-  std::ostringstream out;
-  print_log_summary(out, s);
-  EXPECT_NE(out.str().find("run info:  none in the log"), std::string::npos);
+  EXPECT_HAS(printed(s), "run info:  none in the log");
 }
 
 TEST_F(SyntheticLog, InputOnlyLogSaysRobotOutputsWereNotRecorded) {
@@ -709,11 +690,7 @@ TEST_F(SyntheticLog, InputOnlyLogSaysRobotOutputsWereNotRecorded) {
   }));
   ASSERT_EQ(s.robots.size(), 2u);
   EXPECT_FALSE(s.robots[0].outputs_recorded());
-  std::ostringstream out;
-  print_log_summary(out, s);
-  EXPECT_NE(out.str().find("no POSE_2 or STATUS_ROBOT_2 in the log (robot outputs not recorded); SENSOR missing 6"),
-            std::string::npos)
-      << out.str();
+  EXPECT_HAS(printed(s), "no POSE_2 or STATUS_ROBOT_2 in the log (robot outputs not recorded); SENSOR missing 6");
 }
 
 TEST_F(SyntheticLog, AnotherVersionOfATypeIsReportedByItsFingerprint) {
@@ -742,11 +719,7 @@ TEST_F(SyntheticLog, AnotherVersionOfATypeIsReportedByItsFingerprint) {
   ASSERT_EQ(s.robots.size(), 1u);
   EXPECT_EQ(s.robots[0].pose_undecodable, 2);
   EXPECT_TRUE(s.frames_source.empty());
-  std::ostringstream out;
-  print_log_summary(out, s);
-  EXPECT_NE(out.str().find("2 of 2 POSE_1 events carry another fingerprint than this build's pose_estimate_t"),
-            std::string::npos)
-      << out.str();
+  EXPECT_HAS(printed(s), "2 of 2 POSE_1 events carry another fingerprint than this build's pose_estimate_t");
 }
 
 // The program: exit status and output (skipped when log_info is not built).

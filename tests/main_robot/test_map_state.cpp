@@ -12,13 +12,13 @@
 #include <fstream>
 #include <functional>
 #include <limits>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include "elaslam/landmark_event_t.hpp"
 #include "elaslam/main_robot/map_state.hpp"
 #include "global_event.hpp"
+#include "../support/read_file.hpp"
 
 // The largest single heap allocation since reset_largest_allocation()
 // (largest_allocation.cpp: a counting operator new).
@@ -30,6 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using test::read_file;
 
 GlobalMapOptions options() {
   GlobalMapOptions o;
@@ -66,13 +67,6 @@ StateKey key_of(std::uint8_t fill) {
   k.fill(fill);
   k[0] = 0x5a;
   return k;
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
 }
 
 void write_file(const std::string& path, const std::string& text) {

@@ -211,6 +211,20 @@ void judge(ElaGate* gate, LMap* lmap, const EkfSlam& ekf, const Pose2& truth,
   gate->judge_view(ekf, lmap);
 }
 
+// n landmarks on a ring of radius r, mapped from `pose` by a filter, and a gate of
+// `o` with its own LMap; a test moves some of lms, then judges the landmarks `ids`
+// seen from `pose`.
+struct RingFrame {
+  RingFrame(const Pose2& pose, int n, double r, const RobotOptions& o)
+      : pose(pose), lms(test::ring(n, r)), ekf(test::mapped_filter(pose, lms)), gate(o) {}
+  void judge_view(const std::vector<int>& ids) { judge(&gate, &lmap, ekf, pose, lms, ids); }
+  const Pose2 pose;
+  std::vector<Eigen::Vector2d> lms;
+  const EkfSlam ekf;
+  ElaGate gate;
+  LMap lmap{64};
+};
+
 // ElaGate computes eq 16 for the whole view at once and sets landmarks aside by
 // subtracting their terms (O(n^2) each, not a new O(n^3) pass): the same d2 and
 // verdicts as ela_multi_d2 pass by pass, on views with several movers.
@@ -260,13 +274,10 @@ TEST(ElaGateFrame, TheIncrementalEq16IsEq16PassByPass) {
 }
 
 TEST(ElaGateFrame, OneVerdictAndOneRecordPerLandmarkInViewEq16) {
-  const Pose2 pose{0.0, 0.0, 0.3};
-  auto lms = test::ring(8, 4.0);
-  const EkfSlam ekf = test::mapped_filter(pose, lms);
-  lms[2] += Eigen::Vector2d(0.5, 0.0);
-  ElaGate gate(test::robot_options(Mode::kEla));
-  LMap lmap(64);
-  judge(&gate, &lmap, ekf, pose, lms, test::all_ids(8));
+  RingFrame f({0.0, 0.0, 0.3}, 8, 4.0, test::robot_options(Mode::kEla));
+  f.lms[2] += Eigen::Vector2d(0.5, 0.0);
+  f.judge_view(test::all_ids(8));
+  const ElaGate& gate = f.gate;
   ASSERT_EQ(gate.view_size(), 8);
   ASSERT_EQ(gate.records().size(), 8u);
   for (int k = 0; k < 8; ++k) {
@@ -287,12 +298,10 @@ TEST(ElaGateFrame, OneVerdictAndOneRecordPerLandmarkInViewEq16) {
 TEST(ElaGateFrame, TwoInViewTheMoverIsSetAsideWhicheverComesFirst) {
   const Pose2 pose{0.0, 0.0, 0.2};
   for (int mover : {0, 1}) {
-    auto lms = test::ring(2, 3.0);
-    const EkfSlam ekf = test::mapped_filter(pose, lms);
-    lms[static_cast<std::size_t>(mover)] += Eigen::Vector2d(0.5, -0.3);
-    ElaGate gate(test::robot_options(Mode::kEla));
-    LMap lmap(64);
-    judge(&gate, &lmap, ekf, pose, lms, {0, 1});
+    RingFrame f(pose, 2, 3.0, test::robot_options(Mode::kEla));
+    f.lms[static_cast<std::size_t>(mover)] += Eigen::Vector2d(0.5, -0.3);
+    f.judge_view({0, 1});
+    const ElaGate& gate = f.gate;
     ASSERT_EQ(gate.records().size(), 2u);
     EXPECT_FALSE(gate.verdict(mover).inside) << "mover " << mover;
     EXPECT_TRUE(gate.verdict(1 - mover).inside) << "mover " << mover;
@@ -301,31 +310,26 @@ TEST(ElaGateFrame, TwoInViewTheMoverIsSetAsideWhicheverComesFirst) {
 }
 
 TEST(ElaGateFrame, ALoneLandmarkIsJudgedByItsPriorInnovation) {
-  const Pose2 pose{0.0, 0.0, 0.0};
-  auto lms = test::ring(4, 3.0);
-  const EkfSlam ekf = test::mapped_filter(pose, lms);
-  lms[1] += Eigen::Vector2d(0.0, 0.6);
   for (Mode mode : {Mode::kEla, Mode::kConsensus}) {
-    ElaGate gate(test::robot_options(mode));
-    LMap lmap(64);
-    judge(&gate, &lmap, ekf, pose, lms, {1});
+    RingFrame f({0.0, 0.0, 0.0}, 4, 3.0, test::robot_options(mode));
+    f.lms[1] += Eigen::Vector2d(0.0, 0.6);
+    f.judge_view({1});
+    const ElaGate& gate = f.gate;
     ASSERT_EQ(gate.records().size(), 1u);
     EXPECT_EQ(gate.records()[0].kind, GateKind::kInnovation);
     EXPECT_FALSE(gate.verdict(0).inside);
     EXPECT_TRUE(gate.verdict(0).alone);
-    EXPECT_DOUBLE_EQ(gate.records()[0].d2, ekf.check(1, observe(pose, lms[1])).d2);
+    EXPECT_DOUBLE_EQ(gate.records()[0].d2, f.ekf.check(1, observe(f.pose, f.lms[1])).d2);
     expect_consistent(gate.records()[0]);
   }
 }
 
 TEST(ElaGateFrame, ConsensusRecordsTheCliqueAndTheReTest) {
-  const Pose2 pose{0.0, 0.0, 0.2};
-  auto lms = test::ring(8, 4.0);
-  const EkfSlam ekf = test::mapped_filter(pose, lms);
-  lms[5] += Eigen::Vector2d(0.0, 0.7);
-  ElaGate gate(test::robot_options(Mode::kConsensus));
-  LMap lmap(64);
-  judge(&gate, &lmap, ekf, pose, lms, test::all_ids(8));
+  RingFrame f({0.0, 0.0, 0.2}, 8, 4.0, test::robot_options(Mode::kConsensus));
+  f.lms[5] += Eigen::Vector2d(0.0, 0.7);
+  f.judge_view(test::all_ids(8));
+  const ElaGate& gate = f.gate;
+  const EkfSlam& ekf = f.ekf;
   ASSERT_EQ(gate.records().size(), 8u);
   for (int k = 0; k < 8; ++k) {
     const GateRecord& g = gate.records()[static_cast<std::size_t>(k)];
@@ -347,16 +351,14 @@ TEST(ElaGateFrame, ConsensusRecordsTheCliqueAndTheReTest) {
 
 TEST(ElaGateFrame, ADriftRejectionRecordsTheDriftTestWithItsOwnNumbers) {
   // GIVEN landmark 3's drift sum already far out (a slow mover), landmark 4's near 0
-  const Pose2 pose{0.0, 0.0, 0.0};
-  const auto lms = test::ring(6, 3.0);
-  const EkfSlam ekf = test::mapped_filter(pose, lms);
   RobotOptions o = test::robot_options(Mode::kEla);
   o.drift_memory = 0.9;
-  ElaGate gate(o);
-  LMap lmap(64);
+  RingFrame f({0.0, 0.0, 0.0}, 6, 3.0, o);
+  const ElaGate& gate = f.gate;
+  LMap& lmap = f.lmap;
   lmap.add_drift(3, 0.9, Eigen::Vector2d(20.0, 0.0));
   // WHEN every landmark passes eq 16
-  judge(&gate, &lmap, ekf, pose, lms, test::all_ids(6));
+  f.judge_view(test::all_ids(6));
   // THEN landmark 3 is rejected by the drift test, and its record says so
   const GateRecord& g = gate.records()[3];
   EXPECT_FALSE(gate.verdict(3).inside);

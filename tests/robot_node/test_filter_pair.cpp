@@ -42,11 +42,21 @@ int drive(FilterPair* pair, RandomWorld* w, const EkfOptions& o, int frames) {
   return faults;
 }
 
-TEST(FilterPair, WithoutTeamIncrementsTheTwoFiltersAreOne) {
+// A pair of small_options(false) filters driven `frames` frames through the random
+// world of `seed`; `faults` is what drive counted.
+struct DrivenPair {
+  DrivenPair(std::uint64_t seed, int frames, bool aided = true, int history_frames = 0, int history_ops = 64)
+      : pair(o, aided, history_frames, history_ops), w(seed), faults(drive(&pair, &w, o, frames)) {}
   const EkfOptions o = small_options(false);
-  FilterPair pair(o, /*aided=*/true, /*history_frames=*/0, /*history_ops=*/64);
-  RandomWorld w(0x51);
-  EXPECT_EQ(drive(&pair, &w, o, 10), 0);
+  FilterPair pair;
+  RandomWorld w;
+  const int faults;
+};
+
+TEST(FilterPair, WithoutTeamIncrementsTheTwoFiltersAreOne) {
+  DrivenPair d(0x51, 10, /*aided=*/true, /*history_frames=*/0, /*history_ops=*/64);
+  FilterPair& pair = d.pair;
+  EXPECT_EQ(d.faults, 0);
   ASSERT_TRUE(pair.has_aided());
   EXPECT_EQ(pair.own().num_landmarks(), 4);
   EXPECT_TRUE(same(pair.own(), pair.aided()));
@@ -54,10 +64,8 @@ TEST(FilterPair, WithoutTeamIncrementsTheTwoFiltersAreOne) {
 }
 
 TEST(FilterPair, ATeamIncrementMovesTheAidedFilterAlone) {
-  const EkfOptions o = small_options(false);
-  FilterPair pair(o, true, /*history_frames=*/3, /*history_ops=*/256);
-  RandomWorld w(0x52);
-  drive(&pair, &w, o, 5);
+  DrivenPair d(0x52, 5, true, /*history_frames=*/3, /*history_ops=*/256);
+  FilterPair& pair = d.pair;
   const Eigen::VectorXd own_before = pair.own().mean();
   const Eigen::Vector2d z = pair.aided().landmark(2) + Eigen::Vector2d(0.05, -0.03);
   const Eigen::Matrix2d R = 0.01 * Eigen::Matrix2d::Identity();
@@ -73,10 +81,10 @@ TEST(FilterPair, ATeamIncrementMovesTheAidedFilterAlone) {
 }
 
 TEST(FilterPair, AnOperationTheOwnFilterRefusesNeverReachesTheAidedOne) {
-  const EkfOptions o = small_options(false);
-  FilterPair pair(o, true, 0, 64);
-  RandomWorld w(0x53);
-  drive(&pair, &w, o, 3);
+  DrivenPair d(0x53, 3);
+  FilterPair& pair = d.pair;
+  RandomWorld& w = d.w;
+  const EkfOptions& o = d.o;
   int faults = 0;
   EXPECT_EQ(pair.add(4, 1, w.sense(1, o), &faults), EkfStatus::kAlreadyMapped);  // landmark 1 is held
   EXPECT_EQ(pair.remove(4, 9), EkfStatus::kUnknownLandmark);  // landmark 9 is not
@@ -88,10 +96,8 @@ TEST(FilterPair, AnOperationTheOwnFilterRefusesNeverReachesTheAidedOne) {
 }
 
 TEST(FilterPair, ARelocalisationMovesEachFilterByItsOwnMotion) {
-  const EkfOptions o = small_options(false);
-  FilterPair pair(o, true, 0, 64);
-  RandomWorld w(0x54);
-  drive(&pair, &w, o, 3);
+  DrivenPair d(0x54, 3);
+  FilterPair& pair = d.pair;
   const Pose2 own0 = pair.own().pose(), aided0 = pair.aided().pose();
   ASSERT_EQ(pair.apply_rigid_motion(0.5, Eigen::Vector2d(1.0, 0.0), -0.25, Eigen::Vector2d(0.0, 2.0)), EkfStatus::kOk);
   EXPECT_NEAR(wrap_angle(pair.own().pose().theta - own0.theta), 0.5, 1e-12);
@@ -101,10 +107,9 @@ TEST(FilterPair, ARelocalisationMovesEachFilterByItsOwnMotion) {
 }
 
 TEST(FilterPair, WithoutTheAidedFilterTheEstimateIsTheOwn) {
-  const EkfOptions o = small_options(false);
-  FilterPair pair(o, /*aided=*/false, 0, 64);
-  RandomWorld w(0x55);
-  EXPECT_EQ(drive(&pair, &w, o, 4), 0);
+  DrivenPair d(0x55, 4, /*aided=*/false);
+  FilterPair& pair = d.pair;
+  EXPECT_EQ(d.faults, 0);
   EXPECT_FALSE(pair.has_aided());
   EXPECT_EQ(&pair.estimate(), &pair.own());
   EXPECT_EQ(pair.apply_rigid_motion(0.1, Eigen::Vector2d(0.0, 0.0), 0.0, Eigen::Vector2d(0.0, 0.0)), EkfStatus::kOk);

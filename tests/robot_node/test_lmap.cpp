@@ -5,17 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include "scene.hpp"
+
 namespace elaslam {
 namespace {
 
-LifecycleRules rules() {
-  LifecycleRules r;
-  r.confirm_frames = 3;
-  r.return_frames = 6;
-  r.moving_after = 2;
-  r.missing_needed = 3;
-  return r;
-}
+// The rules of the test robot (test::robot_options): confirm_frames 3, return_frames 6,
+// moving_after 2, missing_needed 3.
+LifecycleRules rules() { return lifecycle_rules(test::robot_options(Mode::kEla)); }
 
 // Confirm a fresh candidate: anchored at `frame`, then consistent until STATIC.
 int sightings_until_confirmed(LMap* m, int id, int frame) {

@@ -6,6 +6,7 @@
 // spans (gaps, re-anchors, a late start); STATUS's fields.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -213,22 +214,18 @@ TEST(OdometryCalibration, StatusCarriesTheEstimate) {
     const node_status_t s = node.status_msg(0);
     const OdometryCalibration c = node.robot().filter().calibration();
     const Eigen::Matrix3d C = node.robot().filter().calibration_cov();
-    EXPECT_EQ(s.odom_turn_scale, static_cast<float>(c.turn_scale));
-    EXPECT_EQ(s.odom_speed_scale, static_cast<float>(c.speed_scale));
-    EXPECT_EQ(s.odom_turn_bias_rad_s, static_cast<float>(c.turn_bias));
-    EXPECT_EQ(s.odom_turn_scale_sigma, static_cast<float>(std::sqrt(C(0, 0))));
-    EXPECT_EQ(s.odom_speed_scale_sigma, static_cast<float>(std::sqrt(C(1, 1))));
-    EXPECT_EQ(s.odom_turn_bias_sigma_rad_s, static_cast<float>(std::sqrt(C(2, 2))));
+    // The six calibration fields of STATUS: turn scale, speed scale, turn bias, and their sigmas.
+    using Six = std::array<float, 6>;
+    const Six in_status{s.odom_turn_scale,       s.odom_speed_scale,       s.odom_turn_bias_rad_s,
+                        s.odom_turn_scale_sigma, s.odom_speed_scale_sigma, s.odom_turn_bias_sigma_rad_s};
+    EXPECT_EQ(in_status, (Six{static_cast<float>(c.turn_scale), static_cast<float>(c.speed_scale),
+                              static_cast<float>(c.turn_bias), static_cast<float>(std::sqrt(C(0, 0))),
+                              static_cast<float>(std::sqrt(C(1, 1))), static_cast<float>(std::sqrt(C(2, 2)))}));
     if (estimated) {
       EXPECT_GT(s.odom_turn_scale_sigma, 0.0f);
       EXPECT_LT(s.odom_turn_scale, 1.0f);  // on its way to 0.9
     } else {
-      EXPECT_EQ(s.odom_turn_scale, 1.0f);
-      EXPECT_EQ(s.odom_speed_scale, 1.0f);
-      EXPECT_EQ(s.odom_turn_bias_rad_s, 0.0f);
-      EXPECT_EQ(s.odom_turn_scale_sigma, 0.0f);
-      EXPECT_EQ(s.odom_speed_scale_sigma, 0.0f);
-      EXPECT_EQ(s.odom_turn_bias_sigma_rad_s, 0.0f);
+      EXPECT_EQ(in_status, (Six{1.0f, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f}));
     }
   }
 }

@@ -222,26 +222,43 @@ TEST_F(RobotPaths, ReturnBackoffDoublesTheProbationOfARepeatMover) {
   EXPECT_EQ(move_and_return(), 22);  // the third time: 24
 }
 
-// A landmark creeping at 3 mm per frame (a tenth of the bearing noise at 3 m):
-// every single test lets it through for a long time while the filter follows it;
-// the drift test of its innovations catches it much sooner.
-int frames_to_flag_creeper(double drift_memory, bool candidate_drift, int* flagged_static, double step = 0.003) {
+// Robot 1 of `o` standing at the origin among 6 landmarks 3 m away, seeing them in
+// frames 0, 1, 2, ... with noise drawn from a generator seeded with `seed`.
+struct StandingRobot {
+  StandingRobot(const RobotOptions& o, std::uint64_t seed) : robot(o, 1), rng(seed) {}
+  FrameSummary step(const std::vector<int>& ids = test::all_ids(6)) {
+    return robot.process(test::frame_from(frame++, pose, pose, lms, ids, &rng));
+  }
+  Robot robot;
+  std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
+  std::mt19937_64 rng;
+  const Pose2 pose{0.0, 0.0, 0.0};
+  int frame = 0;
+};
+
+// The ELA options with the drift test of `drift_memory` (for candidates too when
+// `candidate_drift`) and the missing rule off.
+RobotOptions drift_options(double drift_memory, bool candidate_drift) {
   RobotOptions o = test::robot_options(Mode::kEla);
   o.drift_memory = drift_memory;
   o.candidate_drift_test = candidate_drift;
   o.missing_frames = 0;
-  Robot r(o, 1);
-  std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
-  std::mt19937_64 rng(11);
-  const Pose2 pose{0.0, 0.0, 0.0};
-  int frame = 0;
-  for (; frame < 10; ++frame) r.process(test::frame_from(frame, pose, pose, lms, test::all_ids(6), &rng));
-  const Eigen::Vector2d tangent = Eigen::Vector2d(-lms[2].y(), lms[2].x()).normalized();
+  return o;
+}
+
+// A landmark creeping at 3 mm per frame (a tenth of the bearing noise at 3 m):
+// every single test lets it through for a long time while the filter follows it;
+// the drift test of its innovations catches it much sooner.
+int frames_to_flag_creeper(double drift_memory, bool candidate_drift, int* flagged_static, double step = 0.003) {
+  StandingRobot s(drift_options(drift_memory, candidate_drift), 11);
+  const Robot& r = s.robot;
+  while (s.frame < 10) s.step();
+  const Eigen::Vector2d tangent = Eigen::Vector2d(-s.lms[2].y(), s.lms[2].x()).normalized();
   *flagged_static = 0;
   int found = -1;
-  for (int k = 0; k < 150; ++k, ++frame) {
-    lms[2] += step * tangent;
-    r.process(test::frame_from(frame, pose, pose, lms, test::all_ids(6), &rng));
+  for (int k = 0; k < 150; ++k) {
+    s.lms[2] += step * tangent;
+    s.step();
     for (const MapEvent& e : r.events())
       if (e.kind == EventKind::kMoving) {
         if (e.landmark_id == 2 && found < 0) found = k;
@@ -267,19 +284,14 @@ TEST(DriftTest, CatchesASlowMoverThatSingleTestsLetThrough) {
 // The record of a sighting rejected by the drift test is the drift test's (its
 // statistic |s|^2 (1 - lambda^2) and threshold), not the eq 16 test it passed.
 TEST(DriftTest, ARejectionByTheDriftTestIsRecordedAsSuch) {
-  RobotOptions o = test::robot_options(Mode::kEla);
-  o.drift_memory = 0.9;
-  o.candidate_drift_test = true;
-  o.missing_frames = 0;
-  Robot r(o, 1);
-  std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
-  std::mt19937_64 rng(11);
-  const Pose2 pose{0.0, 0.0, 0.0};
-  const Eigen::Vector2d tangent = Eigen::Vector2d(-lms[2].y(), lms[2].x()).normalized();
+  const RobotOptions o = drift_options(0.9, true);
+  StandingRobot s(o, 11);
+  const Robot& r = s.robot;
+  const Eigen::Vector2d tangent = Eigen::Vector2d(-s.lms[2].y(), s.lms[2].x()).normalized();
   int drift_records = 0;
   for (int frame = 0; frame < 60; ++frame) {
-    if (frame >= 10) lms[2] += 0.003 * tangent;
-    r.process(test::frame_from(frame, pose, pose, lms, test::all_ids(6), &rng));
+    if (frame >= 10) s.lms[2] += 0.003 * tangent;
+    s.step();
     for (const GateRecord& g : r.gate_records()) {
       EXPECT_EQ(g.inside, g.d2 <= g.threshold) << to_string(g.kind) << " frame " << frame;
       if (g.kind != GateKind::kDrift) continue;
@@ -294,17 +306,11 @@ TEST(DriftTest, ARejectionByTheDriftTestIsRecordedAsSuch) {
 TEST(DriftTest, StaticLandmarksAreNotFlaggedByTheDriftTest) {
   // 6 static landmarks, noisy sightings for 1,000 frames: 6,000 drift tests at a
   // 1e-4 gate, strongly correlated over ~10 frames: no landmark may be flagged.
-  RobotOptions o = test::robot_options(Mode::kEla);
-  o.drift_memory = 0.9;
-  o.candidate_drift_test = true;
-  o.missing_frames = 0;
-  Robot r(o, 1);
-  const std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
-  std::mt19937_64 rng(3);
-  const Pose2 pose{0.0, 0.0, 0.0};
+  StandingRobot s(drift_options(0.9, true), 3);
+  const Robot& r = s.robot;
   int moving = 0;
   for (int k = 0; k < 1000; ++k) {
-    r.process(test::frame_from(k, pose, pose, lms, test::all_ids(6), &rng));
+    s.step();
     for (const MapEvent& e : r.events()) moving += e.kind == EventKind::kMoving ? 1 : 0;
   }
   EXPECT_EQ(moving, 0);
@@ -374,15 +380,12 @@ TEST(DriftTest, ACreepingCandidateIsNotConfirmed) {
     RobotOptions o = test::robot_options(Mode::kEla);
     o.candidate_drift_test = drift;
     o.confirm_frames = 12;
-    Robot r(o, 1);
-    std::vector<Eigen::Vector2d> lms = test::ring(6, 3.0);
-    std::mt19937_64 rng(4);
-    const Pose2 pose{0.0, 0.0, 0.0};
+    StandingRobot s(o, 4);
     bool confirmed = false;
     for (int k = 0; k < 12; ++k) {
-      lms[0] += Eigen::Vector2d(0.0, 0.012);
-      r.process(test::frame_from(k, pose, pose, lms, {0}, &rng));
-      confirmed = confirmed || r.lmap()[0].status == LandmarkStatus::kStatic;
+      s.lms[0] += Eigen::Vector2d(0.0, 0.012);
+      s.step({0});
+      confirmed = confirmed || s.robot.lmap()[0].status == LandmarkStatus::kStatic;
     }
     EXPECT_EQ(confirmed, !drift);
   }

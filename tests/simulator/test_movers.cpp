@@ -53,6 +53,21 @@ std::vector<int> run_lengths(const std::vector<bool>& v) {
   return out;
 }
 
+// Steps `w` to frame frames - 1 and calls each(k, i, d) for every landmark i after
+// step k, d its displacement in that step.
+template <typename Each>
+void for_each_displacement(World& w, int frames, Each each) {
+  for (int k = 1; k < frames; ++k) {
+    const auto before = w.landmark_positions();
+    w.step();
+    const auto& p = w.landmark_positions();
+    for (int i = 0; i < w.num_landmarks(); ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      each(k, i, Eigen::Vector2d(p[u] - before[u]));
+    }
+  }
+}
+
 TEST(SimMovers, ConstantVelocityMoversKeepDirectionAndSpeedUntilTheyBounce) {
   // GIVEN every mover of constant velocity, fast enough to reach a border in the run
   ScenarioOptions o = with_kinds({MotionKind::kConstantVelocity}, 50.0, 0.9);
@@ -111,25 +126,19 @@ TEST(SimMovers, StopAndGoMoversAlternateStretchesOfTheConfiguredLengths) {
   std::vector<std::vector<bool>> moved(n);  // per landmark, per step: did it move
   std::vector<bool> first_step_still(n);
   for (std::size_t u = 0; u < n; ++u) first_step_still[u] = w.standing_still(static_cast<int>(u));
-  for (int k = 1; k < o.frames; ++k) {
-    const auto before = w.landmark_positions();
-    w.step();
-    const auto& p = w.landmark_positions();
-    for (int i = 0; i < w.num_landmarks(); ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      const double d = (p[u] - before[u]).norm();
-      if (!w.is_moving(i)) {
-        EXPECT_EQ(d, 0.0);
-        continue;
-      }
-      // THEN a step is either no displacement at all or speed / rate (bounces aside)
-      EXPECT_EQ(w.standing_still(i), d == 0.0) << "landmark " << i << " frame " << k;
-      if (d != 0.0 && !w.reflected_last_step(i)) {
-        EXPECT_NEAR(d, step, 1e-9) << "landmark " << i << " frame " << k;
-      }
-      moved[u].push_back(d != 0.0);
+  for_each_displacement(w, o.frames, [&](int k, int i, const Eigen::Vector2d& displacement) {
+    const double d = displacement.norm();
+    if (!w.is_moving(i)) {
+      EXPECT_EQ(d, 0.0);
+      return;
     }
-  }
+    // THEN a step is either no displacement at all or speed / rate (bounces aside)
+    EXPECT_EQ(w.standing_still(i), d == 0.0) << "landmark " << i << " frame " << k;
+    if (d != 0.0 && !w.reflected_last_step(i)) {
+      EXPECT_NEAR(d, step, 1e-9) << "landmark " << i << " frame " << k;
+    }
+    moved[static_cast<std::size_t>(i)].push_back(d != 0.0);
+  });
   // AND the stretches between the first and the last are 12 moving, 7 standing, to the frame
   std::set<int> first_stretches;
   int movers = 0, inner_stretches = 0;
@@ -199,28 +208,21 @@ TEST(SimMovers, ReportedVelocityIsThePositionDifferenceOverTheStep) {
     }
   }
   int still = 0, full_speed = 0, bounced = 0;
-  for (int k = 1; k < o.frames; ++k) {
-    const auto before = w.landmark_positions();
-    w.step();
-    const auto& p = w.landmark_positions();
-    for (int i = 0; i < w.num_landmarks(); ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      const Eigen::Vector2d diff = p[u] - before[u];
-      // THEN velocity x dt is the step's displacement, bounces included
-      EXPECT_NEAR((w.velocity(i) / o.rate_hz - diff).norm(), 0.0, 1e-12) << "landmark " << i << " frame " << k;
-      EXPECT_EQ(w.standing_still(i), w.velocity(i).isZero(0.0)) << "landmark " << i << " frame " << k;
-      if (w.standing_still(i)) {
-        ++still;
-      } else if (w.reflected_last_step(i)) {
-        EXPECT_LT(w.velocity(i).norm(), speed + 1e-9);
-        ++bounced;
-      } else {
-        EXPECT_NEAR(w.velocity(i).norm(), speed, 1e-9) << "landmark " << i << " frame " << k;
-        EXPECT_NEAR((w.velocity(i) - speed * w.direction(i)).norm(), 0.0, 1e-9) << i;
-        ++full_speed;
-      }
+  for_each_displacement(w, o.frames, [&](int k, int i, const Eigen::Vector2d& diff) {
+    // THEN velocity x dt is the step's displacement, bounces included
+    EXPECT_NEAR((w.velocity(i) / o.rate_hz - diff).norm(), 0.0, 1e-12) << "landmark " << i << " frame " << k;
+    EXPECT_EQ(w.standing_still(i), w.velocity(i).isZero(0.0)) << "landmark " << i << " frame " << k;
+    if (w.standing_still(i)) {
+      ++still;
+    } else if (w.reflected_last_step(i)) {
+      EXPECT_LT(w.velocity(i).norm(), speed + 1e-9);
+      ++bounced;
+    } else {
+      EXPECT_NEAR(w.velocity(i).norm(), speed, 1e-9) << "landmark " << i << " frame " << k;
+      EXPECT_NEAR((w.velocity(i) - speed * w.direction(i)).norm(), 0.0, 1e-9) << i;
+      ++full_speed;
     }
-  }
+  });
   EXPECT_GT(still, 0);
   EXPECT_GT(full_speed, 0);
   EXPECT_GT(bounced, 0);

@@ -8,36 +8,26 @@
 
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/team/team_run.hpp"
+#include "edited_frames.hpp"
 #include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
-
-// The simulator's frames, robot index `robot` missing frames [from, to): it is given
-// frame from - 1 again, which it refuses as a repeat, so it next sees frame `to`.
-class GapFrames : public SimulatorFrames {
- public:
-  GapFrames(const sim::ScenarioOptions& o, int robot, int from, int to)
-      : SimulatorFrames(o), robot_(robot), from_(from), to_(to) {}
-  void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    SimulatorFrames::frame(k, gt, sensors);
-    sensor_frame_t& s = (*sensors)[static_cast<std::size_t>(robot_)];
-    if (k == from_ - 1) last_ = s;
-    if (k >= from_ && k < to_) s = last_;
-  }
-
- private:
-  int robot_, from_, to_;
-  sensor_frame_t last_{};
-};
 
 // Robot index 1's mean position error over the run [m].
 double run_gap(int seed, double rate, int gap) {
   TeamConfig c = test::paper();
   c.scenario.seed = seed;
   c.scenario.rate_hz = rate;
-  const int from = 64;
-  GapFrames frames(c.scenario, 1, from, from + gap);
+  // Robot index 1 misses frames [from, to): it is given frame from - 1 again, which it
+  // refuses as a repeat, so it next sees frame `to`.
+  const int from = 64, to = from + gap;
+  sensor_frame_t last{};
+  test::EditedFrames frames(c.scenario, [&](int k, std::vector<sensor_frame_t>* sensors) {
+    sensor_frame_t& s = (*sensors)[1];
+    if (k == from - 1) last = s;
+    if (k >= from && k < to) s = last;
+  });
   const RunResult r = run_team(c.robot, c.main, frames);
   double sum = 0.0;
   for (std::size_t k = 0; k < r.estimated[1].size(); ++k)

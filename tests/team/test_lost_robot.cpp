@@ -8,35 +8,11 @@
 
 #include "elaslam/common/geometry.hpp"
 #include "elaslam/team/team_run.hpp"
+#include "edited_frames.hpp"
 #include "paper_team.hpp"
 
 namespace elaslam {
 namespace {
-
-// The simulator's frames (SimulatorFrames), robot index `kicked`'s odometer turned by
-// `kick` rad from frame `at` on (its odometry says it turned that much more than it did).
-class KickedFrames : public SimulatorFrames {
- public:
-  KickedFrames(const sim::ScenarioOptions& o, int kicked, int at, double kick)
-      : SimulatorFrames(o), kicked_(kicked), at_(at), kick_(kick) {}
-  void frame(int k, ground_truth_t* gt, std::vector<sensor_frame_t>* sensors) override {
-    SimulatorFrames::frame(k, gt, sensors);
-    sensor_frame_t& s = (*sensors)[static_cast<std::size_t>(kicked_)];
-    const Pose2 odo{s.odom_x, s.odom_y, s.odom_theta};
-    if (k == at_) at_odo_ = odo;
-    if (k >= at_) {
-      const Pose2 kicked = compose(compose(at_odo_, Pose2{0.0, 0.0, kick_}), between(at_odo_, odo));
-      s.odom_x = kicked.x;
-      s.odom_y = kicked.y;
-      s.odom_theta = kicked.theta;
-    }
-  }
-
- private:
-  int kicked_, at_;
-  double kick_;
-  Pose2 at_odo_;
-};
 
 struct Outcome {
   double kicked_error = 0.0;   // robot 1's mean position error after the kick [m]
@@ -53,8 +29,22 @@ Outcome run_kicked(bool team_map, int seed, double gate = 0.9999) {
   c.scenario.dynamism_percent = 0.0;
   c.robot.team_map_fuse = team_map;
   c.main.team_map_period_frames = team_map ? 10 : 0;
+  // Robot index 0's odometer turned by 25 deg from frame `at` on (its odometry says it
+  // turned that much more than it did).
   const int at = 50;
-  KickedFrames frames(c.scenario, 0, at, deg2rad(25.0));
+  const double kick = deg2rad(25.0);
+  Pose2 at_odo;
+  test::EditedFrames frames(c.scenario, [&](int k, std::vector<sensor_frame_t>* sensors) {
+    sensor_frame_t& s = (*sensors)[0];
+    const Pose2 odo{s.odom_x, s.odom_y, s.odom_theta};
+    if (k == at) at_odo = odo;
+    if (k >= at) {
+      const Pose2 kicked = compose(compose(at_odo, Pose2{0.0, 0.0, kick}), between(at_odo, odo));
+      s.odom_x = kicked.x;
+      s.odom_y = kicked.y;
+      s.odom_theta = kicked.theta;
+    }
+  });
   const RunResult r = run_team(c.robot, c.main, frames);
   Outcome o;
   for (std::size_t i = 0; i < r.estimated.size(); ++i) {

@@ -4,8 +4,6 @@
 // computed by hand (mean ± sample sd, cells won), and the parallel run.
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
 #include <unistd.h>
@@ -13,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "elaslam/team/sweep.hpp"
+#include "../support/read_file.hpp"
 
 namespace elaslam {
 namespace {
@@ -90,13 +89,6 @@ TEST(Sweep, SummaryMeansFrameErrorsOverRobotsWithEstimates) {
   EXPECT_TRUE(std::isnan(s.frame_robot_error[1]));
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 TEST(Sweep, FilesOfAHandMadeGrid) {
   SweepGrid g;
   g.modes = {Mode::kEkf, Mode::kEla};
@@ -117,14 +109,14 @@ TEST(Sweep, FilesOfAHandMadeGrid) {
   }
   const fs::path dir = fs::temp_directory_path() / ("sweep_files_" + std::to_string(::getpid()));
   write_sweep(dir.string(), g, jobs, res);
-  const std::string runs = slurp(dir / "runs.csv");
+  const std::string runs = test::read_file(dir / "runs.csv");
   EXPECT_EQ(runs.substr(0, runs.find('\n')),
             "mode,dynamism,speed,run,seed,landmark_error,landmark_rms,robot1_error,robot1_rms,robot1_uncertainty,"
             "precision,recall,static_landmark_error,frames_to_detect,flagged");
   EXPECT_NE(runs.find("\nekf,5,0.1,1,2,3,0,0.2,0.2,0.01,1,1,0,0,0\n"), std::string::npos);
-  const std::string frames = slurp(dir / "frames.csv");
+  const std::string frames = test::read_file(dir / "frames.csv");
   EXPECT_NE(frames.find("\nekf,5,0.1,0,2,nan\nekf,5,0.1,1,nan,1\nela,5,0.1,0,0.5,nan\n"), std::string::npos);
-  const std::string tables = slurp(dir / "tables.md");
+  const std::string tables = test::read_file(dir / "tables.md");
   EXPECT_NE(tables.find("### Table 1: landmark error of the global map [m]\n\n| dynamism [%] | 0.1 m/s ekf | "
                         "0.1 m/s ela |\n|---|---|---|\n| 5 | 2.000 ± 1.414 | 0.500 ± 0.000 |\n"),
             std::string::npos);

@@ -22,34 +22,35 @@ node_status_t status(int node, std::int64_t dropped = 0) {
   return s;
 }
 
+// A Msg of zeros but for `field`, set to `value`.
+template <typename Msg, typename Field>
+Msg message_with(Field Msg::*field, Field value) {
+  Msg m{};
+  m.*field = value;
+  return m;
+}
+
+run_info_t run_info_msg(std::int32_t frames) { return message_with(&run_info_t::frames, frames); }
+sensor_frame_t sensor_msg(std::int32_t frame) { return message_with(&sensor_frame_t::frame, frame); }
+pose_estimate_t pose_msg(std::int16_t robot) { return message_with(&pose_estimate_t::robot_id, robot); }
+
 TEST(TeamProgress, WaitingUntilTheFirstFrame) {
   TeamProgress p;
   EXPECT_EQ(p.line(0, 0), "waiting for the first frame");
-  run_info_t info{};
-  info.frames = 150;
-  p.on_run_info(info);
+  p.on_run_info(run_info_msg(150));
   EXPECT_EQ(p.line(3, 1), "waiting for the first frame of 150");
 }
 
 TEST(TeamProgress, FramesPosesMovingAndNotices) {
   TeamProgress p;
-  run_info_t info{};
-  info.frames = 150;
-  p.on_run_info(info);
-  info.frames = 0;  // no count: the last one stays
-  p.on_run_info(info);
-  sensor_frame_t s{};
-  s.frame = 149;
-  p.on_sensor(s);
-  s.frame = 10;  // late: the frame never goes back
-  p.on_sensor(s);
-  pose_estimate_t pose{};
-  pose.robot_id = 1;
-  p.on_pose(pose);
+  p.on_run_info(run_info_msg(150));
+  p.on_run_info(run_info_msg(0));  // no count: the last one stays
+  p.on_sensor(sensor_msg(149));
+  p.on_sensor(sensor_msg(10));  // late: the frame never goes back
+  p.on_pose(pose_msg(1));
   EXPECT_EQ(p.line(0, 0), "frame 150/150 | poses 1 from 1 robot | moving landmarks found 0 | notices 0");
-  pose.robot_id = 2;
-  p.on_pose(pose);
-  p.on_pose(pose);
+  p.on_pose(pose_msg(2));
+  p.on_pose(pose_msg(2));
   dynamic_notice_t n{};
   n.landmark_id = 7;
   p.on_notice(n);
@@ -62,9 +63,7 @@ TEST(TeamProgress, FramesPosesMovingAndNotices) {
 
 TEST(TeamProgress, HealthDropsRefusalsCalibrationAndFaults) {
   TeamProgress p;
-  sensor_frame_t s{};
-  s.frame = 4;
-  p.on_sensor(s);
+  p.on_sensor(sensor_msg(4));
   p.on_robot_status(status(1, 2));
   node_status_t r2 = status(2, 3);
   r2.refused[0] = 4;
@@ -99,9 +98,7 @@ TEST(TeamProgress, HandlersOnAShell) {
   bus.publish(channels::run_info("_T"), garbage, sizeof garbage);
   while (bus.handle_timeout(0) > 0) {
   }
-  sensor_frame_t s{};
-  s.frame = 0;
-  p.on_sensor(s);
+  p.on_sensor(sensor_msg(0));
   EXPECT_EQ(p.line(shell),
             "frame 1 | poses 0 from 0 robots | moving landmarks found 1 | notices 1 | undecodable 1");
 }
