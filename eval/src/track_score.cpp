@@ -8,32 +8,79 @@
 #include "elaslam/common/stats.hpp"
 
 namespace elaslam {
+namespace {
+
+/// Does `v` mark landmark `id`?
+bool known(const std::vector<std::uint8_t>& v, int id) {
+  return id >= 0 && id < static_cast<int>(v.size()) && v[static_cast<std::size_t>(id)] != 0;
+}
+
+}  // namespace
+
+TrackScorer::TrueMotion TrackScorer::true_motion(double dt, const std::vector<Eigen::Vector2d>& truth,
+                                                 const std::vector<std::uint8_t>& present) const {
+  const std::size_t n = truth.size();
+  TrueMotion m{std::vector<std::uint8_t>(n, 0), std::vector<Eigen::Vector2d>(n, Eigen::Vector2d::Zero()),
+               std::vector<std::uint8_t>(n, 0)};
+  if (!(dt > 0.0)) return m;
+  for (std::size_t i = 0; i < n && i < last_truth_.size(); ++i) {
+    if (!known(present, static_cast<int>(i)) || !known(last_present_, static_cast<int>(i))) continue;
+    m.velocity[i] = (truth[i] - last_truth_[i]) / dt;
+    m.has_velocity[i] = 1;
+    m.moving[i] = m.velocity[i].norm() > TrackMetrics::kMovingSpeedMps ? 1 : 0;
+  }
+  return m;
+}
+
+void TrackScorer::score_velocity(const TrackSample& s, const Eigen::Vector2d& position_error, const Eigen::Vector2d& v,
+                                 bool moving) {
+  static const double kNeesLow = chi2_quantile(0.025, 4), kNeesHigh = chi2_quantile(0.975, 4);
+  const Eigen::Vector2d v_est = s.x.tail<2>();
+  if (moving) {
+    ++n_moving_;
+    const double ds = v_est.norm() - v.norm();
+    speed2_ += ds * ds;
+    const double angle = std::atan2(v.x() * v_est.y() - v.y() * v_est.x(), v.dot(v_est));
+    heading2_ += angle * angle;
+  } else {
+    ++at_rest_;
+  }
+  if (s.stopped) {
+    ++found_stopped_;
+    if (!moving) ++found_and_at_rest_;
+  }
+  Eigen::Vector4d e;
+  e << position_error, v_est - v;
+  const Eigen::FullPivLU<Eigen::Matrix4d> lu(s.P);
+  if (lu.isInvertible()) {
+    const double nees = e.dot(lu.solve(e));
+    nees_ += nees;
+    ++n_nees_;
+    if (nees >= kNeesLow && nees <= kNeesHigh) ++nees_in_;
+  }
+}
+
+void TrackScorer::follow_stop(const std::pair<int, int>& key, const TrackSample& s, double time_s, bool was_moving,
+                              bool moving, std::map<std::pair<int, int>, Open>* still_open) {
+  auto open = open_stops_.find(key);
+  if (open == open_stops_.end() && was_moving && !moving) {
+    ++stops_;
+    open = open_stops_.emplace(key, Open{time_s}).first;
+  }
+  if (open == open_stops_.end()) return;
+  if (s.stopped) {
+    ++stops_found_;
+    latency_sum_ += time_s - open->second.since_s;
+  } else if (!moving) {
+    still_open->emplace(key, open->second);
+  }
+}
 
 void TrackScorer::add(double time_s, const std::vector<Eigen::Vector2d>& truth, const std::vector<std::uint8_t>& present,
                       const std::vector<TrackSample>& tracks) {
   const double dt = have_last_ ? time_s - last_time_s_ : 0.0;
-  const auto known = [](const std::vector<std::uint8_t>& v, int id) {
-    return id >= 0 && id < static_cast<int>(v.size()) && v[static_cast<std::size_t>(id)] != 0;
-  };
-  // The true velocity over the last frame, where both frames have the landmark.
-  const auto true_velocity = [&](int id, Eigen::Vector2d* v) {
-    if (!(dt > 0.0) || !known(present, id) || !known(last_present_, id) ||
-        id >= static_cast<int>(last_truth_.size()))
-      return false;
-    *v = (truth[static_cast<std::size_t>(id)] - last_truth_[static_cast<std::size_t>(id)]) / dt;
-    return true;
-  };
   if (was_moving_.size() < truth.size()) was_moving_.resize(truth.size(), 0);
-  std::vector<std::uint8_t> moving_now(truth.size(), 0);
-  std::vector<std::uint8_t> has_velocity(truth.size(), 0);
-  std::vector<Eigen::Vector2d> velocity(truth.size(), Eigen::Vector2d::Zero());
-  for (int id = 0; id < static_cast<int>(truth.size()); ++id) {
-    const auto i = static_cast<std::size_t>(id);
-    if (!true_velocity(id, &velocity[i])) continue;
-    has_velocity[i] = 1;
-    moving_now[i] = velocity[i].norm() > TrackMetrics::kMovingSpeedMps ? 1 : 0;
-  }
-  static const double kNeesLow = chi2_quantile(0.025, 4), kNeesHigh = chi2_quantile(0.975, 4);
+  const TrueMotion motion = true_motion(dt, truth, present);
   std::map<std::pair<int, int>, Open> still_open;
   std::map<std::pair<int, int>, std::int64_t> sightings_now;
   for (const TrackSample& s : tracks) {
@@ -51,52 +98,16 @@ void TrackScorer::add(double time_s, const std::vector<Eigen::Vector2d>& truth, 
     }
     sightings_now[key] = s.sightings;
     ++n_;
-    pos2_ += (s.x.head<2>() - truth[i]).squaredNorm();
-    if (!has_velocity[i]) continue;
-    const Eigen::Vector2d& v = velocity[i];
-    const Eigen::Vector2d v_est = s.x.tail<2>();
-    if (moving_now[i]) {
-      ++n_moving_;
-      const double ds = v_est.norm() - v.norm();
-      speed2_ += ds * ds;
-      const double angle = std::atan2(v.x() * v_est.y() - v.y() * v_est.x(), v.dot(v_est));
-      heading2_ += angle * angle;
-    } else {
-      ++at_rest_;
-    }
-    if (s.stopped) {
-      ++found_stopped_;
-      if (!moving_now[i]) ++found_and_at_rest_;
-    }
-    Eigen::Vector4d e;
-    e << s.x.head<2>() - truth[i], v_est - v;
-    const Eigen::FullPivLU<Eigen::Matrix4d> lu(s.P);
-    if (lu.isInvertible()) {
-      const double nees = e.dot(lu.solve(e));
-      nees_ += nees;
-      ++n_nees_;
-      if (nees >= kNeesLow && nees <= kNeesHigh) ++nees_in_;
-    }
-    // Stops: a landmark that moved at the last frame and rests now has stopped; its
-    // track's first "stopped" verdict from then on ends the wait. A wait ends
-    // unfound when the landmark moves on or its track ends.
-    auto open = open_stops_.find(key);
-    if (open == open_stops_.end() && was_moving_[i] && !moving_now[i]) {
-      ++stops_;
-      open = open_stops_.emplace(key, Open{time_s}).first;
-    }
-    if (open == open_stops_.end()) continue;
-    if (s.stopped) {
-      ++stops_found_;
-      latency_sum_ += time_s - open->second.since_s;
-    } else if (!moving_now[i]) {
-      still_open.emplace(key, open->second);
-    }
+    const Eigen::Vector2d position_error = s.x.head<2>() - truth[i];
+    pos2_ += position_error.squaredNorm();
+    if (!motion.has_velocity[i]) continue;
+    score_velocity(s, position_error, motion.velocity[i], motion.moving[i] != 0);
+    follow_stop(key, s, time_s, was_moving_[i] != 0, motion.moving[i] != 0, &still_open);
   }
   open_stops_ = std::move(still_open);
   last_sightings_ = std::move(sightings_now);
   for (std::size_t i = 0; i < truth.size(); ++i)
-    if (has_velocity[i]) was_moving_[i] = moving_now[i];
+    if (motion.has_velocity[i]) was_moving_[i] = motion.moving[i];
   last_truth_ = truth;
   last_present_ = present;
   last_time_s_ = time_s;

@@ -73,6 +73,22 @@ class TrackScorer {
   struct Open {  // a true stop not yet found by one robot's track
     double since_s = 0.0;
   };
+  /// The landmarks' true motion over the last frame, by landmark id.
+  struct TrueMotion {
+    std::vector<std::uint8_t> has_velocity;  // both frames have the landmark
+    std::vector<Eigen::Vector2d> velocity;
+    std::vector<std::uint8_t> moving;  // faster than TrackMetrics::kMovingSpeedMps
+  };
+  TrueMotion true_motion(double dt, const std::vector<Eigen::Vector2d>& truth,
+                         const std::vector<std::uint8_t>& present) const;
+  /// A sample's velocity, stop verdict and 4-dof NEES against the true velocity `v`.
+  void score_velocity(const TrackSample& s, const Eigen::Vector2d& position_error, const Eigen::Vector2d& v,
+                      bool moving);
+  /// Stops: a landmark that moved at the last frame and rests now has stopped; its
+  /// track's first "stopped" verdict from then on ends the wait. A wait ends unfound
+  /// when the landmark moves on or its track ends: what still waits goes to *still_open.
+  void follow_stop(const std::pair<int, int>& key, const TrackSample& s, double time_s, bool was_moving, bool moving,
+                   std::map<std::pair<int, int>, Open>* still_open);
   std::int64_t min_sightings_ = 0;
   double last_time_s_ = 0.0;
   bool have_last_ = false;
