@@ -3,16 +3,15 @@
 
 #include <cmath>
 
+#include "elaslam/team/team_config.hpp"
+
 namespace elaslam {
 
 DatasetConfig load_dataset_config(const std::string& path) {
   config::Document doc = config::Document::from_file(path);
   DatasetConfig c;
   doc.section("dataset", [&](config::Reader& r) { mrclam::parse(r, &c.dataset); });
-  doc.section("robot", [&](config::Reader& r) { parse(r, &c.robot); });
-  doc.section("main", [&](config::Reader& r) { parse(r, &c.main); });
-  doc.allow_sections();
-  doc.finish();
+  read_robot_and_main(doc, &c.robot, &c.main);
   // Subjects 1..20 are the ids on the wire (robots 1-5, landmarks 6-20).
   constexpr int kMaxSubject = 20;
   if (c.robot.ekf.max_landmark_id <= kMaxSubject)

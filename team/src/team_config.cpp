@@ -28,14 +28,18 @@ std::string check_team(const TeamConfig& c) {
   return "";
 }
 
+void read_robot_and_main(config::Document& doc, RobotOptions* robot, GlobalMapOptions* main) {
+  doc.section("robot", [&](config::Reader& r) { parse(r, robot); });
+  doc.section("main", [&](config::Reader& r) { parse(r, main); });
+  doc.allow_sections();
+  doc.finish();
+}
+
 TeamConfig load_team_config(const std::string& path) {
   config::Document doc = config::Document::from_file(path);
   TeamConfig c;
   doc.section("scenario", [&](config::Reader& r) { sim::parse(r, &c.scenario); });
-  doc.section("robot", [&](config::Reader& r) { parse(r, &c.robot); });
-  doc.section("main", [&](config::Reader& r) { parse(r, &c.main); });
-  doc.allow_sections();
-  doc.finish();
+  read_robot_and_main(doc, &c.robot, &c.main);
   const std::string problem = check_team(c);
   if (!problem.empty()) throw config::ConfigError(path, {problem});
   c.effective_yaml = doc.effective_yaml();

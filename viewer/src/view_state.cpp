@@ -259,14 +259,20 @@ const char* place_chunk(const Msg& m, const ChunkRefusals& why, int* frame, Chun
   return nullptr;
 }
 
+/// What the viewer holds a message's values to: main's world bound, the contract's
+/// defaults otherwise.
+MessageLimits message_limits(const ViewLimits& v) {
+  MessageLimits l;
+  l.world_bound = v.world_bound_m;
+  return l;
+}
+
 }  // namespace
 
 bool ViewState::on_tracks(const track_list_t& m) {
   ++messages_;
-  MessageLimits l;
-  l.world_bound = limits_.world_bound_m;
   Refusal reason = Refusal::kMalformed;
-  if (!check_track_list(m, l, limits_.max_landmark_id, &reason).empty()) return bad("TRACKS invalid");
+  if (!check_track_list(m, message_limits(limits_), limits_.max_landmark_id, &reason).empty()) return bad("TRACKS invalid");
   Robot& r = robot(m.robot_id);
   // The chunks of the robot's newest frame, drawn as they come.
   static constexpr ChunkRefusals kWhy{"TRACKS num_chunks differs from its frame's other chunks",
@@ -286,10 +292,8 @@ bool ViewState::on_tracks(const track_list_t& m) {
 
 bool ViewState::on_global_tracks(const global_tracks_t& m) {
   ++messages_;
-  MessageLimits l;
-  l.world_bound = limits_.world_bound_m;
   Refusal reason = Refusal::kMalformed;
-  if (!check_global_tracks(m, l, limits_.max_landmark_id, &reason).empty()) return bad("GLOBAL_TRACKS invalid");
+  if (!check_global_tracks(m, message_limits(limits_), limits_.max_landmark_id, &reason).empty()) return bad("GLOBAL_TRACKS invalid");
   static constexpr ChunkRefusals kWhy{"GLOBAL_TRACKS num_chunks differs from its frame's other chunks",
                                      "GLOBAL_TRACKS landmark id in two chunks"};
   bool taken = false;

@@ -6,6 +6,7 @@
 
 #include <string>
 
+#include "elaslam/common/config.hpp"
 #include "elaslam/main_robot/global_map.hpp"
 #include "elaslam/robot_node/robot_options.hpp"
 #include "elaslam/simulator/scenario.hpp"
@@ -25,6 +26,11 @@ struct TeamConfig {
 
 /// Throws config::ConfigError listing every problem.
 TeamConfig load_team_config(const std::string& path);
+
+/// The robot: and main: sections of `doc`, read after the caller's world section
+/// (scenario: or dataset:), every other section allowed, the document finished.
+/// Throws config::ConfigError listing every problem.
+void read_robot_and_main(config::Document& doc, RobotOptions* robot, GlobalMapOptions* main);
 
 /// Check what only the combination of sections can tell; empty when consistent.
 std::string check_team(const TeamConfig& c);
