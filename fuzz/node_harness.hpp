@@ -24,14 +24,18 @@
 
 namespace elaslam::fuzz {
 
+/// A fuzzed node's shell options: its name, no log, and a clock that advances 1 ms
+/// each time it is read (*clock, which the harness owns and sets at each start).
+inline transport::ShellOptions ticking_options(const char* name, std::int64_t* clock) {
+  transport::ShellOptions so(name, "", nullptr);
+  so.clock = [clock] { return *clock += 1000; };
+  return so;
+}
+
 template <class Node, template <class> class Ports>
 struct NodeHarness {
   NodeHarness(const char* name, std::function<Node()> make_node)
-      : shell(bus, [this, name] {
-          transport::ShellOptions so(name, "", nullptr);
-          so.clock = [this] { return clock += 1000; };
-          return so;
-        }()),
+      : shell(bus, ticking_options(name, &clock)),
         make(std::move(make_node)) {
     if (!ports.open()) std::abort();
   }
@@ -67,11 +71,7 @@ struct ShellRig {
   static constexpr std::int64_t kEpoch = 1'700'000'000'000'000;  // [us] the shell's clock at the start
 
   ShellRig(transport::Transport& transport, const char* name, Node made)
-      : shell(transport, [this, name] {
-          transport::ShellOptions so(name, "", nullptr);
-          so.clock = [this] { return clock += 1000; };
-          return so;
-        }()),
+      : shell(transport, ticking_options(name, &clock)),
         node(std::move(made)) {
     if (!ports.open()) std::abort();
   }

@@ -68,6 +68,13 @@ std::string length_problem(std::size_t n, std::size_t lo, std::size_t hi) {
   return "wrong length: got " + num(n) + " items, expected " + num(lo) + " to " + num(hi);
 }
 
+/// "" when `n` is a list of lo..hi items, else what is wrong: not a list (`what`
+/// says what was expected), or its length.
+std::string list_problem(const YAML::Node& n, const char* what, std::size_t lo, std::size_t hi) {
+  if (!n.IsSequence()) return std::string("wrong type: expected ") + what + ", got " + scalar_text(n);
+  return length_problem(n.size(), lo, hi);
+}
+
 }  // namespace
 
 ConfigError::ConfigError(const std::string& source, std::vector<std::string> problems)
@@ -238,11 +245,7 @@ void Reader::read_enum_list(const std::string& key, std::vector<std::string>* ou
     if (optional) echo(*out);
     return;
   }
-  if (!n.IsSequence()) {
-    fail(key, "wrong type: expected a list of strings, got " + scalar_text(n));
-    return;
-  }
-  if (const std::string problem = length_problem(n.size(), min_items, max_items); !problem.empty()) {
+  if (const std::string problem = list_problem(n, "a list of strings", min_items, max_items); !problem.empty()) {
     fail(key, problem);
     return;
   }
@@ -291,11 +294,7 @@ void Reader::list(const std::string& key, const std::function<void(Reader&, std:
   bool present = false;
   YAML::Node n = child(key, false, &present);
   if (!present) return;
-  if (!n.IsSequence()) {
-    fail(key, "wrong type: expected a list, got " + scalar_text(n));
-    return;
-  }
-  if (const std::string problem = length_problem(n.size(), min_items, max_items); !problem.empty()) {
+  if (const std::string problem = list_problem(n, "a list", min_items, max_items); !problem.empty()) {
     fail(key, problem);
     return;
   }

@@ -88,7 +88,7 @@ TEST_F(RealSlice, RobotBarcodesHurtEkfAndElaKeepsMostOfThemOut) {
   const RunResult ekf_with = run(Mode::kEkf, true);
   const RunResult ela_with = run(Mode::kEla, true);
   const RunResult ela_without = run(Mode::kEla, false);
-  // Measured (2026-12-04, main.body_radius_m 0.17): ela 0.186 -> 0.197 m with the
+  // Measured (main.body_radius_m 0.17): ela 0.186 -> 0.197 m with the
   // other robots kept in (+6 %; over the whole run +5 %, docs/mrclam.md); without
   // the body rule 0.206 m (+11 %).
   EXPECT_GT(mean_of_rms(ekf_with), 1.5 * mean_of_rms(ekf_without));

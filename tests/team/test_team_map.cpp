@@ -209,9 +209,9 @@ TEST(TeamMap, DueOncePerPeriodAlsoWhenTheFinishedFrameJumpsOverItsMultiple) {
 // (archived) and come back on the way home. The team's map (every landmark at its
 // true position, 3 mm) is fused at the start; the same map again at the end (main's
 // estimate went on from the same data) must not be fused into a landmark that was
-// evicted and came back: its first fusion taught the pose, which kept it. Before
-// 2026-12-04 the channel forgot a landmark when it left the aided filter and the
-// whole estimate was fused a second time.
+// evicted and came back: its first fusion taught the pose, which kept it. A channel
+// that forgot a landmark when it left the aided filter would fuse the whole
+// estimate a second time.
 TEST(TeamMap, ALandmarkEvictedAndBackIsNotFusedTwice) {
   RobotOptions o = test::robot_options(Mode::kEla);
   o.ekf.capacity = 12;

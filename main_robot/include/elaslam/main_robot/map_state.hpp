@@ -21,7 +21,7 @@
 namespace elaslam {
 
 constexpr const char* kMapStateFormat = "elaslam.global_map";
-/// 2: the sealed file. (1: the bare JSON document of before 2026-12, no longer read.)
+/// 2: the sealed file. (1, a bare JSON document without a seal, is not read.)
 constexpr int kMapStateVersion = 2;
 
 // ---- bounds of the file, beyond what from_json checks ------------------------------
