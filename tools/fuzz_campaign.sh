@@ -6,12 +6,14 @@
 # Stopped at any instant (a reboot, a session's end), it loses at most the chunk
 # under way and goes on from the ledger and the corpus when started again.
 #
-#   tools/fuzz_campaign.sh [--executions N] [--chunk SECONDS] [--targets "..."]
+#   tools/fuzz_campaign.sh [--executions N] [--chunk SECONDS] [--targets "..."] [--jobs J]
 #                          [--max-len BYTES] [--build-dir DIR] [--ledger DIR] [--status]
 #
 # - --executions: the goal per target (default 10000000).
 # - --chunk: seconds per fuzz.sh run (default 600). The next chunk goes to the target
 #   with the fewest executions so far, so all targets advance together.
+# - --jobs: fuzzing processes per chunk (default 1; fuzz.sh --jobs): J processes on
+#   the chunk's target for CHUNK seconds each, their executions summed in its line.
 # - --max-len: bound on a mutated input (default 4096, libFuzzer's own default:
 #   several times faster than fuzz.sh's 131072; the seeds, real recordings up to
 #   130 KB, are read whole).
@@ -33,6 +35,7 @@ GOAL=10000000
 CHUNK=600
 TARGETS="fuzz_robot_node fuzz_main_robot fuzz_config fuzz_state fuzz_mrclam fuzz_datagrams"
 MAX_LEN=4096
+JOBS=1
 BUILD_DIR="$ROOT/build/fuzz"
 LEDGER="$ROOT/fuzz/ledger"
 STATUS=0
@@ -40,11 +43,12 @@ die() { echo "fuzz_campaign.sh: $*" >&2; exit 2; }
 posint() { [[ "$2" =~ ^[1-9][0-9]*$ ]] || die "$1 must be a positive integer, got '$2'"; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --executions|--chunk|--targets|--max-len|--build-dir|--ledger) [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
+    --executions|--chunk|--targets|--jobs|--max-len|--build-dir|--ledger) [ $# -ge 2 ] || die "$1 needs a value (see --help)" ;;&
     --executions) posint "$1" "$2"; GOAL="$2"; shift 2 ;;
     --chunk) posint "$1" "$2"; CHUNK="$2"; shift 2 ;;
     --targets) TARGETS="$2"; shift 2 ;;
     --max-len) posint "$1" "$2"; MAX_LEN="$2"; shift 2 ;;
+    --jobs) posint "$1" "$2"; JOBS="$2"; shift 2 ;;
     --build-dir) BUILD_DIR="$2"; shift 2 ;;
     --ledger) LEDGER="$2"; shift 2 ;;
     --status) STATUS=1; shift ;;
@@ -94,7 +98,7 @@ while :; do
   done
   [ -n "$next" ] || break
   echo "fuzz_campaign.sh: $next, $least of $GOAL executions so far; a chunk of ${CHUNK}s" >&2
-  out=$("$ROOT/tools/fuzz.sh" --targets "$next" --seconds "$CHUNK" --max-len "$MAX_LEN" --keep-corpus \
+  out=$("$ROOT/tools/fuzz.sh" --targets "$next" --seconds "$CHUNK" --jobs "$JOBS" --max-len "$MAX_LEN" --keep-corpus \
         --build-dir "$BUILD_DIR") && rc=0 || rc=$?
   line=$(printf '%s\n' "$out" | awk -v t="$next" '$1 == t')
   execs=$(awk '{ print $2 + 0 }' <<<"$line"); rate=$(awk '{ print $3 + 0 }' <<<"$line")
