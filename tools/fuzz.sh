@@ -83,11 +83,14 @@ for t in $TARGETS; do
   (cd "$BUILD_DIR" && TMPDIR="$tmp" ASAN_OPTIONS=detect_leaks=1 "$BUILD_DIR/bin/$t" "${limit[@]}" -max_len="$MAX_LEN" -timeout=10 -rss_limit_mb=3072 \
     "${jobs[@]}" -print_final_stats=1 -artifact_prefix="$BUILD_DIR/artifacts/$t-" \
     "$corpus" "$ROOT/fuzz/corpus/$t") >"$log" 2>&1 || rc=$?
-  [ "$JOBS" -eq 1 ] || cat "$BUILD_DIR"/fuzz-*.log >>"$log" 2>/dev/null || true
-  execs=$(grep -h "stat::number_of_executed_units" "$log" | awk '{ s += $2 } END { print s + 0 }')
-  rate=$(grep -h "stat::average_exec_per_sec" "$log" | awk '{ s += $2 } END { print s + 0 }')
+  # With --jobs each job writes its own log (fuzz-N.log), which libFuzzer also copies
+  # into ours as the job ends: the figures are read from the job logs, once each.
+  logs=("$log")
+  [ "$JOBS" -eq 1 ] || logs=("$BUILD_DIR"/fuzz-*.log)
+  execs=$(cat "${logs[@]}" 2>/dev/null | grep "stat::number_of_executed_units" | awk '{ s += $2 } END { print s + 0 }')
+  rate=$(cat "${logs[@]}" 2>/dev/null | grep "stat::average_exec_per_sec" | awk '{ s += $2 } END { print s + 0 }')
   n=$(find "$corpus" -type f | wc -l)
-  if [ "$rc" -eq 0 ] && ! grep -q "ERROR: \|SUMMARY: \|escaped\|deadly signal" "$log"; then
+  if [ "$rc" -eq 0 ] && ! cat "$log" "${logs[@]}" 2>/dev/null | grep -q "ERROR: \|SUMMARY: \|escaped\|deadly signal"; then
     result=clean
   else
     result="FAILED (exit $rc; $log)"
