@@ -87,8 +87,9 @@ for t in $TARGETS; do
   # into ours as the job ends: the figures are read from the job logs, once each.
   logs=("$log")
   [ "$JOBS" -eq 1 ] || logs=("$BUILD_DIR"/fuzz-*.log)
-  execs=$(cat "${logs[@]}" 2>/dev/null | grep "stat::number_of_executed_units" | awk '{ s += $2 } END { print s + 0 }')
-  rate=$(cat "${logs[@]}" 2>/dev/null | grep "stat::average_exec_per_sec" | awk '{ s += $2 } END { print s + 0 }')
+  # (0 when a log has no figures, as after a crash: the result below says FAILED.)
+  execs=$(cat "${logs[@]}" 2>/dev/null | awk '/stat::number_of_executed_units/ { s += $2 } END { print s + 0 }' || true)
+  rate=$(cat "${logs[@]}" 2>/dev/null | awk '/stat::average_exec_per_sec/ { s += $2 } END { print s + 0 }' || true)
   n=$(find "$corpus" -type f | wc -l)
   if [ "$rc" -eq 0 ] && ! cat "$log" "${logs[@]}" 2>/dev/null | grep -q "ERROR: \|SUMMARY: \|escaped\|deadly signal"; then
     result=clean
